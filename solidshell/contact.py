@@ -1,0 +1,274 @@
+"""Penalty contact between the sheet and rigid bodies (Section 4.2: cloth on a sphere, [9]).
+
+Bodies
+------
+:class:`Sphere`, :class:`Plane` (a floor: the half-space below the plane is solid) and
+:class:`Pedestal` (a flat-topped vertical cylinder or box with an optional rounded top edge).
+Each body is a *solid*; its signed distance ``g(x)`` is positive outside, negative inside, and its
+``normal`` is the unit outward gradient ``∇g``.
+
+Which points touch
+------------------
+Contact is enforced on the **mid-surface nodes** only (x = X_o + U_o).  Forces act on the U_o
+dofs; the director dofs U_n never see contact.  The sheet's lower face lies h/2 below its
+mid-surface; pass ``offset = h/2`` to a body to keep the mid-surface that far off the body (default
+0: the mid-surface itself touches).  Edges between nodes are not checked: a body narrower than an
+element can slip between nodes (use an element size below the body's smallest radius).
+
+Penalty law
+-----------
+With the penetration p = max(0, offset - g(x)) of a node, the penalty energy is
+
+    E_c = 1/2 sum_i k_i p_i^2 ,   f_i = -dE_c/dx_i = k_i p_i n(x_i)   (frictionless)
+
+so the force is conservative (it enters the energy balance as stored energy E_c), zero outside the
+body, and continuous across the surface.  The force is exactly minus the gradient of E_c wherever the
+signed distance is differentiable (everywhere outside; inside a box/pedestal except on the medial
+planes where the nearest face changes, where the force has a kink but the energy stays continuous).
+
+Penalty stiffness rule
+----------------------
+:func:`penalty_stiffness` gives every node the stiffness k_i = factor * m_i * omega_max^2, with m_i
+its (possibly mass-scaled) mid-surface mass and omega_max the highest natural frequency of the
+sheet (``timestep.critical_time_step``).  A node in contact then vibrates against the body at
+sqrt(factor) * omega_max, and by Weyl's inequality the highest frequency of sheet + contact is at
+most omega_max * sqrt(1 + factor): the penalty shortens the critical step by the factor
+1/sqrt(1 + factor) at most (:func:`contact_critical_time_step`, :func:`combined_critical_time_step`);
+with the default factor 0.1 that is 4.7 %.  Because omega_max is the (very high) thickness mode of
+the solid-shell, this penalty is very stiff: a node carrying its own weight m_i g sinks
+g / (factor * omega_max^2) into the body -- about 2e-7 cm for wool at dt ~ 1e-5 s.  Uniform mass
+scaling by s leaves k unchanged (m ×s, omega^2 ÷s).  (The curvature term k p ∇²g of the contact
+Hessian is neglected in this bound; it is of relative size p / R and p is tiny.)
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .errors import InputError
+
+DEFAULT_PENALTY_FACTOR = 0.1
+"""Default ``factor`` of :func:`penalty_stiffness` (contact frequency sqrt(0.1) * omega_max)."""
+
+
+def _vec3(v, name: str) -> np.ndarray:
+    a = np.asarray(v, dtype=float).ravel()
+    if a.shape != (3,) or not np.all(np.isfinite(a)):
+        raise InputError(f"{name} must be 3 finite numbers, got {v!r}")
+    return a
+
+
+def _pos(v, name: str, allow_zero=False) -> float:
+    try:
+        x = float(v)
+    except (TypeError, ValueError):
+        raise InputError(f"{name} must be a number, got {v!r}") from None
+    if not math.isfinite(x) or x < 0.0 or (x == 0.0 and not allow_zero):
+        raise InputError(f"{name} must be {'non-negative' if allow_zero else 'positive'}, got {v!r}")
+    return x
+
+
+class RigidBody:
+    """Base class: subclasses implement :meth:`signed_distance` -> (g (N,), n (N,3))."""
+
+    offset: float = 0.0
+
+    def signed_distance(self, x: np.ndarray):  # pragma: no cover - interface
+        raise NotImplementedError
+
+    def penetration(self, x):
+        """(gap (N,), normal (N,3)) for points x (N,3): gap = g(x) - offset, negative when the point
+        is closer to the body than ``offset`` (in contact); normal = outward unit normal ∇g."""
+        x = np.asarray(x, dtype=float).reshape(-1, 3)
+        g, n = self.signed_distance(x)
+        return g - self.offset, n
+
+    def forces(self, x, k):
+        """Penalty forces (N,3) on the points x (N,3) and the penalty energy (float).
+
+        k : scalar or (N,) penalty stiffness [force/length] (see :func:`penalty_stiffness`).
+        """
+        x = np.asarray(x, dtype=float).reshape(-1, 3)
+        gap, n = self.penetration(x)
+        p = np.maximum(-gap, 0.0)
+        kp = np.asarray(k, dtype=float) * p
+        return kp[:, None] * n, 0.5 * float(np.dot(kp, p))
+
+    def active(self, x) -> np.ndarray:
+        """(N,) bool: points in contact (gap < 0)."""
+        return self.penetration(x)[0] < 0.0
+
+
+class Sphere(RigidBody):
+    """Rigid solid sphere of ``radius`` about ``center`` (the paper's Ø10 cm sphere, Section 4.2)."""
+
+    def __init__(self, center, radius, offset=0.0):
+        self.center = _vec3(center, "sphere center")
+        self.radius = _pos(radius, "sphere radius")
+        self.offset = _pos(offset, "contact offset", allow_zero=True)
+
+    def signed_distance(self, x):
+        d = x - self.center
+        r = np.linalg.norm(d, axis=1)
+        safe = r > 0.0
+        n = np.zeros_like(d)
+        n[safe] = d[safe] / r[safe, None]
+        n[~safe] = (0.0, 0.0, 1.0)  # the centre itself: push up
+        return r - self.radius, n
+
+    def __repr__(self):
+        return f"Sphere(center={self.center.tolist()}, radius={self.radius}, offset={self.offset})"
+
+
+class Plane(RigidBody):
+    """Rigid half-space: the side of the plane through ``point`` opposite to ``normal`` is solid
+    (a floor with normal (0,0,1))."""
+
+    def __init__(self, point, normal=(0.0, 0.0, 1.0), offset=0.0):
+        self.point = _vec3(point, "plane point")
+        nn = _vec3(normal, "plane normal")
+        L = np.linalg.norm(nn)
+        if L == 0.0:
+            raise InputError("plane normal must be non-zero")
+        self.normal = nn / L
+        self.offset = _pos(offset, "contact offset", allow_zero=True)
+
+    def signed_distance(self, x):
+        return (x - self.point) @ self.normal, np.broadcast_to(self.normal, x.shape).copy()
+
+    def __repr__(self):
+        return f"Plane(point={self.point.tolist()}, normal={self.normal.tolist()}, offset={self.offset})"
+
+
+def _box_sdf(a: np.ndarray, half: np.ndarray):
+    """Signed distance of points with coordinates a (N,k) to the box |a_j| <= half_j, and its
+    gradient with respect to a (N,k).  Outside: Euclidean distance to the box (edges and corners
+    are rounded); inside: minus the distance to the nearest face."""
+    s = np.where(a >= 0.0, 1.0, -1.0)
+    q = np.abs(a) - half
+    qp = np.maximum(q, 0.0)
+    L = np.linalg.norm(qp, axis=1)
+    m = q.max(axis=1)
+    g = L + np.minimum(m, 0.0)
+    grad = np.zeros_like(a)
+    out = L > 0.0
+    grad[out] = qp[out] / L[out, None]
+    inn = ~out
+    if np.any(inn):
+        j = np.argmax(q[inn], axis=1)
+        grad[np.flatnonzero(inn), j] = 1.0
+    return g, grad * s
+
+
+class Pedestal(RigidBody):
+    """A rigid flat-topped pedestal standing on its base: a vertical cylinder or a box.
+
+    Parameters
+    ----------
+    top_center : (3,) centre of the top face [length]; the pedestal axis is global Z.
+    radius : cylinder radius (give this for a circular pedestal), or
+    half_widths : (a, b) half side lengths along X and Y (give this for a square/box pedestal).
+    height : height below the top face (default: 10 × the top's size; only the top face and the
+        top edge matter for a drape).
+    edge_radius : rounding radius of the top edge (default 0: sharp edge; the distance outside is
+        still the exact distance to the sharp edge, so the outside surface normal turns smoothly
+        around it).
+
+    The paper clamps the sheet along the pedestal edge and models only the hanging part, so the
+    pedestal body here only keeps the hanging skirt out of the pedestal's side and top.
+    """
+
+    def __init__(self, top_center, radius=None, half_widths=None, height=None, edge_radius=0.0,
+                 offset=0.0):
+        self.top_center = _vec3(top_center, "pedestal top_center")
+        if (radius is None) == (half_widths is None):
+            raise InputError("give a pedestal either radius (cylinder) or half_widths (box), not both")
+        if radius is not None:
+            self.kind = "cylinder"
+            self.radius = _pos(radius, "pedestal radius")
+            size = self.radius
+        else:
+            hw = np.asarray(half_widths, dtype=float).ravel()
+            if hw.shape != (2,):
+                raise InputError(f"pedestal half_widths must be (a, b), got {half_widths!r}")
+            self.kind = "box"
+            self.half_widths = np.array([_pos(hw[0], "half width a"), _pos(hw[1], "half width b")])
+            size = float(self.half_widths.max())
+        self.height = _pos(height, "pedestal height") if height is not None else 10.0 * size
+        self.edge_radius = _pos(edge_radius, "edge_radius", allow_zero=True)
+        if self.edge_radius >= min(size, 0.5 * self.height):
+            raise InputError("pedestal edge_radius must be smaller than its radius/half width and half height")
+        self.offset = _pos(offset, "contact offset", allow_zero=True)
+
+    def signed_distance(self, x):
+        r = self.edge_radius
+        d = x - self.top_center
+        zc = d[:, 2] + 0.5 * self.height  # z about the pedestal's mid-height
+        if self.kind == "cylinder":
+            rho = np.hypot(d[:, 0], d[:, 1])
+            a = np.column_stack([rho, zc])
+            g, ga = _box_sdf(a, np.array([self.radius - r, 0.5 * self.height - r]))
+            safe = rho > 0.0
+            er = np.zeros((len(x), 2))
+            er[safe] = d[safe, :2] / rho[safe, None]
+            er[~safe] = (1.0, 0.0)
+            n = np.column_stack([ga[:, 0:1] * er, ga[:, 1]])
+        else:
+            a = np.column_stack([d[:, 0], d[:, 1], zc])
+            hw = np.array([*self.half_widths, 0.5 * self.height]) - r
+            g, n = _box_sdf(a, hw)
+        return g - r, n
+
+    def __repr__(self):
+        dims = f"radius={self.radius}" if self.kind == "cylinder" else f"half_widths={self.half_widths.tolist()}"
+        return (f"Pedestal({self.kind}, top_center={self.top_center.tolist()}, {dims}, height={self.height}, "
+                f"edge_radius={self.edge_radius}, offset={self.offset})")
+
+
+# ---------------------------------------------------------------------- all bodies at once
+def contact_forces(bodies, x, k):
+    """Sum over ``bodies`` of the penalty forces on points x (N,3): (forces (N,3), energy, active
+    count).  No body: zeros and no work done."""
+    x = np.asarray(x, dtype=float).reshape(-1, 3)
+    f = np.zeros_like(x)
+    e = 0.0
+    n_active = 0
+    for b in bodies:
+        fb, eb = b.forces(x, k)
+        f += fb
+        e += eb
+        n_active += int(np.count_nonzero(np.any(fb != 0.0, axis=1)))
+    return f, e, n_active
+
+
+# ---------------------------------------------------------------------- stiffness and time step
+def penalty_stiffness(node_mass, omega_max, factor=DEFAULT_PENALTY_FACTOR):
+    """Per-node penalty stiffness k_i = factor * m_i * omega_max^2 [force/length].
+
+    node_mass : (N,) mid-surface (U_o) masses, after mass scaling;  omega_max : the sheet's highest
+    natural frequency [1/time] (2 / critical step).  See the module docstring for the reasoning.
+    """
+    f = _pos(factor, "contact penalty factor")
+    return f * np.asarray(node_mass, dtype=float) * float(omega_max) ** 2
+
+
+def contact_omega2(k, node_mass) -> float:
+    """Largest k_i / m_i: the squared frequency of a node alone on its contact spring."""
+    k = np.broadcast_to(np.asarray(k, dtype=float), np.shape(node_mass))
+    m = np.asarray(node_mass, dtype=float)
+    ok = m > 0.0
+    return float(np.max(k[ok] / m[ok])) if np.any(ok) else 0.0
+
+
+def contact_critical_time_step(k, node_mass) -> float:
+    """Critical step 2 / sqrt(max k_i/m_i) of the contact springs alone (inf when k = 0)."""
+    w2 = contact_omega2(k, node_mass)
+    return math.inf if w2 <= 0.0 else 2.0 / math.sqrt(w2)
+
+
+def combined_critical_time_step(omega_max, k, node_mass) -> float:
+    """Bound on the critical step of sheet + contact: 2 / sqrt(omega_max^2 + max k_i/m_i)
+    (Weyl: the largest eigenvalue of M^-1 (K + K_c) is at most the sum of the largest ones)."""
+    return 2.0 / math.sqrt(float(omega_max) ** 2 + contact_omega2(k, node_mass))

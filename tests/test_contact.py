@@ -1,0 +1,132 @@
+"""Penalty contact bodies: forces are minus the gradient of the penalty energy, vanish outside the
+body, respect symmetry, and the stiffness / time-step rules hold."""
+
+import math
+
+import numpy as np
+import pytest
+
+from solidshell.contact import (Pedestal, Plane, Sphere, combined_critical_time_step, contact_forces,
+                                contact_critical_time_step, penalty_stiffness)
+from solidshell.errors import InputError
+
+BODIES = {
+    "sphere": Sphere((0.1, -0.2, 0.3), 2.0),
+    "sphere_offset": Sphere((0.0, 0.0, 0.0), 2.0, offset=0.03),
+    "plane": Plane((0.0, 0.0, -1.0), (0.2, 0.1, 1.0)),
+    "cylinder": Pedestal((0.0, 0.0, 0.0), radius=1.5, height=3.0),
+    "cylinder_round": Pedestal((0.0, 0.0, 0.0), radius=1.5, height=3.0, edge_radius=0.3),
+    "box": Pedestal((0.0, 0.0, 0.0), half_widths=(1.0, 1.5), height=3.0),
+    "box_round": Pedestal((0.0, 0.0, 0.0), half_widths=(1.0, 1.5), height=3.0, edge_radius=0.2),
+}
+
+
+def _points_near_surface(body, rng, n=200):
+    """Random points within +-0.2 of the body's surface (so that about half penetrate)."""
+    x = rng.uniform(-2.5, 2.5, size=(4 * n, 3))
+    g, nrm = body.signed_distance(x)
+    x = x - (g - body.offset)[:, None] * nrm + rng.uniform(-0.2, 0.2, size=(4 * n, 1)) * nrm
+    return x[:n]
+
+
+@pytest.mark.parametrize("name", sorted(BODIES))
+def test_force_is_minus_gradient_of_energy(name):
+    body = BODIES[name]
+    rng = np.random.default_rng(1)
+    x = _points_near_surface(body, rng)
+    k = rng.uniform(50.0, 150.0, size=len(x))
+    f, _ = body.forces(x, k)
+    assert np.any(np.linalg.norm(f, axis=1) > 0), "no point in contact: test set-up is wrong"
+    # central differences, one coordinate at a time, vectorised over the points (each point's
+    # energy depends on that point only).  Step 1e-6: truncation O(h^2 * k) ~ 1e-10, round-off
+    # ~ 1e-16 * E / h ~ 1e-9; tolerance 1e-5 relative to k*0.2 (the largest force) is far above both
+    # and far below any real error.  Points within 1e-4 of a kink of the signed distance (medial
+    # planes inside a box, the axis inside a cylinder) are skipped: there the force has a kink.
+    h = 1e-6
+    fd = np.zeros_like(x)
+    for j in range(3):
+        e = np.zeros(3)
+        e[j] = h
+        gp, _ = body.penetration(x + e)
+        gm, _ = body.penetration(x - e)
+        Ep = 0.5 * k * np.maximum(-gp, 0) ** 2
+        Em = 0.5 * k * np.maximum(-gm, 0) ** 2
+        fd[:, j] = -(Ep - Em) / (2 * h)
+    ok = np.ones(len(x), bool)
+    if isinstance(body, Pedestal):
+        d = x - body.top_center
+        if body.kind == "box":
+            q = np.abs(np.column_stack([d[:, 0], d[:, 1], d[:, 2] + body.height / 2])) - np.array(
+                [*body.half_widths, body.height / 2])
+        else:
+            q = np.column_stack([np.hypot(d[:, 0], d[:, 1]) - body.radius, np.abs(d[:, 2] + body.height / 2) - body.height / 2])
+        qs = np.sort(q, axis=1)
+        ok = (qs[:, -1] - qs[:, -2] > 1e-4) | (qs[:, -1] > 0)
+    scale = 150.0 * 0.2
+    assert np.max(np.abs(f[ok] - fd[ok])) < 1e-5 * scale
+
+
+@pytest.mark.parametrize("name", sorted(BODIES))
+def test_zero_force_outside(name):
+    body = BODIES[name]
+    rng = np.random.default_rng(2)
+    x = rng.uniform(-6, 6, size=(2000, 3))
+    gap, _ = body.penetration(x)
+    f, E = body.forces(x[gap > 0], 100.0)
+    assert np.all(f == 0.0) and E == 0.0
+    # and points inside are pushed outward: force along +normal, energy positive
+    fi, Ei = body.forces(x[gap < 0], 100.0)
+    _, n = body.penetration(x[gap < 0])
+    if np.any(gap < 0):
+        assert Ei > 0 and np.all(np.einsum("ij,ij->i", fi, n) > 0)
+
+
+def test_symmetric_configuration_gives_symmetric_forces():
+    # a grid symmetric about x=0 and y=0 over a sphere centred on the z axis: forces mirror exactly
+    s = np.linspace(-1.5, 1.5, 7)
+    X, Y = np.meshgrid(s, s, indexing="ij")
+    x = np.column_stack([X.ravel(), Y.ravel(), np.full(X.size, 1.9)])
+    for body in (Sphere((0, 0, 0), 2.0), Pedestal((0, 0, 2.0), radius=1.2),
+                 Pedestal((0, 0, 2.0), half_widths=(1.2, 1.2), edge_radius=0.1)):
+        f, _ = body.forces(x, 10.0)
+        F = f.reshape(7, 7, 3)
+        assert np.any(F != 0)
+        np.testing.assert_allclose(F[::-1, :, 0], -F[:, :, 0], atol=1e-12)
+        np.testing.assert_allclose(F[::-1, :, 1], F[:, :, 1], atol=1e-12)
+        np.testing.assert_allclose(F[::-1, :, 2], F[:, :, 2], atol=1e-12)
+        np.testing.assert_allclose(F[:, ::-1, 1], -F[:, :, 1], atol=1e-12)
+        np.testing.assert_allclose(F[:, ::-1, 2], F[:, :, 2], atol=1e-12)
+        # and the total lateral force vanishes
+        assert abs(f[:, 0].sum()) < 1e-10 and abs(f[:, 1].sum()) < 1e-10
+
+
+def test_known_values():
+    sph = Sphere((0, 0, 0), 5.0)
+    f, E = sph.forces(np.array([[0.0, 0.0, 4.9], [0.0, 3.0, 0.0]]), 10.0)
+    np.testing.assert_allclose(f, [[0, 0, 1.0], [0, 20.0, 0]], atol=1e-12)
+    assert E == pytest.approx(0.5 * 10 * (0.1**2 + 2.0**2))
+    floor = Plane((0, 0, 0))
+    f, E = floor.forces(np.array([[3.0, 1.0, -0.01], [0, 0, 0.5]]), 1000.0)
+    np.testing.assert_allclose(f, [[0, 0, 10.0], [0, 0, 0]], atol=1e-12)
+    ped = Pedestal((0, 0, 0), half_widths=(1.0, 1.0), height=2.0)
+    g, n = ped.penetration(np.array([[0.0, 0.0, -0.1], [0.95, 0.0, -1.0], [2.0, 0.0, 1.0]]))
+    np.testing.assert_allclose(g, [-0.1, -0.05, math.sqrt(2)], atol=1e-12)
+    np.testing.assert_allclose(n[:2], [[0, 0, 1], [1, 0, 0]], atol=1e-12)
+    np.testing.assert_allclose(n[2], [math.sqrt(0.5), 0, math.sqrt(0.5)], atol=1e-12)
+
+
+def test_contact_forces_sum_and_stiffness_rules():
+    x = np.array([[0, 0, 1.95], [5, 0, -0.05], [10, 10, 10]])
+    bodies = [Sphere((0, 0, 0), 2.0), Plane((0, 0, 0))]
+    f, E, n_act = contact_forces(bodies, x, 100.0)
+    np.testing.assert_allclose(f, [[0, 0, 5.0], [0, 0, 5.0], [0, 0, 0]], atol=1e-9)
+    assert n_act == 2 and E == pytest.approx(2 * 0.5 * 100 * 0.05**2)
+    m = np.array([1.0, 2.0, 4.0])
+    k = penalty_stiffness(m, omega_max=100.0, factor=0.1)
+    np.testing.assert_allclose(k, 0.1 * m * 1e4)
+    assert contact_critical_time_step(k, m) == pytest.approx(2.0 / math.sqrt(1e3))
+    assert combined_critical_time_step(100.0, k, m) == pytest.approx(0.02 / math.sqrt(1.1))
+    with pytest.raises(InputError):
+        Pedestal((0, 0, 0), radius=1.0, half_widths=(1, 1))
+    with pytest.raises(InputError):
+        Sphere((0, 0, 0), -1.0)

@@ -1,0 +1,390 @@
+"""Batched ANS solid-shell kernels shared by the quadrilateral and the triangle (Eqs. 1-15).
+
+Every strain of Eq. (7) is written as a difference of products of nodal vectors of the *current*
+configuration x_o = X_o + U_o and x_n = X_n + U_n (Eq. 2 with the truncations of Eq. 3):
+
+- at each membrane/bending point g, with a_k = sum_i dN_ik x_oi and b_k = sum_i dN_ik x_ni
+  (k = xi, eta or s, t):  e = (a1.a1/2, a2.a2/2, a1.a2),   k = (a1.b1, a2.b2, a1.b2 + a2.b1);
+- at each ANS shear tying point t (Eq. 4, Eq. 12): gamma_t = (sum_i alpha_ti x_oi).(sum_i beta_ti x_ni);
+- at each node i (Eq. 5, Eq. 15): eps_zz,i = x_ni.x_ni / 2 (Green) or the quasi-engineering strain of
+  Eq. (24);
+
+minus the same quantities at X ("raw" natural strains).  The transformation to the local frame
+(Eq. 6), the ANS interpolation to the integration points, the rigidities and J_o w of Eq. (7)--(8)
+are all linear in the raw strains and depend only on the initial geometry, so they are folded once
+per element into constant matrices (``Cmb``, ``Cs``, ``Cz``; see quad4.py / tri3.py).  The energy is
+
+    U^e = 1/2 sum_g (e_g^T Cm_g e_g + k_g^T Cb_g k_g) + 1/2 gamma^T Cs gamma + 1/2 eps^T Cz eps,
+
+its gradient (Eq. 9, f) and Hessian (k_t) follow in closed form.  Kernels know nothing of meshes:
+they take node coordinates, displacements, connectivity and the element constants.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+
+# fastmath without nnan/ninf: a blown-up state must stay visibly non-finite for the solvers.
+_FM = {"nsz", "arcp", "contract", "reassoc"}
+
+
+@njit(cache=True, fastmath=_FM, inline="always")
+def _sign_quasi(xo, xn, conn_e, nn, i, mu):
+    """Sign s_p of Eq. (24) at local node i: +1 if n_p.d_p > -mu, else -1 (n_p from the corner)."""
+    q = (i + 1) % nn
+    r = (i + nn - 1) % nn
+    p0 = conn_e[i]
+    pq = conn_e[q]
+    pr = conn_e[r]
+    ux = xo[pq, 0] - xo[p0, 0]
+    uy = xo[pq, 1] - xo[p0, 1]
+    uz = xo[pq, 2] - xo[p0, 2]
+    vx = xo[pr, 0] - xo[p0, 0]
+    vy = xo[pr, 1] - xo[p0, 1]
+    vz = xo[pr, 2] - xo[p0, 2]
+    nx = uy * vz - uz * vy
+    ny = uz * vx - ux * vz
+    nz = ux * vy - uy * vx
+    dx = xn[p0, 0]
+    dy = xn[p0, 1]
+    dz = xn[p0, 2]
+    nd = nx * dx + ny * dy + nz * dz
+    den = np.sqrt((nx * nx + ny * ny + nz * nz) * (dx * dx + dy * dy + dz * dz))
+    if nd > -mu * den:
+        return 1.0
+    return -1.0
+
+
+@njit(cache=True, fastmath=_FM)
+def _element_force(e, xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r_z,
+                   quasi, mu, fe, gs, gz, zs):
+    """Energy of element e; its force into fe (nn,6).  gs, gz, zs: workspaces (nt,), (nn,), (nn,)."""
+    nn = conn.shape[1]
+    ngp = dN.shape[0]
+    nt = alpha.shape[0]
+    ce = conn[e]
+    for i in range(nn):
+        for c in range(6):
+            fe[i, c] = 0.0
+    energy = 0.0
+    # ---- membrane and bending at the integration points
+    for g in range(ngp):
+        a1x = 0.0; a1y = 0.0; a1z = 0.0; a2x = 0.0; a2y = 0.0; a2z = 0.0
+        b1x = 0.0; b1y = 0.0; b1z = 0.0; b2x = 0.0; b2y = 0.0; b2z = 0.0
+        for i in range(nn):
+            p = ce[i]
+            d1 = dN[g, i, 0]
+            d2 = dN[g, i, 1]
+            a1x += d1 * xo[p, 0]; a1y += d1 * xo[p, 1]; a1z += d1 * xo[p, 2]
+            a2x += d2 * xo[p, 0]; a2y += d2 * xo[p, 1]; a2z += d2 * xo[p, 2]
+            b1x += d1 * xn[p, 0]; b1y += d1 * xn[p, 1]; b1z += d1 * xn[p, 2]
+            b2x += d2 * xn[p, 0]; b2y += d2 * xn[p, 1]; b2z += d2 * xn[p, 2]
+        e0 = 0.5 * (a1x * a1x + a1y * a1y + a1z * a1z) - r_mb[e, g, 0]
+        e1 = 0.5 * (a2x * a2x + a2y * a2y + a2z * a2z) - r_mb[e, g, 1]
+        e2 = (a1x * a2x + a1y * a2y + a1z * a2z) - r_mb[e, g, 2]
+        k0 = (a1x * b1x + a1y * b1y + a1z * b1z) - r_mb[e, g, 3]
+        k1 = (a2x * b2x + a2y * b2y + a2z * b2z) - r_mb[e, g, 4]
+        k2 = (a1x * b2x + a1y * b2y + a1z * b2z + a2x * b1x + a2y * b1y + a2z * b1z) - r_mb[e, g, 5]
+        C = Cmb[e, g]
+        n0 = C[0, 0, 0] * e0 + C[0, 0, 1] * e1 + C[0, 0, 2] * e2
+        n1 = C[0, 1, 0] * e0 + C[0, 1, 1] * e1 + C[0, 1, 2] * e2
+        n2 = C[0, 2, 0] * e0 + C[0, 2, 1] * e1 + C[0, 2, 2] * e2
+        m0 = C[1, 0, 0] * k0 + C[1, 0, 1] * k1 + C[1, 0, 2] * k2
+        m1 = C[1, 1, 0] * k0 + C[1, 1, 1] * k1 + C[1, 1, 2] * k2
+        m2 = C[1, 2, 0] * k0 + C[1, 2, 1] * k1 + C[1, 2, 2] * k2
+        energy += 0.5 * (n0 * e0 + n1 * e1 + n2 * e2 + m0 * k0 + m1 * k1 + m2 * k2)
+        # generalised forces on a1, a2, b1, b2
+        p1x = n0 * a1x + n2 * a2x + m0 * b1x + m2 * b2x
+        p1y = n0 * a1y + n2 * a2y + m0 * b1y + m2 * b2y
+        p1z = n0 * a1z + n2 * a2z + m0 * b1z + m2 * b2z
+        p2x = n1 * a2x + n2 * a1x + m1 * b2x + m2 * b1x
+        p2y = n1 * a2y + n2 * a1y + m1 * b2y + m2 * b1y
+        p2z = n1 * a2z + n2 * a1z + m1 * b2z + m2 * b1z
+        q1x = m0 * a1x + m2 * a2x
+        q1y = m0 * a1y + m2 * a2y
+        q1z = m0 * a1z + m2 * a2z
+        q2x = m1 * a2x + m2 * a1x
+        q2y = m1 * a2y + m2 * a1y
+        q2z = m1 * a2z + m2 * a1z
+        for i in range(nn):
+            d1 = dN[g, i, 0]
+            d2 = dN[g, i, 1]
+            fe[i, 0] += d1 * p1x + d2 * p2x
+            fe[i, 1] += d1 * p1y + d2 * p2y
+            fe[i, 2] += d1 * p1z + d2 * p2z
+            fe[i, 3] += d1 * q1x + d2 * q2x
+            fe[i, 4] += d1 * q1y + d2 * q2y
+            fe[i, 5] += d1 * q1z + d2 * q2z
+    # ---- ANS transverse shear at the tying points (Eq. 4 / Eq. 12-14)
+    for t in range(nt):
+        s = 0.0
+        for c in range(3):
+            at = 0.0
+            dt = 0.0
+            for i in range(nn):
+                at += alpha[t, i] * xo[ce[i], c]
+                dt += beta[t, i] * xn[ce[i], c]
+            s += at * dt
+        gs[t] = s - r_s[e, t]
+    for t in range(nt):
+        q = 0.0
+        for u in range(nt):
+            q += Cs[e, t, u] * gs[u]
+        energy += 0.5 * q * gs[t]
+        zs[0] = q  # reuse as scalar holder
+        for c in range(3):
+            at = 0.0
+            dt = 0.0
+            for i in range(nn):
+                at += alpha[t, i] * xo[ce[i], c]
+                dt += beta[t, i] * xn[ce[i], c]
+            for i in range(nn):
+                fe[i, c] += q * alpha[t, i] * dt
+                fe[i, 3 + c] += q * beta[t, i] * at
+    # ---- ANS thickness strain at the nodes (Eq. 5 / Eq. 15), Green or Eq. (24)
+    for i in range(nn):
+        p = ce[i]
+        xx = xn[p, 0] * xn[p, 0] + xn[p, 1] * xn[p, 1] + xn[p, 2] * xn[p, 2]
+        if quasi:
+            zs[i] = _sign_quasi(xo, xn, ce, nn, i, mu)
+            gz[i] = zs[i] * np.sqrt(xx) - r_z[e, i]
+        else:
+            gz[i] = 0.5 * xx - r_z[e, i]
+    for i in range(nn):
+        q = 0.0
+        for j in range(nn):
+            q += Cz[e, i, j] * gz[j]
+        energy += 0.5 * q * gz[i]
+        p = ce[i]
+        if quasi:
+            sc = q * zs[i] / np.sqrt(xn[p, 0] ** 2 + xn[p, 1] ** 2 + xn[p, 2] ** 2)
+        else:
+            sc = q
+        for c in range(3):
+            fe[i, 3 + c] += sc * xn[p, c]
+    return energy
+
+
+@njit(cache=True, parallel=True, fastmath=_FM)
+def energy_force(xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r_z, quasi, mu, f_out, w_out, nth):
+    """Element energies into w_out (M,) and element forces into f_out (M, nn, 6), all elements.
+
+    xo, xn : (N,3) current nodal mid-surface positions and directors (X + U)
+    conn   : (M,nn) connectivity;  dN (ngp,nn,2), alpha/beta (nt,nn): the element type's constants
+    Cmb (M,ngp,2,3,3), Cs (M,nt,nt), Cz (M,nn,nn): folded rigidities;  r_*: raw strains at X
+    nth    : number of work chunks (numba threads); each chunk allocates its workspace once
+    """
+    M = conn.shape[0]
+    nn = conn.shape[1]
+    nt = alpha.shape[0]
+    chunk = (M + nth - 1) // nth
+    for th in prange(nth):
+        gs = np.empty(max(nt, 1))
+        gz = np.empty(nn)
+        zs = np.empty(nn)
+        for e in range(th * chunk, min(M, (th + 1) * chunk)):
+            w_out[e] = _element_force(e, xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r_z,
+                                      quasi, mu, f_out[e], gs, gz, zs)
+
+
+@njit(cache=True, fastmath=_FM)
+def _element_tangent(e, xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r_z,
+                     quasi, mu, Ke, B, D, Bs, oo, on, nz, gs, gz, zs, at, dt):
+    """Tangent k_t of Eq. (9) of element e into Ke (nd,nd), nd = 6 nn (dof 6i+c: U_o then U_n)."""
+    nn = conn.shape[1]
+    ngp = dN.shape[0]
+    nt = alpha.shape[0]
+    nd = 6 * nn
+    ce = conn[e]
+    for a in range(nd):
+        for b in range(nd):
+            Ke[a, b] = 0.0
+    for i in range(nn):
+        for j in range(nn):
+            oo[i, j] = 0.0
+            on[i, j] = 0.0
+        for c in range(3):
+            for d in range(3):
+                nz[i, c, d] = 0.0
+    for g in range(ngp):
+        a1 = np.zeros(3); a2 = np.zeros(3); b1 = np.zeros(3); b2 = np.zeros(3)
+        for i in range(nn):
+            p = ce[i]
+            for c in range(3):
+                a1[c] += dN[g, i, 0] * xo[p, c]
+                a2[c] += dN[g, i, 1] * xo[p, c]
+                b1[c] += dN[g, i, 0] * xn[p, c]
+                b2[c] += dN[g, i, 1] * xn[p, c]
+        st = np.empty(6)
+        st[0] = 0.5 * (a1[0] * a1[0] + a1[1] * a1[1] + a1[2] * a1[2]) - r_mb[e, g, 0]
+        st[1] = 0.5 * (a2[0] * a2[0] + a2[1] * a2[1] + a2[2] * a2[2]) - r_mb[e, g, 1]
+        st[2] = (a1[0] * a2[0] + a1[1] * a2[1] + a1[2] * a2[2]) - r_mb[e, g, 2]
+        st[3] = (a1[0] * b1[0] + a1[1] * b1[1] + a1[2] * b1[2]) - r_mb[e, g, 3]
+        st[4] = (a2[0] * b2[0] + a2[1] * b2[1] + a2[2] * b2[2]) - r_mb[e, g, 4]
+        st[5] = (a1[0] * b2[0] + a1[1] * b2[1] + a1[2] * b2[2]
+                 + a2[0] * b1[0] + a2[1] * b1[1] + a2[2] * b1[2]) - r_mb[e, g, 5]
+        C = Cmb[e, g]
+        sig = np.zeros(6)
+        for r in range(3):
+            for s in range(3):
+                sig[r] += C[0, r, s] * st[s]
+                sig[3 + r] += C[1, r, s] * st[3 + s]
+        # B: rows = (e11, e22, e12, k11, k22, k12), cols = element dofs
+        for r in range(6):
+            for a in range(nd):
+                B[r, a] = 0.0
+        for i in range(nn):
+            d1 = dN[g, i, 0]
+            d2 = dN[g, i, 1]
+            o = 6 * i
+            for c in range(3):
+                B[0, o + c] = d1 * a1[c]
+                B[1, o + c] = d2 * a2[c]
+                B[2, o + c] = d1 * a2[c] + d2 * a1[c]
+                B[3, o + c] = d1 * b1[c]
+                B[3, o + 3 + c] = d1 * a1[c]
+                B[4, o + c] = d2 * b2[c]
+                B[4, o + 3 + c] = d2 * a2[c]
+                B[5, o + c] = d1 * b2[c] + d2 * b1[c]
+                B[5, o + 3 + c] = d2 * a1[c] + d1 * a2[c]
+        # D = C B (block diagonal C), then Ke += B^T D on the upper triangle
+        for r in range(3):
+            for a in range(nd):
+                D[r, a] = C[0, r, 0] * B[0, a] + C[0, r, 1] * B[1, a] + C[0, r, 2] * B[2, a]
+                D[3 + r, a] = C[1, r, 0] * B[3, a] + C[1, r, 1] * B[4, a] + C[1, r, 2] * B[5, a]
+        for a in range(nd):
+            for b in range(a, nd):
+                v = 0.0
+                for r in range(6):
+                    v += B[r, a] * D[r, b]
+                Ke[a, b] += v
+        # geometric part (scalar multiples of I3 between nodal vectors)
+        for i in range(nn):
+            di1 = dN[g, i, 0]
+            di2 = dN[g, i, 1]
+            for j in range(nn):
+                dj1 = dN[g, j, 0]
+                dj2 = dN[g, j, 1]
+                oo[i, j] += sig[0] * di1 * dj1 + sig[1] * di2 * dj2 + sig[2] * (di1 * dj2 + di2 * dj1)
+                on[i, j] += sig[3] * di1 * dj1 + sig[4] * di2 * dj2 + sig[5] * (di1 * dj2 + di2 * dj1)
+    # shear tying strains
+    for t in range(nt):
+        s = 0.0
+        for c in range(3):
+            av = 0.0
+            dv = 0.0
+            for i in range(nn):
+                av += alpha[t, i] * xo[ce[i], c]
+                dv += beta[t, i] * xn[ce[i], c]
+            at[t, c] = av
+            dt[t, c] = dv
+            s += av * dv
+        gs[t] = s - r_s[e, t]
+        for i in range(nn):
+            for c in range(3):
+                Bs[t, 6 * i + c] = alpha[t, i] * dt[t, c]
+                Bs[t, 6 * i + 3 + c] = beta[t, i] * at[t, c]
+    for t in range(nt):
+        q = 0.0
+        for u in range(nt):
+            q += Cs[e, t, u] * gs[u]
+        for i in range(nn):
+            for j in range(nn):
+                on[i, j] += q * alpha[t, i] * beta[t, j]
+        for a in range(nd):
+            v = 0.0
+            for u in range(nt):
+                v += Cs[e, t, u] * Bs[u, a]
+            D[t, a] = v
+    for a in range(nd):
+        for b in range(a, nd):
+            v = 0.0
+            for t in range(nt):
+                v += Bs[t, a] * D[t, b]
+            Ke[a, b] += v
+    # thickness strains at the nodes
+    for i in range(nn):
+        p = ce[i]
+        xx = xn[p, 0] ** 2 + xn[p, 1] ** 2 + xn[p, 2] ** 2
+        if quasi:
+            zs[i] = _sign_quasi(xo, xn, ce, nn, i, mu)
+            gz[i] = zs[i] * np.sqrt(xx) - r_z[e, i]
+        else:
+            gz[i] = 0.5 * xx - r_z[e, i]
+    for i in range(nn):
+        p = ce[i]
+        q = 0.0
+        for j in range(nn):
+            q += Cz[e, i, j] * gz[j]
+        if quasi:
+            ln = np.sqrt(xn[p, 0] ** 2 + xn[p, 1] ** 2 + xn[p, 2] ** 2)
+            for c in range(3):
+                for d in range(3):
+                    dd = xn[p, c] * xn[p, d] / (ln * ln)
+                    nz[i, c, d] += q * zs[i] * ((1.0 if c == d else 0.0) - dd) / ln
+        else:
+            for c in range(3):
+                nz[i, c, c] += q
+        for j in range(nn):
+            pj = ce[j]
+            cij = Cz[e, i, j]
+            if quasi:
+                si = zs[i] / np.sqrt(xn[p, 0] ** 2 + xn[p, 1] ** 2 + xn[p, 2] ** 2)
+                sj = zs[j] / np.sqrt(xn[pj, 0] ** 2 + xn[pj, 1] ** 2 + xn[pj, 2] ** 2)
+            else:
+                si = 1.0
+                sj = 1.0
+            for c in range(3):
+                for d in range(3):
+                    a = 6 * i + 3 + c
+                    b = 6 * j + 3 + d
+                    if b >= a:
+                        Ke[a, b] += cij * si * sj * xn[p, c] * xn[pj, d]
+    # add the geometric blocks, then mirror the upper triangle
+    for i in range(nn):
+        for j in range(nn):
+            for c in range(3):
+                a = 6 * i + c
+                b = 6 * j + c
+                if b >= a:
+                    Ke[a, b] += oo[i, j]
+                b = 6 * j + 3 + c
+                if b >= a:
+                    Ke[a, b] += on[i, j]
+                else:
+                    Ke[b, a] += on[i, j]
+        for c in range(3):
+            for d in range(c, 3):
+                Ke[6 * i + 3 + c, 6 * i + 3 + d] += nz[i, c, d]
+    for a in range(nd):
+        for b in range(a + 1, nd):
+            Ke[b, a] = Ke[a, b]
+
+
+@njit(cache=True, parallel=True, fastmath=_FM)
+def force_tangent(xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r_z, quasi, mu,
+                  f_out, w_out, K_out, nth):
+    """Energies, forces (M,nn,6) and tangents (M,nd,nd) of all elements."""
+    M = conn.shape[0]
+    nn = conn.shape[1]
+    nt = alpha.shape[0]
+    nd = 6 * nn
+    chunk = (M + nth - 1) // nth
+    for th in prange(nth):
+        B = np.empty((6, nd))
+        D = np.empty((max(6, nt), nd))
+        Bs = np.empty((max(nt, 1), nd))
+        oo = np.empty((nn, nn))
+        on = np.empty((nn, nn))
+        nz = np.empty((nn, 3, 3))
+        gs = np.empty(max(nt, 1))
+        gz = np.empty(nn)
+        zs = np.empty(nn)
+        at = np.empty((max(nt, 1), 3))
+        dt = np.empty((max(nt, 1), 3))
+        for e in range(th * chunk, min(M, (th + 1) * chunk)):
+            w_out[e] = _element_force(e, xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r_z,
+                                      quasi, mu, f_out[e], gs, gz, zs)
+            _element_tangent(e, xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r_z,
+                             quasi, mu, K_out[e], B, D, Bs, oo, on, nz, gs, gz, zs, at, dt)

@@ -1,0 +1,195 @@
+"""Model: a mesh and a shell section -> energy, internal force, tangent, lumped mass (public face).
+
+U is always an (N,6) array [U_o | U_n] per node (Eq. 1), in the mesh's length unit; forces are in
+the section's force unit (gf for fabrics), energies in force x length, the tangent is a scipy CSR
+matrix (6N, 6N) with dof index 6*node + k.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import get_num_threads
+
+from .assembly import SparsePattern, element_dofs, scatter_add_vec
+from .elements import core, quad4, tri3
+from .errors import InputError
+from .mesh import ShellMesh
+
+_THICKNESS_STRAINS = ("green", "quasi")
+
+
+class _Block:
+    """One element type of the mesh with its folded constants (see elements/core.py)."""
+
+    def __init__(self, module, conn, Xo, Xn, section):
+        self.module = module
+        self.conn = np.ascontiguousarray(conn, dtype=np.int64)
+        self.nn = conn.shape[1]
+        self.dofs = element_dofs(self.conn)
+        c = module.precompute(Xo[conn], Xn[conn], section.C_m, section.C_b, section.C_t,
+                              float(section.E_z), float(section.warp_angle_rad))
+        self.c = c
+        self.dN = np.ascontiguousarray(module.DN_GP)
+        self.alpha = np.ascontiguousarray(module.ALPHA)
+        self.beta = np.ascontiguousarray(module.BETA)
+
+    def args(self, xo, xn, quasi, mu):
+        c = self.c
+        return (xo, xn, self.conn, self.dN, self.alpha, self.beta, c["Cmb"], c["Cs"], c["Cz"],
+                c["r_mb"], c["r_s"], c["r_z"], quasi, mu)
+
+
+class Model:
+    """Total-Lagrangian solid-shell model of a :class:`ShellMesh` with a section (Fabric or
+    IsotropicShell).
+
+    Parameters
+    ----------
+    thickness_strain : "green" (Eq. 3, default) or "quasi" (the quasi-engineering strain, Eq. 24)
+    mu : the threshold of Eq. (24), 0 < mu < 1 (only with thickness_strain="quasi")
+    """
+
+    def __init__(self, mesh: ShellMesh, material, thickness_strain: str = "green", mu: float = 0.5):
+        if thickness_strain not in _THICKNESS_STRAINS:
+            raise InputError(f"thickness_strain must be one of {_THICKNESS_STRAINS}, got {thickness_strain!r}")
+        if not (0.0 < float(mu) < 1.0):
+            raise InputError(f"mu of Eq. (24) must lie in (0, 1), got {mu!r}")
+        self.mesh = mesh
+        self.material = material
+        self.quasi = thickness_strain == "quasi"
+        self.mu = float(mu)
+        Xo, Xn = mesh.nodes, mesh.directors
+        self.blocks = [_Block(mod, conn, Xo, Xn, material)
+                       for mod, conn in ((quad4, mesh.quads), (tri3, mesh.tris)) if len(conn)]
+        self._pattern = None
+        self._mass = None
+
+    n_nodes = property(lambda self: self.mesh.n_nodes)
+    n_dofs = property(lambda self: 6 * self.mesh.n_nodes)
+
+    # ------------------------------------------------------------- kinematics
+    def _current(self, U):
+        U = np.asarray(U, dtype=float)
+        if U.shape != (self.n_nodes, 6):
+            U = U.reshape(self.n_nodes, 6)
+        xo = np.ascontiguousarray(self.mesh.nodes + U[:, :3])
+        xn = np.ascontiguousarray(self.mesh.directors + U[:, 3:])
+        return xo, xn
+
+    # ------------------------------------------------------------- energy & force
+    def energy_and_force(self, U):
+        """(strain energy [force*length], internal force (N,6) [force]) at U (N,6): Eqs. (7), (9)."""
+        xo, xn = self._current(U)
+        F = np.zeros(self.n_dofs)
+        W = 0.0
+        for b in self.blocks:
+            M = len(b.conn)
+            fe = np.empty((M, b.nn, 6))
+            we = np.empty(M)
+            core.energy_force(*b.args(xo, xn, self.quasi, self.mu), fe, we, get_num_threads())
+            scatter_add_vec(b.dofs, fe.reshape(M, -1), F)
+            W += we.sum()
+        return float(W), F.reshape(-1, 6)
+
+    def energy(self, U) -> float:
+        """Strain energy U = sum of U^e of Eq. (7) [force*length]."""
+        return self.energy_and_force(U)[0]
+
+    def internal_force(self, U) -> np.ndarray:
+        """Internal force F = dU/dD (Eq. 9), (N,6) [force]."""
+        return self.energy_and_force(U)[1]
+
+    def element_energies(self, U) -> np.ndarray:
+        """Per-element strain energies, quads first then triangles."""
+        xo, xn = self._current(U)
+        out = []
+        for b in self.blocks:
+            M = len(b.conn)
+            fe = np.empty((M, b.nn, 6))
+            we = np.empty(M)
+            core.energy_force(*b.args(xo, xn, self.quasi, self.mu), fe, we, get_num_threads())
+            out.append(we)
+        return np.concatenate(out)
+
+    # ------------------------------------------------------------- tangent
+    @property
+    def pattern(self) -> SparsePattern:
+        if self._pattern is None:
+            self._pattern = SparsePattern(self.n_dofs, [b.dofs for b in self.blocks])
+        return self._pattern
+
+    def force_and_tangent(self, U):
+        """(internal force (N,6), tangent K_t (6N,6N) CSR) at U, Eq. (9)."""
+        xo, xn = self._current(U)
+        F = np.zeros(self.n_dofs)
+        Ks = []
+        for b in self.blocks:
+            M = len(b.conn)
+            nd = 6 * b.nn
+            fe = np.empty((M, b.nn, 6))
+            we = np.empty(M)
+            Ke = np.empty((M, nd, nd))
+            core.force_tangent(*b.args(xo, xn, self.quasi, self.mu), fe, we, Ke, get_num_threads())
+            scatter_add_vec(b.dofs, fe.reshape(M, -1), F)
+            Ks.append(Ke)
+        return F.reshape(-1, 6), self.pattern.assemble(Ks)
+
+    def tangent(self, U):
+        """Tangent stiffness K_t = d^2 U / dD^2 (Eq. 9): scipy CSR (6N, 6N) [force/length]."""
+        return self.force_and_tangent(U)[1]
+
+    # ------------------------------------------------------------- mass
+    def nodal_areas(self) -> np.ndarray:
+        """(N,) mid-surface area share of each node by the trapezoidal rule [length^2] (Section 4)."""
+        A = np.zeros(self.n_nodes)
+        Xo, Xn = self.mesh.nodes, self.mesh.directors
+        for b in self.blocks:
+            np.add.at(A, b.conn.ravel(), b.module.nodal_areas(Xo[b.conn], Xn[b.conn]).ravel())
+        return A
+
+    def lumped_mass(self) -> np.ndarray:
+        """(N,6) diagonal mass by the trapezoidal rule in-plane and through the thickness (Section 4):
+        mu*A_i on the U_o dofs and mu*h^2/4*A_i on the U_n dofs [mass]."""
+        if self._mass is None:
+            A = self.nodal_areas()
+            mu = self.material.mass_per_area
+            h = self.material.thickness
+            self._mass = np.column_stack([np.repeat(mu * A[:, None], 3, 1),
+                                          np.repeat(mu * h * h / 4.0 * A[:, None], 3, 1)])
+        return self._mass.copy()
+
+    # ------------------------------------------------------------- diagnostics
+    def bending_strain(self, U) -> np.ndarray:
+        """||eps_b|| per element (quads first, then triangles) [1/length], the curvature measure of
+        the adaptivity criterion Eq. (25): the Euclidean norm of the local bending strain vector of
+        Eq. (6), root-mean-square over the element's integration points."""
+        xo, xn = self._current(U)
+        out = []
+        for b in self.blocks:
+            mb, _, _ = b.module.raw_strains(xo[b.conn], xn[b.conn])
+            kb = mb[..., 3:] - b.c["r_mb"][..., 3:]
+            eb = np.einsum("mgab,mgb->mga", b.c["T"], kb)
+            out.append(np.sqrt(np.mean(np.sum(eb * eb, -1), axis=1)))
+        return np.concatenate(out)
+
+    def interpenetration(self, U) -> list[np.ndarray]:
+        """n_p . d_p per element corner (Section 4.3), one (M,nn) array per element block:
+        n_p the unit normal of the deformed corner p (edges to its two neighbours), d_p the unit
+        deformed director; negative where the top and bottom surfaces interpenetrate."""
+        xo, xn = self._current(U)
+        out = []
+        for b in self.blocks:
+            P = xo[b.conn]
+            n = np.cross(np.roll(P, -1, axis=1) - P, np.roll(P, 1, axis=1) - P)
+            n /= np.linalg.norm(n, axis=-1, keepdims=True)
+            d = xn[b.conn]
+            d = d / np.linalg.norm(d, axis=-1, keepdims=True)
+            out.append(np.sum(n * d, -1))
+        return out
+
+    def interpenetrated_nodes(self, U) -> np.ndarray:
+        """(N,) bool: nodes where n_p . d_p < 0 in any element (Section 4.3)."""
+        flag = np.zeros(self.n_nodes, dtype=bool)
+        for b, nd in zip(self.blocks, self.interpenetration(U)):
+            flag[b.conn[nd < 0.0]] = True
+        return flag

@@ -50,13 +50,17 @@ Scene file format
     #                   both ends are in the set (lumped by the trapezoidal rule)
     # [[loads.surface]] force = [fx, fy, fz] gf/cm^2 on the whole sheet (dead load per initial area)
 
-    [[contact]]                           # zero or more rigid bodies (penalty contact)
+    [[contact]]                           # zero or more rigid bodies (solidshell.contact, penalty)
     type = "pedestal"                     # sphere:   centre = [x,y,z], radius
-    shape = "square"                      # plane:    point = [x,y,z], normal = [nx,ny,nz]
-    size = 10.0                           # pedestal: shape = "square" (size = side) or "disc"
-    centre = [0.0, 0.0, 0.0]              #           (diameter); centre = centre of its top face;
-                                          #           height (default 10)
-                                          # all:      penalty (optional), gap (optional)
+    shape = "square"                      # plane:    point = [x,y,z], normal = [nx,ny,nz] (the
+    size = 10.0                           #           side opposite the normal is solid)
+    centre = [0.0, 0.0, 0.0]              # pedestal: shape = "square" (size = side) or "disc"
+                                          #           (diameter); centre = centre of its top face;
+                                          #           height (default 10), edge_radius (default 0)
+                                          # all:      offset = distance kept between the body and
+                                          #           the mid-surface (h/2 for the lower face)
+    # The paper's pedestal scenes clamp the sheet on the pedestal edge and need no pedestal body
+    # (a picture still shows the pedestal); add one to keep folds out of the pedestal.
 
     [solver]
     kind = "static"                       # static | explicit | relax
@@ -111,9 +115,10 @@ ISOTROPIC_FIELDS = ("E", "nu", "h", "density", "shear_factor")
 CONTACT_KEYS = {
     "sphere": {"centre": "vec3", "radius": "pos"},
     "plane": {"point": "vec3", "normal": "vec3"},
-    "pedestal": {"shape": "str", "centre": "vec3", "size": "pos", "diameter": "pos", "height": "pos"},
+    "pedestal": {"shape": "str", "centre": "vec3", "size": "pos", "diameter": "pos", "height": "pos",
+                 "edge_radius": "nonneg"},
 }
-CONTACT_COMMON = {"type": "str", "penalty": "pos", "gap": "num"}
+CONTACT_COMMON = {"type": "str", "offset": "nonneg"}
 
 _DENSITY_RE = re.compile(r"^\s*\d+(\s*[xX×]\s*\d+)*\s*$")
 
@@ -196,7 +201,7 @@ def check_density(density: str, recipe: str | None = None, where: str = "mesh de
     parts = [int(p) for p in re.split(r"\s*[xX×]\s*", density.strip())]
     if any(p <= 0 for p in parts):
         raise InputError(f"{where}: malformed mesh density {density!r}: every count must be positive")
-    n = DENSITY_FACTORS.get(recipe or "")
+    n = _density_fields(recipe)
     if n is not None and len(parts) != n:
         example = {2: "20x80", 3: "48x16x4"}[n] if n in (2, 3) else "x".join(["10"] * n)
         raise InputError(f"{where}: malformed mesh density {density!r}: recipe {recipe!r} takes {n} "
@@ -205,28 +210,35 @@ def check_density(density: str, recipe: str | None = None, where: str = "mesh de
 
 
 def _recipe_params(recipe: str):
-    """(parameter names, required names) of a recipe: from solidshell.meshing.RECIPES when it is
-    importable, otherwise from the built-in contract table.  None when meshing knows the recipe but
-    its parameters cannot be introspected; False when the recipe is unknown."""
+    """(parameter names, required names) of a recipe, or False when the recipe is unknown.
+    The names come from solidshell.meshing.RECIPES when it is importable, else from the contract
+    table; a scene file must give every parameter of the contract table (self-documenting)."""
     try:
-        from . import meshing  # noqa: WPS433  (lazy: meshing imports gmsh)
+        from . import meshing  # lazy: meshing imports gmsh only when it meshes
         recipes = getattr(meshing, "RECIPES", {})
     except ImportError:
         recipes = {}
-    fn = recipes.get(recipe) if isinstance(recipes, dict) else None
-    if fn is not None and callable(fn):
-        try:
-            ps = [p for p in inspect.signature(fn).parameters.values()
-                  if p.name != "density" and p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)]
-            if ps:
-                return (tuple(p.name for p in ps), tuple(p.name for p in ps if p.default is p.empty))
-        except (TypeError, ValueError):
-            pass
-    if recipe in RECIPE_PARAMS:
-        return (RECIPE_PARAMS[recipe], RECIPE_PARAMS[recipe])
-    if isinstance(recipes, dict) and recipe in recipes:
-        return None  # known to meshing, parameters not introspectable: accept any
-    return False
+    r = recipes.get(recipe) if recipe != "from_file" else None
+    names = tuple(getattr(r, "geometry", ()) or ()) if r is not None else ()
+    required = RECIPE_PARAMS.get(recipe, ())
+    if not names:
+        if recipe not in RECIPE_PARAMS:
+            return False
+        names = RECIPE_PARAMS[recipe]
+    return names, tuple(p for p in required if p in names)
+
+
+def _density_fields(recipe: str | None) -> int | None:
+    if recipe is None:
+        return None
+    try:
+        from . import meshing
+        r = meshing.RECIPES.get(recipe)
+        if r is not None and getattr(r, "n_fields", 0):
+            return int(r.n_fields)
+    except (ImportError, AttributeError):
+        pass
+    return DENSITY_FACTORS.get(recipe)
 
 
 # --------------------------------------------------------------------------- the Scene
@@ -426,8 +438,8 @@ class Scene:
                     ent[k] = _vec3(ctx, f"{key}.{k}", v)
                 elif kind == "pos":
                     ent[k] = _num(ctx, f"{key}.{k}", v, positive=True)
-                elif kind == "num":
-                    ent[k] = _num(ctx, f"{key}.{k}", v)
+                elif kind == "nonneg":
+                    ent[k] = _num(ctx, f"{key}.{k}", v, nonneg=True)
                 else:
                     ent[k] = _str(ctx, f"{key}.{k}", v)
             if t == "sphere":

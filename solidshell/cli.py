@@ -1,0 +1,152 @@
+"""Command line: ``solidshell scenes | mesh | run`` (also ``python -m solidshell ...``).
+
+    solidshell scenes
+    solidshell mesh SCENE [--mesh 48x16x4] [--out DIR]
+    solidshell run  SCENE [--mesh M] [--solver static|explicit|relax] [--set key=value ...] [--out DIR]
+
+SCENE is a packaged scene name (``solidshell scenes`` lists them) or the path of a .toml scene
+file.  ``--set`` overrides any scene key by its dotted name (``--set solver.static.c=2e-3``,
+``--set material.warp_angle=90``, ``--set solver.explicit.t_end=0.4``); the value is read as a TOML
+value when it is one (numbers, true/false, [arrays], "strings"), else as a bare string.
+
+Exit status: 0 done (``run``: converged), 1 the solver did not converge or stopped (the last state
+is written), 2 bad input (one line on stderr, no traceback), 130 interrupted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import tomllib
+
+from .errors import InputError, SolverError
+
+EXIT_OK, EXIT_NOT_CONVERGED, EXIT_INPUT = 0, 1, 2
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with usage errors as one line and exit status 2."""
+
+    def error(self, message):
+        raise InputError(f"{self.prog}: {message}")
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = _Parser(prog="solidshell", description="Fabric drape with ANS solid-shell elements "
+                "(Xie, Sze & Zhou, FEAD 106 (2015) 85-102).  Units: cm, gf, s.")
+    from . import __version__
+    p.add_argument("--version", action="version", version=f"solidshell {__version__}")
+    sub = p.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+    sub.required = True
+
+    sub.add_parser("scenes", help="list the packaged scenes (name, paper section, default mesh, title)")
+
+    m = sub.add_parser("mesh", help="build a scene's mesh and write it with pictures and a summary")
+    m.add_argument("scene", help="scene name or path of a .toml scene file")
+    m.add_argument("--mesh", metavar="DENSITY", help="mesh density, e.g. 48x16x4 (default: the scene's)")
+    m.add_argument("--set", metavar="KEY=VALUE", action="append", default=[], help="override a scene key")
+    m.add_argument("--out", metavar="DIR", help="output directory (default: runs/<scene>-mesh)")
+
+    r = sub.add_parser("run", help="run a scene and write the results")
+    r.add_argument("scene", help="scene name or path of a .toml scene file")
+    r.add_argument("--mesh", metavar="DENSITY", help="mesh density, e.g. 24x8x4 (default: the scene's)")
+    r.add_argument("--solver", choices=["static", "explicit", "relax"],
+                   help="solver (default: the scene's [solver] kind)")
+    r.add_argument("--set", metavar="KEY=VALUE", action="append", default=[],
+                   help="override a scene key, e.g. solver.static.c=2e-3 (repeatable)")
+    r.add_argument("--out", metavar="DIR", help="output directory (default: runs/<scene>)")
+    r.add_argument("--no-progress", action="store_true", help="no progress bar")
+    return p
+
+
+def _cmd_scenes(args) -> int:
+    from . import scenes
+
+    rows = []
+    for name in scenes.available():
+        s = scenes.load(name)
+        rows.append((name, f"§{s.paper_section}" if s.paper_section else "-", s.density or "file", s.title))
+    w = [max(len(r[i]) for r in rows) for i in range(3)]
+    for r in rows:
+        print(f"{r[0]:<{w[0]}}  {r[1]:<{w[1]}}  {r[2]:<{w[2]}}  {r[3]}")
+    return EXIT_OK
+
+
+def _default_out(scene: str, suffix: str = "") -> str:
+    from pathlib import Path
+
+    stem = Path(scene).stem if scene.endswith(".toml") else scene
+    return str(Path("runs") / f"{stem}{suffix}")
+
+
+def _cmd_mesh(args) -> int:
+    from .runner import run_scene
+    from .scenes import parse_overrides
+
+    out_dir = args.out or _default_out(args.scene, "-mesh")
+    res = run_scene(args.scene, mesh=args.mesh, solver="none", out_dir=out_dir, progress=True,
+                    overrides=parse_overrides(args.set))
+    c = res.summary["counts"]
+    print(f"{res.summary['scene']}: mesh {res.summary['mesh']}: {c['nodes']} nodes, {c['quads']} quads, "
+          f"{c['triangles']} triangles; node sets: "
+          + ", ".join(f"{k} ({v})" for k, v in c["node_sets"].items()))
+    print(f"wrote {res.out_dir}/: " + ", ".join(res.summary["files"]))
+    return EXIT_OK
+
+
+def _cmd_run(args) -> int:
+    from .runner import run_scene
+    from .scenes import parse_overrides
+
+    out_dir = args.out or _default_out(args.scene)
+    res = run_scene(args.scene, mesh=args.mesh, solver=args.solver, out_dir=out_dir,
+                    progress=not args.no_progress, overrides=parse_overrides(args.set))
+    s = res.summary
+    c = s["counts"]
+    status = "converged" if s.get("converged") else "NOT converged"
+    line = f"{s['scene']}: {s['solver']} on mesh {s['mesh']} ({c['nodes']} nodes, {c['elements']} elements): {status}"
+    if s.get("message"):
+        line += f" -- {s['message']}"
+    print(line)
+    extras = [f"{k} = {s[k]:.4g}" if isinstance(s[k], float) else f"{k} = {s[k]}"
+              for k in ("drape_coefficient", "fold_count", "interpenetrated_nodes", "max_displacement")
+              if s.get(k) is not None]
+    if extras:
+        print("  " + ", ".join(extras))
+    print(f"  {s['timings'].get('total', 0.0):.1f} s; wrote {res.out_dir}/: " + ", ".join(s["files"]))
+    return EXIT_OK if s.get("converged") else EXIT_NOT_CONVERGED
+
+
+def main(argv=None) -> int:
+    """Entry point; returns the exit status (the console script exits with it)."""
+    try:
+        args = _parser().parse_args(argv)
+        if args.command == "scenes":
+            return _cmd_scenes(args)
+        if args.command == "mesh":
+            return _cmd_mesh(args)
+        return _cmd_run(args)
+    except InputError as e:
+        _say(f"solidshell: error: {e}")
+        return EXIT_INPUT
+    except tomllib.TOMLDecodeError as e:
+        _say(f"solidshell: error: not valid TOML: {e}")
+        return EXIT_INPUT
+    except OSError as e:
+        where = f" {e.filename}" if getattr(e, "filename", None) else ""
+        _say(f"solidshell: error:{where}: {e.strerror or e}")
+        return EXIT_INPUT
+    except SolverError as e:
+        _say(f"solidshell: solver stopped: {e}")
+        return EXIT_NOT_CONVERGED
+    except KeyboardInterrupt:
+        _say("solidshell: interrupted")
+        return 130
+
+
+def _say(msg: str) -> None:
+    print(" ".join(str(msg).split()), file=sys.stderr)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

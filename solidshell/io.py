@@ -1,0 +1,250 @@
+"""Run output: meshes and fields for ParaView (XDMF + VTU via meshio), time series, summary.json.
+
+A run directory holds (only the files that apply)::
+
+    mesh.xdmf, mesh.vtu        the undeformed mesh: point data ``director`` (X_n) and one 0/1
+                               field ``set:<name>`` per node set
+    result.xdmf, result.vtu    the undeformed mesh with the final state: ``displacement`` (U_o),
+                               ``director_displacement`` (U_n), ``director`` (X_n),
+                               ``deformed_director`` (X_n + U_n), ``position`` (X_o + U_o) and the
+                               node sets; in ParaView use "Warp By Vector" with ``displacement``
+    deformed.vtu               the deformed mid-surface itself (points X_o + U_o), same fields
+    series.xdmf                dynamic runs: one frame per kept time (the time in the XDMF
+                               ``Time`` value), fields ``displacement`` and ``director_displacement``
+    summary.json               inputs, counts, units, versions, timings and the solver's info
+    top.png, iso.png, ...      pictures (solidshell.plotting)
+
+XDMF files are written with inline XML data (no HDF5 needed), so each is self-contained.  Every
+file is written atomically: to a temporary file in the same directory, flushed and fsync'ed, then
+renamed over the final name with ``os.replace`` -- a crash or an exception mid-write leaves no
+file (and no temporary) under the final name.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import math
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+UNITS = {"length": "cm", "force": "gf", "time": "s", "mass": "gf*s^2/cm", "angle": "deg",
+         "displacement": "cm", "energy": "gf*cm", "rigidity_tensile": "gf/cm",
+         "rigidity_bending": "gf*cm^2/cm", "weight": "gf/cm^2"}
+
+
+# --------------------------------------------------------------------------- atomic writes
+def _fsync_dir(d: Path) -> None:
+    try:
+        fd = os.open(str(d), os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
+
+
+def _umask() -> int:
+    old = os.umask(0o022)
+    os.umask(old)
+    return old
+
+
+_FILE_MODE = 0o666 & ~_umask()   # what open() would give a new file (mkstemp gives 0600)
+
+
+def _fsync_file(p: Path) -> None:
+    with open(p, "rb+") as f:
+        os.fsync(f.fileno())
+
+
+@contextlib.contextmanager
+def atomic_path(path, suffix: str | None = None):
+    """Yield a temporary path in the same directory as ``path``; on normal exit the file written
+    there is fsync'ed and renamed to ``path``; on an exception it is removed.  For writers that
+    take a file name (meshio, matplotlib).  ``suffix`` (default: path's suffix) lets writers that
+    pick the format from the extension see the right one."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=suffix if suffix is not None else path.suffix,
+                               dir=path.parent)
+    os.close(fd)
+    tmp = Path(tmp)
+    try:
+        yield tmp
+        _fsync_file(tmp)
+        os.chmod(tmp, _FILE_MODE)
+        os.replace(tmp, path)
+        _fsync_dir(path.parent)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            tmp.unlink()
+        raise
+
+
+@contextlib.contextmanager
+def atomic_write(path, mode: str = "w", encoding: str | None = "utf-8"):
+    """``with atomic_write(p) as f: f.write(...)`` -- the file appears under ``p`` complete or not
+    at all."""
+    binary = "b" in mode
+    with atomic_path(path) as tmp:
+        with open(tmp, mode, encoding=None if binary else encoding) as f:
+            yield f
+            f.flush()
+            os.fsync(f.fileno())
+
+
+def write_json(path, data) -> Path:
+    """Write ``data`` as indented JSON, atomically (numpy scalars/arrays become plain numbers/lists;
+    non-finite floats become null)."""
+    text = json.dumps(to_jsonable(data), indent=2, allow_nan=False) + "\n"
+    with atomic_write(path) as f:
+        f.write(text)
+    return Path(path)
+
+
+def to_jsonable(v):
+    """Plain JSON types from numpy values, paths, tuples; NaN/inf -> None.  Other objects raise
+    TypeError (so a bad summary fails loudly instead of writing half a file)."""
+    if isinstance(v, dict):
+        return {str(k): to_jsonable(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple)):
+        return [to_jsonable(x) for x in v]
+    if isinstance(v, np.ndarray):
+        return to_jsonable(v.tolist())
+    if isinstance(v, (bool, np.bool_)):
+        return bool(v)
+    if isinstance(v, (int, np.integer)):
+        return int(v)
+    if isinstance(v, (float, np.floating)):
+        f = float(v)
+        return f if math.isfinite(f) else None
+    if v is None or isinstance(v, str):
+        return v
+    if isinstance(v, Path):
+        return str(v)
+    raise TypeError(f"summary value of type {type(v).__name__} is not JSON-serialisable: {v!r}")
+
+
+# --------------------------------------------------------------------------- meshio files
+@contextlib.contextmanager
+def _no_h5py_needed():
+    """meshio 5.3's XdmfWriter imports h5py unconditionally, even for data_format="XML" where it
+    never touches it.  When h5py is not installed (it is not a dependency), lend the writer an
+    empty stand-in module for the duration of the call."""
+    import importlib.util
+    import sys
+    import types
+
+    if "h5py" in sys.modules or importlib.util.find_spec("h5py") is not None:
+        yield
+        return
+    sys.modules["h5py"] = types.ModuleType("h5py")
+    try:
+        yield
+    finally:
+        sys.modules.pop("h5py", None)
+
+
+def _fields(mesh, U=None) -> dict:
+    """Point data of a state U (N,6) on the mesh (nothing extra when U is None)."""
+    if U is None:
+        return {}
+    U = np.asarray(U, dtype=float).reshape(mesh.n_nodes, 6)
+    return {"displacement": U[:, :3].copy(),
+            "director_displacement": U[:, 3:].copy(),
+            "deformed_director": mesh.directors + U[:, 3:],
+            "position": mesh.nodes + U[:, :3]}
+
+
+def write_mesh_file(path, mesh, U=None, deformed: bool = False) -> Path:
+    """Write the mesh (and the state U, if given) with meshio; the format comes from the suffix
+    (.xdmf -> XDMF with inline XML data, .vtu -> VTU).  ``deformed`` puts the points at X_o + U_o."""
+    import meshio
+
+    path = Path(path)
+    m = mesh.to_meshio(point_data=_fields(mesh, U))
+    if deformed and U is not None:
+        m.points = m.points + np.asarray(U, float).reshape(-1, 6)[:, :3]
+    # meshio's XDMF writer wants float/int data only; sets are int32 already
+    with atomic_path(path) as tmp:
+        if path.suffix.lower() == ".xdmf":
+            with _no_h5py_needed():
+                meshio.xdmf.write(str(tmp), m, data_format="XML")
+        elif path.suffix.lower() == ".vtu":
+            meshio.vtu.write(str(tmp), m, binary=True, compression="zlib")
+        else:
+            meshio.write(str(tmp), m)
+    return path
+
+
+def write_time_series(path, mesh, frames) -> Path:
+    """XDMF time series (meshio TimeSeriesWriter, inline XML data) of ``frames`` = [(t, U (N,6)), ...]
+    on the undeformed mesh: fields ``displacement`` and ``director_displacement`` per frame."""
+    import meshio
+
+    path = Path(path)
+    cells = []
+    if mesh.n_quads:
+        cells.append(("quad", mesh.quads))
+    if mesh.n_tris:
+        cells.append(("triangle", mesh.tris))
+    with atomic_path(path) as tmp:
+        with meshio.xdmf.TimeSeriesWriter(str(tmp), data_format="XML") as w:
+            w.write_points_cells(mesh.nodes, cells)
+            for t, U in frames:
+                U = np.asarray(U, dtype=float).reshape(mesh.n_nodes, 6)
+                w.write_data(float(t), point_data={"displacement": U[:, :3].copy(),
+                                                   "director_displacement": U[:, 3:].copy()})
+    return path
+
+
+def read_state(path):
+    """(mesh, U) back from a result .vtu/.xdmf written here (U from ``displacement`` and
+    ``director_displacement``; zeros where absent)."""
+    import meshio
+
+    from .mesh import ShellMesh
+
+    with _no_h5py_needed():
+        m = meshio.read(str(path))
+    mesh = ShellMesh.from_meshio(m)
+    U = np.zeros((mesh.n_nodes, 6))
+    pd = m.point_data or {}
+    if "displacement" in pd:
+        U[:, :3] = np.asarray(pd["displacement"], float)[: mesh.n_nodes]
+    if "director_displacement" in pd:
+        U[:, 3:] = np.asarray(pd["director_displacement"], float)[: mesh.n_nodes]
+    return mesh, U
+
+
+# --------------------------------------------------------------------------- summaries
+def package_versions() -> dict:
+    """Versions of Python and of the packages a run depends on (without importing them)."""
+    import platform
+    from importlib import metadata
+
+    out = {"python": platform.python_version()}
+    for name in ("solidshell", "numpy", "scipy", "numba", "gmsh", "meshio", "matplotlib", "scikit-fem"):
+        try:
+            out[name.replace("-", "_")] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            out[name.replace("-", "_")] = None
+    return out
+
+
+def mesh_counts(mesh, fixed=None) -> dict:
+    c = {"nodes": int(mesh.n_nodes), "quads": int(mesh.n_quads), "triangles": int(mesh.n_tris),
+         "elements": int(mesh.n_elements), "dofs": 6 * int(mesh.n_nodes),
+         "node_sets": {k: int(len(v)) for k, v in sorted(mesh.node_sets.items())}}
+    if fixed is not None:
+        nf = int(np.count_nonzero(fixed))
+        c["fixed_dofs"] = nf
+        c["free_dofs"] = c["dofs"] - nf
+    return c

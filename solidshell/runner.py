@@ -1,0 +1,410 @@
+"""run_scene: scene -> mesh -> model + problem -> solver -> files.
+
+    out = run_scene("square-pedestal", mesh="48x16x4", solver="static", out_dir="runs/sp")
+    out.summary["converged"], out.U, out.mesh, out.out_dir
+
+The model, boundary, contact, analysis and solver modules are imported only when a solver runs,
+so building and writing a mesh (``solver="none"``, what ``solidshell mesh`` does) stays fast.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from . import io as sio
+from .errors import InputError
+from .scenes import Scene, check_density, load
+
+MESH_SUFFIXES = (".msh", ".geo", ".vtu", ".vtk", ".xdmf", ".inp", ".med")
+
+
+@dataclass
+class RunOutput:
+    """What :func:`run_scene` returns."""
+
+    summary: dict
+    U: np.ndarray
+    mesh: Any
+    out_dir: Path | None
+    scene: Scene | None = None
+    result: Any = None                      # the solver's SolveResult (None for a mesh-only run)
+    files: list = field(default_factory=list)
+
+    @property
+    def converged(self):
+        return self.summary.get("converged")
+
+
+# --------------------------------------------------------------------------- progress
+class _Bar:
+    """progress(fraction, text) drawn as a tqdm bar on stderr, shown only after one second."""
+
+    def __init__(self, label: str):
+        from tqdm import tqdm
+
+        self.bar = tqdm(total=1000, desc=label, file=sys.stderr, delay=1.0, leave=False,
+                        bar_format="{desc}: {percentage:3.0f}%|{bar}| {elapsed}<{remaining} {postfix}")
+
+    def __call__(self, fraction: float, text: str = "") -> None:
+        try:
+            n = int(round(1000 * min(max(float(fraction), 0.0), 1.0)))
+        except (TypeError, ValueError):
+            return
+        if text:
+            self.bar.set_postfix_str(str(text)[:60], refresh=False)
+        if n != self.bar.n:
+            self.bar.update(n - self.bar.n)     # update() honours the 1 s delay
+
+    def close(self):
+        self.bar.close()
+
+
+def _phase(cb, lo, hi):
+    """A progress callback mapping [0,1] onto [lo,hi] of the outer one."""
+    return lambda f, text="": cb(lo + (hi - lo) * float(f), text)
+
+
+# --------------------------------------------------------------------------- building blocks
+def build_scene_mesh(scene: Scene, mesh=None):
+    """(ShellMesh, mesh name) for a scene: ``mesh`` None (the scene's density), a density string,
+    a mesh/geometry file path or a ShellMesh."""
+    from .mesh import ShellMesh
+
+    if isinstance(mesh, ShellMesh):
+        return mesh, "user ShellMesh"
+    if mesh is not None and (isinstance(mesh, Path) or str(mesh).lower().endswith(MESH_SUFFIXES)):
+        from . import meshing
+        p = Path(mesh)
+        return meshing.from_file(p), str(p)
+    from . import meshing
+
+    if "file" in scene.geometry:
+        if mesh is not None:
+            raise InputError(f"scene {scene.name!r} reads its mesh from {scene.geometry['file']}; "
+                             f"a density ({mesh!r}) applies to recipe geometries only")
+        p = Path(scene.geometry["file"])
+        return meshing.from_file(p), str(p)
+    density = scene.density if mesh is None else check_density(str(mesh), scene.recipe, "--mesh")
+    params = {k: v for k, v in scene.geometry.items() if k != "recipe"}
+    return meshing.build_mesh(scene.recipe, density, **params), density
+
+
+def support_mask(scene: Scene, mesh) -> np.ndarray:
+    """(N,6) bool: clamped sets fix all six dofs, fixed_translations sets fix U_o."""
+    fixed = np.zeros((mesh.n_nodes, 6), dtype=bool)
+    for name in scene.supports.get("clamped", ()):
+        fixed[mesh.node_set(name)] = True
+    for name in scene.supports.get("fixed_translations", ()):
+        fixed[mesh.node_set(name), :3] = True
+    return fixed
+
+
+def _lumped_areas(mesh) -> np.ndarray:
+    """(N,) trapezoidal-rule area share of each node of a flat or curved mesh (corner Jacobians)."""
+    A = np.zeros(mesh.n_nodes)
+    if mesh.n_quads:
+        P = mesh.nodes[mesh.quads]
+        cn = np.cross(np.roll(P, -1, axis=1) - P, np.roll(P, 1, axis=1) - P)
+        np.add.at(A, mesh.quads.ravel(), (np.linalg.norm(cn, axis=2) / 4.0).ravel())
+    if mesh.n_tris:
+        P = mesh.nodes[mesh.tris]
+        a = 0.5 * np.linalg.norm(np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]), axis=1)
+        np.add.at(A, mesh.tris.ravel(), np.repeat(a[:, None] / 3.0, 3, axis=1).ravel())
+    return A
+
+
+def extra_loads(scene: Scene, mesh) -> np.ndarray:
+    """(N,6) point, line and surface loads of the scene [gf]."""
+    P = np.zeros((mesh.n_nodes, 6))
+    for i, ld in enumerate(scene.loads["point"]):
+        f = np.asarray(ld["force"], float)
+        if "at" in ld:
+            idx = np.array([int(np.argmin(np.linalg.norm(mesh.nodes - np.asarray(ld["at"]), axis=1)))])
+        else:
+            idx = mesh.node_set(ld["node_set"])
+        P[idx, :3] += f / len(idx)
+    if scene.loads["line"]:
+        be = mesh.boundary_edges()
+        for ld in scene.loads["line"]:
+            nodes = mesh.node_set(ld["node_set"])
+            inset = np.zeros(mesh.n_nodes, dtype=bool)
+            inset[nodes] = True
+            e = be[inset[be[:, 0]] & inset[be[:, 1]]]
+            if len(e) == 0:
+                raise InputError(f"line load on node set {ld['node_set']!r}: no boundary edge has both "
+                                 f"ends in the set")
+            L = np.linalg.norm(mesh.nodes[e[:, 1]] - mesh.nodes[e[:, 0]], axis=1)
+            f = np.asarray(ld["force"], float)
+            for k in (0, 1):
+                np.add.at(P[:, :3], e[:, k], 0.5 * L[:, None] * f[None, :])
+    if scene.loads["surface"]:
+        A = _lumped_areas(mesh)
+        for ld in scene.loads["surface"]:
+            P[:, :3] += A[:, None] * np.asarray(ld["force"], float)[None, :]
+    return P
+
+
+def gravity(model, scene: Scene) -> np.ndarray:
+    """(N,6) self-weight: boundary.gravity_loads when available, else weight/area x nodal areas."""
+    d = np.asarray(scene.loads["gravity_direction"], float)
+    d = d / np.linalg.norm(d)
+    try:
+        from .boundary import gravity_loads
+    except ImportError:
+        gravity_loads = None
+    if gravity_loads is not None:
+        return np.asarray(gravity_loads(model, direction=tuple(d)), float).reshape(-1, 6)
+    A = model.nodal_areas() if hasattr(model, "nodal_areas") else _lumped_areas(model.mesh)
+    P = np.zeros((len(A), 6))
+    P[:, :3] = model.material.weight_per_area * A[:, None] * d[None, :]
+    return P
+
+
+def contact_bodies(scene: Scene) -> list:
+    """solidshell.contact bodies of the scene's [[contact]] tables (empty: no contact search)."""
+    if not scene.contact:
+        return []
+    from . import contact as C
+
+    out = []
+    for c in scene.contact:
+        off = c.get("offset", 0.0)
+        if c["type"] == "sphere":
+            out.append(C.Sphere(c["centre"], c["radius"], offset=off))
+        elif c["type"] == "plane":
+            out.append(C.Plane(c["point"], c["normal"], offset=off))
+        else:
+            kw = dict(height=c.get("height"), edge_radius=c.get("edge_radius", 0.0), offset=off)
+            if c["shape"] == "disc":
+                out.append(C.Pedestal(c["centre"], radius=c["diameter"] / 2, **kw))
+            else:
+                out.append(C.Pedestal(c["centre"], half_widths=(c["size"] / 2, c["size"] / 2), **kw))
+    return out
+
+
+def _pedestal_area(scene: Scene) -> float | None:
+    p = scene.pedestal()
+    if p is None:
+        return None
+    return p["size"] ** 2 if p["shape"] == "square" else np.pi * p["diameter"] ** 2 / 4.0
+
+
+def _analyse(scene: Scene, mesh, U, model=None) -> dict:
+    """Drape measures for scenes with a pedestal or a sphere; interpenetrated nodes for all."""
+    out = {}
+    if model is not None and hasattr(model, "interpenetrated_nodes"):
+        out["interpenetrated_nodes"] = int(np.count_nonzero(model.interpenetrated_nodes(U)))
+    ped = _pedestal_area(scene)
+    if ped is None and not any(c["type"] == "sphere" for c in scene.contact):
+        return out
+    from . import analysis
+
+    kw = {"pedestal_area": ped or 0.0}
+    if ped is None:   # cloth on a sphere: the sheet is whole; measure about the sphere's axis
+        c = next(c for c in scene.contact if c["type"] == "sphere")
+        kw["center"] = (c["centre"][0], c["centre"][1])
+    d = analysis.drape_summary(mesh, U, **kw)
+    out["projected_boundary"] = d.pop("projected_boundary")
+    out.update(d)
+    return out
+
+
+# --------------------------------------------------------------------------- the run
+def run_scene(scene, mesh=None, solver=None, out_dir=None, progress=True, overrides=None,
+              **settings) -> RunOutput:
+    """Run a scene (a name, a .toml path or a Scene).
+
+    mesh      : None (the scene's density), a density like "24x8x4", a mesh file, or a ShellMesh
+    solver    : None (the scene's [solver] kind), "static" | "explicit" | "relax", or "none"
+                (build and write the mesh only)
+    out_dir   : directory for the files (created); None writes nothing
+    progress  : True (a tqdm bar on stderr after 1 s), False, or a callback(fraction, text)
+    overrides : dotted scene keys, e.g. {"solver.static.c": 2e-3, "material.warp_angle": 90}
+    settings  : overrides of the chosen solver's settings (e.g. t_end=0.4, alpha=1.0)
+    """
+    t_start = time.perf_counter()
+    timings = {}
+    sc = load(scene)
+    sc = sc.with_overrides(overrides)
+    kind = sc.solver["kind"] if solver is None else str(solver)
+    if kind not in ("none", "static", "explicit", "relax"):
+        raise InputError(f"unknown solver {kind!r}; choose one of: static, explicit, relax, none")
+
+    bar = None
+    if callable(progress):
+        cb = progress
+    elif progress:
+        bar = _Bar(sc.name)
+        cb = bar
+    else:
+        from .problem import no_progress
+        cb = no_progress
+    try:
+        return _run(sc, kind, mesh, out_dir, cb, settings, timings, t_start)
+    finally:
+        if bar is not None:
+            bar.close()
+
+
+def _run(sc, kind, mesh_arg, out_dir, cb, settings, timings, t_start) -> RunOutput:
+    files = []
+    out = Path(out_dir) if out_dir is not None else None
+    if out is not None:
+        if out.exists() and not out.is_dir():
+            raise InputError(f"output path {out} exists and is not a directory")
+        try:
+            out.mkdir(parents=True, exist_ok=True)
+        except OSError as e:
+            raise InputError(f"cannot create output directory {out}: {e.strerror or e}") from None
+
+    # mesh -----------------------------------------------------------------------------------
+    cb(0.0, "meshing")
+    t = time.perf_counter()
+    mesh, mesh_name = build_scene_mesh(sc, mesh_arg)
+    fixed = support_mask(sc, mesh)            # unknown / empty node sets fail here, before solving
+    material = sc.material_object()
+    loads_extra = extra_loads(sc, mesh)
+    timings["mesh"] = time.perf_counter() - t
+
+    summary = {
+        "scene": sc.name, "title": sc.title, "paper_section": sc.paper_section,
+        "scene_file": sc.source, "mesh": mesh_name, "recipe": sc.recipe,
+        "geometry": {k: (str(v) if isinstance(v, Path) else v) for k, v in sc.geometry.items()},
+        "solver": kind, "settings": None, "counts": sio.mesh_counts(mesh, fixed),
+        "area": float(mesh.area()), "pedestal_area": _pedestal_area(sc),
+        "material": _material_summary(material), "model": dict(sc.model),
+        "supports": {k: list(v) for k, v in sc.supports.items()},
+        "contact": [dict(c) for c in sc.contact],
+        "units": dict(sio.UNITS), "versions": sio.package_versions(),
+        "converged": None, "message": "mesh only" if kind == "none" else "",
+    }
+    summary["total_weight"] = float(material.weight_per_area * summary["area"])
+
+    if out is not None:
+        cb(0.03, "writing mesh")
+        t = time.perf_counter()
+        for name in ("mesh.xdmf", "mesh.vtu"):
+            files.append(sio.write_mesh_file(out / name, mesh))
+        timings["write_mesh"] = time.perf_counter() - t
+
+    U = np.zeros((mesh.n_nodes, 6))
+    result = None
+    model = None
+    if kind != "none":
+        cb(0.05, "setting up")
+        t = time.perf_counter()
+        from . import solvers
+        from .model import Model
+        from .problem import Problem
+
+        model = Model(mesh, material, thickness_strain=sc.model["thickness_strain"], mu=sc.model["mu"])
+        loads = loads_extra.copy()
+        if sc.loads["gravity"]:
+            loads += gravity(model, sc)
+        problem = Problem(model, fixed, loads, contact=contact_bodies(sc), name=sc.name)
+        s = sc.solver_settings(kind)
+        s.update(settings)
+        summary["settings"] = s
+        fn = solvers.get(kind)
+        timings["setup"] = time.perf_counter() - t
+        t = time.perf_counter()
+        result = fn(problem, dict(s), _phase(cb, 0.08, 0.9))
+        timings["solve"] = time.perf_counter() - t
+        U = np.asarray(result.U, float).reshape(mesh.n_nodes, 6)
+        summary["converged"] = bool(result.converged)
+        summary["message"] = str(result.message or "")
+        finite = bool(np.all(np.isfinite(U)))
+        summary["finite"] = finite
+        if finite:
+            summary["max_displacement"] = float(np.max(np.linalg.norm(U[:, :3], axis=1)))
+            summary["min_z"] = float(np.min(mesh.nodes[:, 2] + U[:, 2]))
+        for k, v in (result.info or {}).items():
+            key = k if k not in summary else f"solver_{k}"
+            summary[key] = v
+        summary["frames"] = len(result.frames or [])
+        if finite:
+            try:
+                a = _analyse(sc, mesh, U, model)
+            except Exception as e:      # analysis must never lose a solved state
+                summary["analysis_error"] = f"{type(e).__name__}: {e}"
+            else:
+                boundary = a.pop("projected_boundary", None)
+                for k, v in a.items():
+                    summary.setdefault(k, v)
+                if boundary is not None and out is not None:
+                    p = out / "projected_boundary.csv"
+                    with sio.atomic_write(p) as f:
+                        f.write("# projected boundary of the draped sheet on the X-Y plane [cm]\nx,y\n")
+                        f.writelines(f"{x:.6g},{y:.6g}\n" for x, y in boundary)
+                    files.append(p)
+
+    # files ----------------------------------------------------------------------------------
+    if out is not None:
+        cb(0.9, "writing results")
+        t = time.perf_counter()
+        if result is not None:
+            files.append(sio.write_mesh_file(out / "result.xdmf", mesh, U))
+            files.append(sio.write_mesh_file(out / "result.vtu", mesh, U))
+            if np.all(np.isfinite(U)):
+                files.append(sio.write_mesh_file(out / "deformed.vtu", mesh, U, deformed=True))
+            frames = [(float(tf), Uf) for tf, Uf in (result.frames or [])]
+            if len(frames) > 1:
+                files.append(sio.write_time_series(out / "series.xdmf", mesh, frames))
+                summary["series_parameter"] = "time [s]" if kind in ("explicit", "relax") else "load factor"
+        state = U if (result is not None and np.all(np.isfinite(U))) else None
+        sub = _subtitle(sc, mesh_name, mesh, kind, summary)
+        from .plotting import render
+        for view in sc.output["pictures"]:
+            files.append(render(out / f"{view}.png", mesh, state, view=view, title=sc.title, scene=sc,
+                                subtitle=sub))
+        if result is not None and kind in ("explicit", "relax") and sc.output["snapshots"] and result.frames:
+            times = np.array([float(tf) for tf, _ in result.frames])
+            for ts in sc.output["snapshots"]:
+                j = int(np.argmin(np.abs(times - ts)))
+                if abs(times[j] - ts) <= 1e-6 + 1e-3 * max(ts, 1.0) and np.all(np.isfinite(result.frames[j][1])):
+                    files.append(render(out / f"iso_t{ts:.3f}.png", mesh, result.frames[j][1], view="iso",
+                                        title=sc.title, scene=sc, subtitle=f"t = {times[j]:.3f} s"))
+        timings["write_results"] = time.perf_counter() - t
+        timings["total"] = time.perf_counter() - t_start
+        summary["timings"] = {k: round(v, 4) for k, v in timings.items()}
+        summary["files"] = sorted({Path(f).name for f in files} | {"summary.json"})
+        sio.write_json(out / "summary.json", summary)
+        files.append(out / "summary.json")
+    else:
+        timings["total"] = time.perf_counter() - t_start
+        summary["timings"] = {k: round(v, 4) for k, v in timings.items()}
+    cb(1.0, "done")
+    summary = sio.to_jsonable(summary)
+    return RunOutput(summary=summary, U=U, mesh=mesh, out_dir=out, scene=sc, result=result,
+                     files=[Path(f) for f in files])
+
+
+def _subtitle(sc, mesh_name, mesh, kind, summary) -> str:
+    parts = [f"mesh {mesh_name}", f"{mesh.n_nodes} nodes", f"{mesh.n_elements} elements"]
+    if kind == "none":
+        parts.append("undeformed")
+    else:
+        parts.append(kind)
+        dc = summary.get("drape_coefficient")
+        if isinstance(dc, (int, float)):
+            parts.append(f"DC = {dc:.3f}")
+        if summary.get("fold_count") is not None and summary.get("pedestal_area") is not None:
+            parts.append(f"{summary['fold_count']} folds")
+        if summary.get("converged") is False:
+            parts.append("NOT CONVERGED")
+    return ", ".join(parts)
+
+
+def _material_summary(m) -> dict:
+    d = {"type": type(m).__name__, "name": getattr(m, "name", None),
+         "C_m": np.asarray(m.C_m).tolist(), "C_b": np.asarray(m.C_b).tolist(),
+         "C_t": np.asarray(m.C_t).tolist(), "E_z": float(m.E_z), "thickness": float(m.thickness),
+         "mass_per_area": float(m.mass_per_area), "weight_per_area": float(m.weight_per_area),
+         "warp_angle_deg": float(np.degrees(m.warp_angle_rad))}
+    return d

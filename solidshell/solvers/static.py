@@ -1,0 +1,676 @@
+"""Static equilibrium: the paper's lambda-scaled Newton-Raphson, an energy-minimising Newton, and
+Crisfield's arc-length method.
+
+Equilibrium (Eq. 16): F(D) = P on the free dofs, with D the global displacements [U_o | U_n] per
+node, F = dU/dD the internal force (Eq. 9) and P the dead external loads.  Because P is dead,
+equilibrium is a stationary point of the total potential Pi(D) = U(D) - P.D, and a *stable*
+equilibrium is a minimum of Pi: a positive-definite K_t on the free dofs.
+
+Methods (``method=``)
+---------------------
+``"paper"``  Section 3, Eqs. (16)-(18): full Newton-Raphson K_t dD = P - F with the multiplier
+    lambda = c L_f / max|dD| (capped at 1) on every update, D <- D + lambda dD.  ``c`` is the
+    paper's 1e-3 ... 1e-2 (default 1e-2); L_f the free-hanging length (default: the largest
+    distance from a free node to the nearest fixed node).  No line search, no safeguard: the
+    paper's scheme, kept as a reference (it needs at least ~ (max displacement)/(c L_f) iterations).
+``"newton"`` (default)  Newton on Pi with a backtracking (Armijo) line search, a step-length cap,
+    and a tangent shift K_t + sigma diag|K_t| whenever K_t is not positive definite (detected by
+    the inertia of an LDL^T-type factorisation: SuperLU with diagonal pivoting in symmetric mode,
+    whose U diagonal has as many negative entries as K has negative eigenvalues, Sylvester's law);
+    sigma grows tenfold until the factorisation is positive definite and shrinks tenfold on the
+    next iteration.  Every direction is therefore a descent direction of Pi and the iteration
+    cannot climb to a saddle or a maximum.  A failed load step is bisected automatically.
+``"arclength"``  Crisfield's cylindrical arc-length method (load factor as an extra unknown, the
+    quadratic constraint |Delta D| = Delta l, root chosen by the smallest angle with the previous
+    increment), which follows the equilibrium path through limit points; the last step lands exactly
+    on the requested final load factor by a load-controlled Newton correction.
+
+Convergence (all methods): relative residual |P - F|_free / max(|P|, |reactions|) <= ``tol``
+(default 1e-8) and energy norm |dD . (P - F)| of the last update <= ``energy_tol`` (1e-12) times that
+of the first iteration of the step.  The final state is checked for stability: ``positive_definite``
+(inertia of K_t on the free dofs) and ``min_tangent_eigenvalue`` (eigsh, shift-invert, when the
+problem has at most ``eig_max_dofs`` free dofs).  Solvers never raise on non-convergence: they return
+``converged=False``, the last state and a one-line message.
+
+Displacement control: the fixed dofs take ``load_factor * prescribed`` (so a prescribed rotation is
+applied gradually with the load factors); dead loads are ``load_factor * loads``.
+
+Rigid contact bodies (``contact=`` or ``Problem.contact``) enter as the penalty energy
+1/2 k p^2 on the mid-surface nodes (frictionless, Gauss-Newton tangent k n n^T); k defaults to
+``contact_stiffness`` = 1e3 * (heaviest nodal dead load) / h, i.e. a node carrying its own weight
+sinks 1e-3 h.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.linalg import eigsh, splu
+
+from ..errors import InputError
+from ..problem import SolveResult, no_progress
+
+__all__ = ["StaticResult", "solve_static", "run", "METHODS"]
+
+METHODS = ("newton", "paper", "arclength")
+
+
+@dataclass
+class StaticResult:
+    """Result of :func:`solve_static`.
+
+    U : (N,6) final displacements;  converged : bool;  message : one line;
+    info : JSON-able numbers (solver, method, iterations, linear_solves, final_relative_residual,
+    positive_definite, min_tangent_eigenvalue, wall_time_s, ...);
+    path : list of (load factor, (N,6) U) of every converged load step / arc-length point.
+    """
+
+    U: np.ndarray
+    converged: bool
+    message: str = ""
+    info: dict = field(default_factory=dict)
+    path: list = field(default_factory=list)
+
+    @property
+    def frames(self):
+        return self.path
+
+
+# ============================================================================ the discrete system
+class _System:
+    """Model + constraints + loads + contact, with counters.  Works on full flat vectors D (6N)."""
+
+    def __init__(self, model, fixed, loads, prescribed, contact, contact_stiffness):
+        n = model.n_nodes
+        self.model = model
+        self.n = n
+        self.fixed_mask = np.asarray(fixed, dtype=bool).reshape(n, 6).ravel()
+        self.free = np.flatnonzero(~self.fixed_mask)
+        self.fixd = np.flatnonzero(self.fixed_mask)
+        self.P = np.asarray(loads, dtype=float).reshape(n, 6).ravel().copy()
+        self.presc = (np.zeros(6 * n) if prescribed is None
+                      else np.asarray(prescribed, dtype=float).reshape(n, 6).ravel().copy())
+        if not (np.all(np.isfinite(self.P)) and np.all(np.isfinite(self.presc))):
+            raise InputError("loads and prescribed values must be finite")
+        self.contact = list(contact or [])
+        self.k_contact = 0.0
+        if self.contact:
+            if contact_stiffness is None:
+                h = float(getattr(model.material, "thickness", 1.0))
+                w = np.abs(self.P.reshape(n, 6)[:, :3]).max()
+                contact_stiffness = 1e3 * max(w, 1e-12) / h
+            self.k_contact = float(contact_stiffness)
+        self.n_energy = 0
+        self.n_tangent = 0
+        self.n_solves = 0
+        self._has_ef = hasattr(model, "energy_and_force")
+
+    # -- vectors
+    def apply_prescribed(self, D, lam):
+        D = D.copy()
+        D[self.fixd] = lam * self.presc[self.fixd]
+        return D
+
+    def U(self, D):
+        return D.reshape(self.n, 6)
+
+    # -- contact (mid-surface nodes; forces on U_o only)
+    def _contact(self, D, want_tangent=False):
+        x = self.model.mesh.nodes + D.reshape(self.n, 6)[:, :3]
+        f = np.zeros((self.n, 6))
+        e = 0.0
+        rows, cols, vals = [], [], []
+        for b in self.contact:
+            gap, nrm = b.penetration(x)
+            p = np.maximum(-gap, 0.0)
+            act = np.flatnonzero(p > 0.0)
+            if act.size == 0:
+                continue
+            k = self.k_contact
+            e += 0.5 * k * float(np.dot(p[act], p[act]))
+            f[act, :3] -= (k * p[act])[:, None] * nrm[act]          # dE/dx = -k p n
+            if want_tangent:
+                nn = k * nrm[act][:, :, None] * nrm[act][:, None, :]    # (A,3,3)
+                base = 6 * act
+                r = (base[:, None, None] + np.arange(3)[None, :, None]).repeat(3, axis=2)
+                c = (base[:, None, None] + np.arange(3)[None, None, :]).repeat(3, axis=1)
+                rows.append(r.ravel()); cols.append(c.ravel()); vals.append(nn.ravel())
+        Kc = None
+        if want_tangent and rows:
+            m = 6 * self.n
+            Kc = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                               shape=(m, m))
+        return e, f.ravel(), Kc
+
+    # -- evaluations
+    def potential_and_gradient(self, D, lam):
+        """(Pi, dPi/dD full vector) at D; Pi = U(D) - lam P.D (+ contact)."""
+        self.n_energy += 1
+        U = self.U(D)
+        if self._has_ef:
+            W, F = self.model.energy_and_force(U)
+        else:
+            W, F = self.model.energy(U), self.model.internal_force(U)
+        F = np.asarray(F, dtype=float).ravel()
+        if self.contact:
+            ec, fc, _ = self._contact(D)
+            W += ec
+            F = F + fc
+        return float(W) - lam * float(np.dot(self.P, D)), F - lam * self.P
+
+    def force_tangent(self, D):
+        """(F internal (+contact) full vector, K (6N,6N) CSR)."""
+        self.n_tangent += 1
+        F, K = self.model.force_and_tangent(self.U(D))
+        F = np.asarray(F, dtype=float).ravel()
+        K = sp.csr_matrix(K)
+        if self.contact:
+            _, fc, Kc = self._contact(D, want_tangent=True)
+            F = F + fc
+            if Kc is not None:
+                K = K + Kc
+        return F, K
+
+    def reference_norm(self, F, lam):
+        """max(|lam P|, |reactions|, tiny): the scale of the relative residual."""
+        r = F[self.fixd] - lam * self.P[self.fixd]
+        return max(float(np.linalg.norm(lam * self.P)), float(np.linalg.norm(r)), 1e-300)
+
+    def Kff(self, K):
+        f = self.free
+        return K[f][:, f].tocsc()
+
+
+# ============================================================================ linear algebra
+def _factor(A):
+    """SuperLU of a symmetric A with diagonal pivoting in symmetric mode.
+
+    Returns (lu, n_negative) where n_negative is the number of negative eigenvalues of A (Sylvester:
+    with a symmetric permutation and diagonal pivots the U diagonal is the D of an LDL^T), or None
+    when the pivoting was not symmetric.  Raises RuntimeError when A is singular.
+    """
+    lu = splu(A, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+              options=dict(SymmetricMode=True))
+    d = lu.U.diagonal()
+    if not np.all(np.isfinite(d)) or np.any(d == 0.0):
+        raise RuntimeError("singular tangent")
+    neg = int(np.count_nonzero(d < 0.0)) if np.array_equal(lu.perm_r, lu.perm_c) else None
+    return lu, neg
+
+
+def _shifted_factor(A, scale, sigma0, sigma_max=1e12):
+    """Factor A + sigma diag(scale) with the smallest sigma >= sigma0 (tenfold steps from 1e-8)
+    that is positive definite.  Returns (lu, sigma, n_factorisations, n_negative_at_sigma0)."""
+    sigma = sigma0
+    nf = 0
+    neg0 = None
+    while True:
+        M = A if sigma == 0.0 else (A + sp.diags(sigma * scale)).tocsc()
+        nf += 1
+        try:
+            lu, neg = _factor(M)
+            if nf == 1:
+                neg0 = neg
+            if neg == 0:
+                return lu, sigma, nf, neg0
+        except RuntimeError:
+            if nf == 1:
+                neg0 = -1
+        sigma = 1e-8 if sigma == 0.0 else 10.0 * sigma
+        if sigma > sigma_max:
+            raise RuntimeError("no positive-definite shift of the tangent found")
+
+
+# ============================================================================ one load level
+@dataclass
+class _Opts:
+    tol: float = 1e-8
+    energy_tol: float = 1e-12
+    max_iter: int = 100
+    c: float = 1e-2
+    L_f: float = 1.0
+    max_step: float = 1.0
+    armijo: float = 1e-4
+
+
+def _converged(rel, e_ratio, o):
+    return rel <= o.tol and e_ratio <= o.energy_tol
+
+
+def _newton_level(sys, D, lam, o, stats):
+    """Energy-minimising Newton at load factor lam, starting from D (fixed dofs already set).
+    Returns (D, ok, message, rel)."""
+    f = sys.free
+    sigma = 0.0
+    e_first = None
+    e_ratio = np.inf
+    Pi, G = sys.potential_and_gradient(D, lam)
+    rel = np.inf
+    for it in range(o.max_iter + 1):
+        F, K = sys.force_tangent(D)
+        g = F[f] - lam * sys.P[f]
+        rel = float(np.linalg.norm(g)) / sys.reference_norm(F, lam)
+        if not np.isfinite(rel):
+            return D, False, "non-finite residual", rel
+        if _converged(rel, e_ratio if it else (0.0 if rel <= o.tol else np.inf), o):
+            return D, True, f"converged in {it} iterations", rel
+        if it == o.max_iter:
+            break
+        stats["iterations"] += 1
+        A = sys.Kff(K)
+        scale = np.abs(A.diagonal())
+        scale[scale == 0.0] = max(float(scale.max(initial=0.0)), 1.0)
+        try:
+            lu, sigma, nf, neg0 = _shifted_factor(A, scale, 0.0 if sigma < 1e-7 else sigma / 10.0)
+        except RuntimeError as exc:
+            return D, False, f"tangent could not be factorised ({exc})", rel
+        sys.n_solves += nf
+        stats["max_shift"] = max(stats["max_shift"], sigma)
+        if sigma > 0.0:
+            stats["shifted_iterations"] += 1
+        p = np.zeros_like(D)
+        p[f] = -lu.solve(g)
+        gp = float(np.dot(g, p[f]))
+        if not np.isfinite(gp) or gp >= 0.0:
+            return D, False, "no descent direction (non-finite or uphill Newton step)", rel
+        pmax = float(np.abs(p).max())
+        alpha = min(1.0, o.max_step / pmax) if pmax > 0 else 1.0
+        accepted = False
+        gnorm = float(np.linalg.norm(g))
+        for _ in range(40):
+            Dt = D + alpha * p
+            Pit, Gt = sys.potential_and_gradient(Dt, lam)
+            if np.isfinite(Pit):
+                dec = Pit - Pi
+                if dec <= o.armijo * alpha * gp:
+                    accepted = True
+                elif abs(alpha * gp) <= 1e-11 * max(abs(Pi), 1e-300) and \
+                        np.linalg.norm(Gt[f]) < gnorm:
+                    # decrease below the round-off of Pi: accept on the residual instead
+                    accepted = True
+            if accepted:
+                break
+            # quadratic interpolation of Pi along p, safeguarded to [0.1, 0.5] alpha
+            if np.isfinite(Pit):
+                den = 2.0 * (Pit - Pi - alpha * gp)
+                a_new = -gp * alpha * alpha / den if den > 0 else 0.5 * alpha
+                alpha = min(max(a_new, 0.1 * alpha), 0.5 * alpha)
+            else:
+                alpha *= 0.25
+        if not accepted:
+            return D, False, "line search failed (no decrease of the potential along the Newton step)", rel
+        e_step = abs(alpha * gp)
+        e_first = e_step if e_first is None else e_first
+        e_ratio = e_step / e_first if e_first > 0 else 0.0
+        D, Pi = Dt, Pit
+    return D, False, f"no convergence in {o.max_iter} iterations (relative residual {rel:.2e})", rel
+
+
+def _paper_level(sys, D, lam, o, stats):
+    """The paper's Eqs. (16)-(18) at load factor lam.  Returns (D, ok, message, rel)."""
+    f = sys.free
+    e_first = None
+    e_ratio = np.inf
+    rel = np.inf
+    best = np.inf
+    since_best = 0
+    for it in range(o.max_iter + 1):
+        F, K = sys.force_tangent(D)
+        r = lam * sys.P[f] - F[f]
+        rel = float(np.linalg.norm(r)) / sys.reference_norm(F, lam)
+        if not np.isfinite(rel):
+            return D, False, "non-finite residual (the lambda-scaled Newton iteration diverged)", rel
+        if _converged(rel, e_ratio if it else (0.0 if rel <= o.tol else np.inf), o):
+            return D, True, f"converged in {it} iterations", rel
+        if it == o.max_iter:
+            break
+        if rel < 0.999 * best:
+            best, since_best = rel, 0
+        else:
+            since_best += 1
+        stats["iterations"] += 1
+        try:
+            dD = splu(sys.Kff(K)).solve(r)
+        except RuntimeError:
+            return D, False, (f"singular tangent K_t at iteration {it} (relative residual {rel:.2e}); "
+                              "the paper's scheme cannot proceed"), rel
+        sys.n_solves += 1
+        if not np.all(np.isfinite(dD)):
+            return D, False, f"singular tangent K_t at iteration {it} (non-finite increment)", rel
+        m = float(np.abs(dD).max())
+        mult = min(1.0, o.c * o.L_f / m) if m > 0 else 1.0
+        stats["min_multiplier"] = min(stats["min_multiplier"], mult)
+        D = D.copy()
+        D[f] += mult * dD
+        e_step = abs(mult * float(np.dot(dD, r)))
+        e_first = e_step if e_first is None else e_first
+        e_ratio = e_step / e_first if e_first > 0 else 0.0
+    stall = f"; no progress in the last {since_best} iterations" if since_best > 50 else ""
+    return D, False, (f"paper scheme stopped after {o.max_iter} iterations at relative residual "
+                      f"{rel:.2e}{stall}"), rel
+
+
+# ============================================================================ drivers
+def _predictor(sys, D, lam0, lam1):
+    """Linearised first guess for a load/prescribed increment lam0 -> lam1 (tangent at D)."""
+    F, K = sys.force_tangent(D)
+    f, c = sys.free, sys.fixd
+    dl = lam1 - lam0
+    rhs = dl * sys.P[f]
+    dc = dl * sys.presc[c]
+    if c.size and np.any(dc):
+        rhs = rhs - K[f][:, c] @ dc
+    A = sys.Kff(K)
+    scale = np.abs(A.diagonal())
+    scale[scale == 0.0] = 1.0
+    lu, _, nf, _ = _shifted_factor(A, scale, 0.0)
+    sys.n_solves += nf
+    Dp = sys.apply_prescribed(D, lam1)
+    Dp[f] += lu.solve(rhs)
+    return Dp
+
+
+def _load_stepping(sys, D, factors, o, method, stats, progress, path, max_cutbacks, predictor):
+    level = _newton_level if method == "newton" else _paper_level
+    lam = stats["load_factor"]
+    target_final = factors[-1] if factors else lam
+    msg = ""
+    rel = np.nan
+    for target in factors:
+        cut = 0
+        trial = target
+        while True:
+            D0 = sys.apply_prescribed(D, trial)
+            if predictor and method == "newton" and trial != lam:
+                try:
+                    Dp = _predictor(sys, D, lam, trial)
+                    if np.all(np.isfinite(Dp)):
+                        Pa = sys.potential_and_gradient(D0, trial)[0]
+                        Pb = sys.potential_and_gradient(Dp, trial)[0]
+                        if np.isfinite(Pb) and Pb < Pa:
+                            D0 = Dp
+                except RuntimeError:
+                    pass
+            Dn, ok, msg, rel = level(sys, D0, trial, o, stats)
+            if ok:
+                D, lam = Dn, trial
+                stats["load_steps"] += 1
+                stats["load_factor"] = lam
+                path.append((lam, D.reshape(sys.n, 6).copy()))
+                progress(min(1.0, abs(lam) / max(abs(target_final), 1e-300)), f"load factor {lam:.4g}")
+                if trial == target:
+                    break
+                trial = target
+                continue
+            if method != "newton" or cut >= max_cutbacks:
+                stats["final_relative_residual"] = rel
+                return Dn, False, (f"load step to factor {trial:.4g} failed: {msg}"
+                                   + (f" after {cut} cut-backs" if cut else "")), rel
+            cut += 1
+            stats["cutbacks"] += 1
+            trial = lam + 0.5 * (trial - lam)
+    return D, True, msg, rel
+
+
+def _arc_length(sys, D, lam_target, o, stats, progress, path, dlam0, max_steps, desired_iter=6):
+    f = sys.free
+    Pf = sys.P[f]
+    if not np.any(Pf):
+        raise InputError("arc-length needs a non-zero load on the free dofs")
+    if np.any(sys.presc):
+        raise InputError("arc-length supports dead loads only (prescribed values must be zero)")
+    lam = stats["load_factor"]
+    F, K = sys.force_tangent(D)
+    lu, _ = _factor(sys.Kff(K))
+    sys.n_solves += 1
+    dt = lu.solve(Pf)
+    dl = abs(dlam0) * float(np.linalg.norm(dt))
+    dl_min = dl * 1e-6
+    prev = None
+    rel = np.nan
+    for step in range(max_steps):
+        F, K = sys.force_tangent(D)
+        try:
+            lu, _ = _factor(sys.Kff(K))
+        except RuntimeError:
+            return D, False, f"singular tangent at load factor {lam:.4g} (bifurcation point?)", rel
+        sys.n_solves += 1
+        dt = lu.solve(Pf)
+        s = 1.0 if prev is None else (1.0 if np.dot(prev, dt) >= 0.0 else -1.0)
+        dlam = s * dl / float(np.linalg.norm(dt))
+        dD = dlam * dt
+        ok = False
+        for it in range(o.max_iter):
+            Dt = D.copy()
+            Dt[f] += dD
+            lt = lam + dlam
+            F, K = sys.force_tangent(Dt)
+            R = F[f] - lt * Pf
+            rel = float(np.linalg.norm(R)) / sys.reference_norm(F, lt)
+            if not np.isfinite(rel):
+                break
+            if it > 0 and rel <= o.tol:
+                ok = True
+                break
+            stats["iterations"] += 1
+            try:
+                lu, _ = _factor(sys.Kff(K))
+            except RuntimeError:
+                break
+            sys.n_solves += 1
+            dt = lu.solve(Pf)
+            dr = -lu.solve(R)
+            u = dD + dr
+            a = float(np.dot(dt, dt))
+            b = 2.0 * float(np.dot(dt, u))
+            cc = float(np.dot(u, u)) - dl * dl
+            disc = b * b - 4.0 * a * cc
+            if disc < 0.0:
+                break
+            sq = math.sqrt(disc)
+            roots = ((-b + sq) / (2 * a), (-b - sq) / (2 * a))
+            cands = [u + r_ * dt for r_ in roots]
+            k = int(np.argmax([np.dot(cd, dD) for cd in cands]))
+            dD = cands[k]
+            dlam += roots[k]
+        if not ok:
+            dl *= 0.5
+            if dl < dl_min:
+                return D, False, f"arc-length step could not converge at load factor {lam:.4g}", rel
+            continue
+        stats["load_steps"] += 1
+        lam_new = lam + dlam
+        if (lam_new - lam_target) * (lam - lam_target) <= 0.0 and lam_new != lam:
+            # crossed the target: interpolate and land on it by load control
+            t = (lam_target - lam) / (lam_new - lam)
+            Dg = D.copy()
+            Dg[f] += t * dD
+            Dn, okn, msg, rel = _newton_level(sys, Dg, lam_target, o, stats)
+            if not okn:
+                return Dn, False, f"final correction to load factor {lam_target:.4g} failed: {msg}", rel
+            path.append((lam_target, Dn.reshape(sys.n, 6).copy()))
+            stats["load_factor"] = lam_target
+            return Dn, True, f"arc-length reached load factor {lam_target:.4g} in {step + 1} steps", rel
+        D = Dt
+        lam = lam_new
+        prev = dD.copy()
+        stats["load_factor"] = lam
+        path.append((lam, D.reshape(sys.n, 6).copy()))
+        progress(min(1.0, max(0.0, lam / lam_target)), f"arc-length load factor {lam:.4g}")
+        dl *= min(2.0, max(0.5, math.sqrt(desired_iter / max(it, 1))))
+    return D, False, f"arc-length stopped after {max_steps} steps at load factor {lam:.4g}", rel
+
+
+def _free_length(mesh, fixed_mask):
+    """Largest distance from a free node to the nearest node with any fixed dof (L_f of Eq. 18)."""
+    X = mesh.nodes
+    fixed_nodes = np.flatnonzero(np.asarray(fixed_mask).reshape(len(X), 6).any(axis=1))
+    if fixed_nodes.size == 0 or fixed_nodes.size == len(X):
+        return float(mesh.characteristic_length())
+    from scipy.spatial import cKDTree
+    d, _ = cKDTree(X[fixed_nodes]).query(X)
+    return float(d.max())
+
+
+def _stability(sys, D, eig_max_dofs):
+    """(positive_definite or None, min eigenvalue or None) of K_t on the free dofs at D."""
+    _, K = sys.force_tangent(D)
+    A = sys.Kff(K)
+    pd = None
+    try:
+        _, neg = _factor(A)
+        pd = None if neg is None else bool(neg == 0)
+    except RuntimeError:
+        pd = False
+    lmin = None
+    if A.shape[0] <= eig_max_dofs and A.shape[0] > 2:
+        try:
+            s = 1e-10 * float(np.abs(A.diagonal()).mean())
+            vals = eigsh(A, k=1, sigma=-s, which="LM", return_eigenvectors=False, tol=1e-8,
+                         maxiter=2000)
+            lmin = float(vals[0])
+        except Exception:  # noqa: BLE001 - a diagnostic, never fatal
+            lmin = None
+    elif A.shape[0] <= 2:
+        lmin = float(np.linalg.eigvalsh(A.toarray()).min())
+    return pd, lmin
+
+
+def solve_static(model, fixed, loads, load_factors=None, method="newton", prescribed=None, *,
+                 tol=1e-8, energy_tol=1e-12, max_iter=None, c=1e-2, L_f=None, max_step=None,
+                 U0=None, predictor=True, max_cutbacks=8, arc_length_initial=0.1,
+                 max_arc_steps=500, check_stability=True, eig_max_dofs=60000, contact=None,
+                 contact_stiffness=None, progress=None) -> StaticResult:
+    """Static equilibrium of ``model`` under dead ``loads`` and ``prescribed`` fixed dofs.
+
+    Parameters
+    ----------
+    model : Model (energy, internal force, tangent; see solidshell.model)
+    fixed : (N,6) bool, prescribed dofs;  loads : (N,6) dead nodal forces P [force]
+    load_factors : increasing list of load factors (default [1.0]); each is a converged state in
+        ``path``; loads and prescribed values are scaled by the factor.  For ``arclength`` only the
+        last factor matters (the target) and the path is chosen by the method.
+    method : "newton" (default) | "paper" (Eqs. 16-18) | "arclength" (Crisfield)
+    prescribed : (N,6) values of the fixed dofs at load factor 1 (default 0: clamped)
+    tol, energy_tol : relative residual and energy-norm tolerances
+    max_iter : iterations per load step (default 100 for newton/arclength, 5000 for paper)
+    c, L_f : the paper's multiplier constant (1e-3..1e-2) and free-hanging length (default: largest
+        distance from a free node to the nearest fixed one)
+    max_step : cap on max|dD| per Newton update [length] (default L_f / 2), method newton
+    U0 : (N,6) starting state (default zero)
+    predictor : linearised predictor at every new load level (newton)
+    max_cutbacks : bisections of a failed load step (newton)
+    arc_length_initial : first arc-length step as a fraction of the target load factor
+    check_stability : report positive_definite and min_tangent_eigenvalue of the final state
+    contact, contact_stiffness : rigid bodies (solidshell.contact) and the penalty [force/length]
+    progress : callback(fraction, text)
+    """
+    t0 = time.perf_counter()
+    progress = progress or no_progress
+    if method not in METHODS:
+        raise InputError(f"unknown static method {method!r}; choose one of: {', '.join(METHODS)}")
+    n = model.n_nodes
+    fixed = np.asarray(fixed, dtype=bool)
+    if fixed.size != 6 * n:
+        raise InputError(f"fixed must have shape ({n}, 6), got {fixed.shape}")
+    loads = np.asarray(loads, dtype=float)
+    if loads.size != 6 * n:
+        raise InputError(f"loads must have shape ({n}, 6), got {loads.shape}")
+    factors = [1.0] if load_factors is None else [float(x) for x in np.atleast_1d(load_factors)]
+    if not factors or not all(np.isfinite(factors)):
+        raise InputError("load_factors must be a non-empty list of finite numbers")
+    sys = _System(model, fixed, loads, prescribed, contact, contact_stiffness)
+    if sys.free.size == 0:
+        raise InputError("every dof is fixed: nothing to solve")
+    Lf = float(L_f) if L_f is not None else _free_length(model.mesh, fixed)
+    o = _Opts(tol=float(tol), energy_tol=float(energy_tol),
+              max_iter=int(max_iter if max_iter is not None else (5000 if method == "paper" else 100)),
+              c=float(c), L_f=Lf, max_step=float(max_step) if max_step is not None else 0.5 * Lf)
+    if not (o.c > 0.0):
+        raise InputError(f"c must be positive, got {c!r}")
+    D = np.zeros(6 * n) if U0 is None else np.asarray(U0, dtype=float).reshape(-1).copy()
+    D = sys.apply_prescribed(D, 0.0)
+    stats = dict(iterations=0, load_steps=0, cutbacks=0, load_factor=0.0, shifted_iterations=0,
+                 max_shift=0.0, min_multiplier=1.0, final_relative_residual=np.nan)
+    path = []
+    try:
+        if method == "arclength":
+            D, ok, msg, rel = _arc_length(sys, D, factors[-1], o, stats, progress, path,
+                                          arc_length_initial * factors[-1], max_arc_steps)
+        else:
+            D, ok, msg, rel = _load_stepping(sys, D, factors, o, method, stats, progress, path,
+                                             max_cutbacks, predictor)
+    except (FloatingPointError, np.linalg.LinAlgError, RuntimeError) as exc:
+        ok, msg, rel = False, f"{type(exc).__name__}: {exc}", np.nan
+    if ok:
+        msg = (f"{method}: converged to load factor {stats['load_factor']:.4g} in "
+               f"{stats['load_steps']} step(s), {stats['iterations']} iterations")
+    else:
+        msg = f"{method}: {msg}"
+    info = {
+        "solver": "static",
+        "method": method,
+        "converged": bool(ok),
+        "iterations": int(stats["iterations"]),
+        "linear_solves": int(sys.n_solves),
+        "tangent_assemblies": int(sys.n_tangent),
+        "energy_evaluations": int(sys.n_energy),
+        "load_steps": int(stats["load_steps"]),
+        "load_factor": float(stats["load_factor"]),
+        "cutbacks": int(stats["cutbacks"]),
+        "final_relative_residual": float(rel) if np.isfinite(rel) else None,
+        "free_length": Lf,
+    }
+    if method == "newton":
+        info["shifted_iterations"] = int(stats["shifted_iterations"])
+        info["max_tangent_shift"] = float(stats["max_shift"])
+    if method == "paper":
+        info["c"] = o.c
+        info["min_multiplier"] = float(stats["min_multiplier"])
+    if sys.contact:
+        info["contact_stiffness"] = sys.k_contact
+    if check_stability and np.all(np.isfinite(D)):
+        lam = stats["load_factor"]
+        pd, lmin = _stability(sys, sys.apply_prescribed(D, lam) if ok else D, eig_max_dofs)
+        info["positive_definite"] = pd
+        info["min_tangent_eigenvalue"] = lmin
+    info["wall_time_s"] = time.perf_counter() - t0
+    return StaticResult(U=D.reshape(n, 6).copy(), converged=bool(ok), message=msg, info=info, path=path)
+
+
+# ============================================================================ registry entry
+_SETTINGS = {"method", "c", "tol", "energy_tol", "max_iter", "load_steps", "load_factors", "L_f",
+             "max_step", "predictor", "max_cutbacks", "arc_length_initial", "max_arc_steps",
+             "check_stability", "eig_max_dofs", "contact_stiffness"}
+
+
+def run(problem, settings: dict | None = None, progress=None) -> SolveResult:
+    """Registry entry ``"static"``: solve a :class:`~solidshell.problem.Problem`.
+
+    settings: method ("newton" | "paper" | "arclength"), c, tol, energy_tol, max_iter,
+    load_steps (int n -> factors 1/n, 2/n, ..., 1) or load_factors (list), L_f, max_step, predictor,
+    max_cutbacks, arc_length_initial, max_arc_steps, check_stability, eig_max_dofs,
+    contact_stiffness.  Other keys (meant for other solvers) are ignored.
+    """
+    settings = dict(settings or {})
+    s = {k: v for k, v in settings.items() if k in _SETTINGS}
+    method = s.pop("method", "newton")
+    steps = s.pop("load_steps", None)
+    factors = s.pop("load_factors", None)
+    if factors is None and steps is not None:
+        try:
+            ns = int(steps)
+        except (TypeError, ValueError):
+            raise InputError(f"load_steps must be a positive integer, got {steps!r}") from None
+        if ns < 1:
+            raise InputError(f"load_steps must be a positive integer, got {steps!r}")
+        factors = [(i + 1) / ns for i in range(ns)]
+    res = solve_static(problem.model, problem.fixed, problem.loads, load_factors=factors,
+                       method=method, prescribed=problem.prescribed, contact=problem.contact,
+                       progress=progress, **s)
+    return SolveResult(U=res.U, converged=res.converged, message=res.message, info=res.info,
+                       frames=res.path)

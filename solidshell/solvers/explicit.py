@@ -1,0 +1,576 @@
+"""Explicit dynamics (Section 4): central differences with mass-proportional Rayleigh damping,
+Eq. (23), and dynamic relaxation (Section 4.2).
+
+Scheme
+------
+With the lumped (diagonal) mass M of the trapezoidal rule, Eq. (23) is applied literally, dof by dof:
+
+    D_n+1 = [ M^-1 (P_n - F_n + C_n) + 2/dt^2 D_n + (alpha/(2 dt) - 1/dt^2) D_n-1 ]
+            / (1/dt^2 + alpha/(2 dt))
+
+(C_n: penalty contact forces on the mid-surface dofs, ``solidshell.contact``).  Fixed dofs are held
+at their prescribed values.  The hot path of a step is one ``model.internal_force`` (a compiled
+batched kernel), the contact forces when there is a contact body, and a handful of vectorised numpy
+operations on (6N,) arrays: no tangent, no sparse matrix, no Python loop over nodes or elements.
+The start from (D_0, V_0) uses D_-1 = D_0 - dt V_0 + dt^2/2 A_0, A_0 = M^-1 (P - F_0 + C_0) - alpha V_0.
+
+Critical step
+-------------
+Estimated once at the start state by matrix-free Lanczos on M^-1 K (``timestep.py``), after mass
+scaling and including the penalty springs (``contact.combined_critical_time_step``).  The default step
+is ``safety`` (0.9) × dt_crit; a user ``dt`` above dt_crit is refused with the numbers (InputError),
+or reduced to safety × dt_crit when ``allow_reduce=True``.  A run that goes non-finite stops at
+once and returns the last finite state, converged=False and a message saying when and why.
+
+Energy balance (every ``sample_every`` steps)
+---------------------------------------------
+E_kin = 1/2 v_n.M.v_n with the central velocity v_n = (D_n+1 - D_n-1)/(2 dt); E_strain =
+model energy at D_n; W_ext = P.(D_n - D_0) (dead loads, exact); E_damp = trapezoidal sum over steps
+of alpha v_m.M.v_m dt (accumulated every step); E_contact = penalty energy at D_n (the contact is
+frictionless and conservative; the work of the contact forces is also accumulated and reported).
+energy_balance_error = max over samples of |dE_kin + dE_strain - W_ext + E_damp + dE_contact| /
+max(W_ext, max E_kin, initial energy), d = change since the start.  All energies use the (scaled)
+masses actually integrated.  With kinetic damping the energy removed at each reset is E_damp.
+
+Mass scaling (Section 4.2): ``mass_scaling`` s with ``mass_scaling_mode`` "uniform" (all masses ×s,
+the paper's choice; the weight P is unchanged) or "director" (only the U_n masses ×s: the thickness
+mode limits the step, so this lengthens it by up to sqrt(s) while leaving translational inertia,
+hence the drape dynamics, unchanged until the membrane/bending modes take over).
+
+Settings (all optional unless said)
+-----------------------------------
+run:        t_end [s] (required), snapshots (list of times [s] to keep as frames), dt [s],
+            safety (0.9), allow_reduce (False), allow_unstable (False: only for stability studies),
+            alpha [1/s] (Rayleigh factor of Eq. 20, default 5.0), mass_scaling (1), mass_scaling_mode
+            ("uniform"), sample_every (steps between energy/interpenetration samples), U0, V0 ((N,6)
+            initial state), critical_time_step [s] (skip the estimate), critical_step_method
+            ("lanczos" | "power" | "tangent"), critical_step_tol (1e-6), contact_penalty_factor
+            (0.1), checkpoint (path), checkpoint_every (steps, 2000), restart (path),
+            max_wall_time [s] (stop, unconverged, when exceeded), frame_every (steps), threads
+            (numba threads for the force kernel; default 1 below SMALL_MESH_ELEMENTS elements).
+run_relax:  the same keys (alpha default 5.0, mass_scaling default 100) plus damping ("rayleigh" |
+            "kinetic"), tol_kinetic (1e-6: E_kin / W_ext), tol_residual (1e-3: |P - F + C|_free /
+            |P|_free), check_every (steps, 100), t_max [s] (default 20) or max_steps.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import time
+
+import numpy as np
+
+from ..contact import combined_critical_time_step, contact_forces, penalty_stiffness
+from ..errors import InputError, SolverError
+from ..problem import Problem, SolveResult, no_progress
+from .timestep import critical_time_step, estimate_omega_max
+
+_CHECKPOINT_VERSION = 1
+
+_RUN_KEYS = {"t_end", "snapshots", "dt", "safety", "allow_reduce", "allow_unstable", "alpha",
+             "mass_scaling", "mass_scaling_mode", "sample_every", "U0", "V0", "critical_time_step",
+             "critical_step_method", "critical_step_tol", "contact_penalty_factor", "checkpoint",
+             "checkpoint_every", "restart", "max_wall_time", "frame_every", "progress_every", "threads"}
+_RELAX_KEYS = _RUN_KEYS - {"t_end", "snapshots"} | {"damping", "tol_kinetic", "tol_residual",
+                                                     "check_every", "t_max", "max_steps"}
+
+
+# ============================================================================ settings helpers
+def _num(settings, key, default, *, positive=False, nonneg=False, integer=False):
+    v = settings.get(key, default)
+    if v is None:
+        return None
+    try:
+        x = int(v) if integer else float(v)
+    except (TypeError, ValueError):
+        raise InputError(f"setting {key} must be a number, got {v!r}") from None
+    if integer and float(v) != x:
+        raise InputError(f"setting {key} must be an integer, got {v!r}")
+    if not math.isfinite(x) or (positive and x <= 0) or (nonneg and x < 0):
+        kind = "positive" if positive else "non-negative" if nonneg else "finite"
+        raise InputError(f"setting {key} must be {kind}, got {v!r}")
+    return x
+
+
+def _check_keys(settings, allowed, name):
+    unknown = sorted(set(settings) - allowed)
+    if unknown:
+        raise InputError(f"unknown {name} setting(s): {', '.join(unknown)}; known: {', '.join(sorted(allowed))}")
+
+
+def scaled_mass(model, scaling: float = 1.0, mode: str = "uniform") -> np.ndarray:
+    """(N,6) lumped mass after mass scaling (Section 4.2): "uniform" multiplies every mass by
+    ``scaling``; "director" only the U_n masses."""
+    M = np.asarray(model.lumped_mass(), dtype=float).copy()
+    if mode == "uniform":
+        M *= scaling
+    elif mode == "director":
+        M[:, 3:] *= scaling
+    else:
+        raise InputError(f"mass_scaling_mode must be 'uniform' or 'director', got {mode!r}")
+    return M
+
+
+# ============================================================================ the integrator
+class _State:
+    """Everything that changes during the run: saved in checkpoints, restored on restart."""
+
+    FIELDS = ("D", "Dp", "step", "damp_sum", "ekin_max", "balance_err", "max_interp", "contact_work",
+              "max_contact", "ek_prev_half", "resets", "last_ekin", "last_rel_res", "frame_t", "frame_U")
+
+    def __init__(self, **kw):
+        self.__dict__.update(kw)
+
+
+def _save_checkpoint(path, st: _State, fixed_info: dict):
+    tmp = f"{path}.tmp{os.getpid()}.npz"
+    arrays = {k: np.asarray(getattr(st, k)) for k in _State.FIELDS if k not in ("frame_t", "frame_U")}
+    arrays["frame_t"] = np.asarray(st.frame_t, dtype=float)
+    arrays["frame_U"] = (np.stack(st.frame_U) if st.frame_U else np.zeros((0,) + st.D.shape))
+    for k, v in fixed_info.items():
+        arrays["fix_" + k] = np.asarray(v)
+    arrays["version"] = np.asarray(_CHECKPOINT_VERSION)
+    with open(tmp, "wb") as fh:
+        np.savez(fh, **arrays)
+        fh.flush()
+        os.fsync(fh.fileno())
+    os.replace(tmp, path)  # atomic: a reader sees the old or the new checkpoint, never half of one
+
+
+def _load_checkpoint(path, fixed_info: dict) -> _State:
+    try:
+        z = np.load(path, allow_pickle=False)
+    except (OSError, ValueError) as exc:
+        raise InputError(f"cannot read restart file {path}: {exc}") from None
+    with z:
+        if int(z["version"]) != _CHECKPOINT_VERSION:
+            raise InputError(f"restart file {path} has version {int(z['version'])}, expected {_CHECKPOINT_VERSION}")
+        for k, v in fixed_info.items():
+            saved = z["fix_" + k]
+            if not np.array_equal(saved, np.asarray(v)):
+                raise InputError(f"restart file {path} does not match this run: {k} was {saved.tolist() if saved.size < 8 else '...'}, "
+                                 f"now {np.asarray(v).tolist() if np.asarray(v).size < 8 else '...'}")
+        kw = {k: z[k].copy() for k in _State.FIELDS}
+    for k in ("step", "max_interp", "max_contact", "resets"):
+        kw[k] = int(kw[k])
+    for k in ("damp_sum", "ekin_max", "balance_err", "contact_work", "ek_prev_half", "last_ekin", "last_rel_res"):
+        kw[k] = float(kw[k])
+    kw["frame_t"] = [float(t) for t in kw["frame_t"]]
+    kw["frame_U"] = [u for u in kw["frame_U"]]
+    return _State(**kw)
+
+
+def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> SolveResult:
+    wall0 = time.perf_counter()
+    settings = dict(settings or {})
+    _check_keys(settings, _RELAX_KEYS if relax else _RUN_KEYS, "relax" if relax else "explicit")
+    model = problem.model
+    N = model.n_nodes
+    shape = (N, 6)
+    n_elem = int(getattr(getattr(model, "mesh", None), "n_elements", 0))
+
+    # ------------------------------------------------------------------ settings
+    alpha = _num(settings, "alpha", 5.0, nonneg=True)
+    damping = settings.get("damping", "rayleigh") if relax else "rayleigh"
+    if damping not in ("rayleigh", "kinetic"):
+        raise InputError(f"damping must be 'rayleigh' or 'kinetic', got {damping!r}")
+    if damping == "kinetic" and "alpha" not in settings:
+        alpha = 0.0  # Cundall's kinetic damping replaces the viscous damping unless asked for both
+    ms = _num(settings, "mass_scaling", 100.0 if relax else 1.0, positive=True)
+    ms_mode = settings.get("mass_scaling_mode", "uniform")
+    safety = _num(settings, "safety", 0.9, positive=True)
+    if safety >= 1.0 and not settings.get("allow_unstable", False):
+        raise InputError(f"safety must be below 1 (the step would reach the stability limit), got {safety}")
+    allow_reduce = bool(settings.get("allow_reduce", False))
+    allow_unstable = bool(settings.get("allow_unstable", False))
+    pen_factor = _num(settings, "contact_penalty_factor", 0.1, positive=True)
+    max_wall = _num(settings, "max_wall_time", None, positive=True)
+
+    M = scaled_mass(model, ms, ms_mode)
+    fixed = problem.fixed
+    free_mask = ~fixed
+    if np.any(M[free_mask] <= 0.0):
+        raise InputError(f"{int(np.sum(M[free_mask] <= 0))} free dof(s) have zero mass: the explicit scheme needs M > 0")
+    P = problem.loads.ravel().copy()
+    fixed_idx = np.flatnonzero(fixed.ravel())
+    free_idx = np.flatnonzero(free_mask.ravel())
+    presc = problem.prescribed.ravel()[fixed_idx].copy()
+    X0 = model.mesh.nodes if hasattr(model, "mesh") else np.zeros((N, 3))
+    bodies = list(problem.contact or [])
+
+    U0 = np.zeros(shape) if settings.get("U0") is None else np.asarray(settings["U0"], float).reshape(shape).copy()
+    V0 = np.zeros(shape) if settings.get("V0") is None else np.asarray(settings["V0"], float).reshape(shape).copy()
+    D0 = U0.ravel().copy()
+    D0[fixed_idx] = presc
+    V0f = V0.ravel().copy()
+    V0f[fixed_idx] = 0.0
+
+    # ------------------------------------------------------------------ restart: dt as saved
+    restart = settings.get("restart")
+    saved = None
+    if restart:
+        try:
+            with np.load(restart, allow_pickle=False) as z:
+                saved = dict(dt=float(z["fix_dt"]), omega=float(z["fix_omega"]),
+                             omega_el=float(z["fix_omega_el"]), method=str(z["fix_method"]))
+        except (OSError, ValueError, KeyError) as exc:
+            raise InputError(f"cannot read restart file {restart}: {exc}") from None
+
+    # ------------------------------------------------------------------ critical step
+    t_est = time.perf_counter()
+    dt_crit_user = _num(settings, "critical_time_step", None, positive=True)
+    method = settings.get("critical_step_method", "lanczos")
+    n_est_evals = 0
+    if saved is not None:  # a restart reuses the step of the run it continues (bit-for-bit)
+        omega_el, method = saved["omega_el"], saved["method"]
+    elif dt_crit_user is None:
+        try:
+            est = estimate_omega_max(model.internal_force, M, free_mask, D0.reshape(shape), method=method,
+                                     tol=_num(settings, "critical_step_tol", 1e-6, positive=True),
+                                     tangent=getattr(model, "tangent", None))
+        except ValueError as exc:
+            raise InputError(f"cannot estimate the critical time step: {exc}") from None
+        omega_el = est.omega_max
+        n_est_evals = est.n_force_evals
+    else:
+        omega_el = 2.0 / dt_crit_user
+        method = "given"
+    k_pen = None
+    omega = omega_el
+    if bodies:
+        k_pen = penalty_stiffness(M[:, 0], omega_el, pen_factor)
+        omega = 2.0 / combined_critical_time_step(omega_el, k_pen, M[:, 0])
+    dt_crit = critical_time_step(omega, alpha)
+    t_est = time.perf_counter() - t_est
+
+    dt_req = _num(settings, "dt", None, positive=True)
+    info_dt = {}
+    if saved is not None:
+        dt = saved["dt"]
+    elif dt_req is None:
+        dt = safety * dt_crit
+    elif dt_req > dt_crit and not allow_unstable:
+        if not allow_reduce:
+            raise InputError(
+                f"dt = {dt_req:.6g} s exceeds the critical time step {dt_crit:.6g} s "
+                f"(omega_max = {omega:.6g} rad/s, alpha = {alpha:g} 1/s, mass scaling {ms:g} {ms_mode}); "
+                f"use dt <= {safety * dt_crit:.6g} s, mass scaling, or allow_reduce=True")
+        dt = safety * dt_crit
+        info_dt["dt_requested"] = dt_req
+    else:
+        dt = dt_req
+
+    # ------------------------------------------------------------------ step counts
+    if relax:
+        t_max = _num(settings, "t_max", 20.0, positive=True)
+        max_steps = _num(settings, "max_steps", None, positive=True, integer=True)
+        n_steps = max_steps if max_steps is not None else int(math.ceil(t_max / dt))
+        snap_steps = {}
+        tol_ke = _num(settings, "tol_kinetic", 1e-6, positive=True)
+        tol_res = _num(settings, "tol_residual", 1e-3, positive=True)
+        check_every = _num(settings, "check_every", 100, positive=True, integer=True)
+    else:
+        if "t_end" not in settings:
+            raise InputError("the explicit solver needs t_end [s] (the simulated time)")
+        t_end = _num(settings, "t_end", None, positive=True)
+        n_steps = int(math.ceil(t_end / dt * (1.0 - 1e-12)))
+        if saved is None:
+            dt = t_end / n_steps  # land exactly on t_end; never longer than the requested/default step
+        snaps = settings.get("snapshots") or []
+        try:
+            snaps = sorted(float(s) for s in snaps)
+        except (TypeError, ValueError):
+            raise InputError(f"snapshots must be a list of times [s], got {settings.get('snapshots')!r}") from None
+        if snaps and (snaps[0] < 0.0 or snaps[-1] > t_end * (1 + 1e-9)):
+            raise InputError(f"snapshot times must lie in [0, t_end = {t_end:g}] s, got {snaps}")
+        snap_steps = {min(n_steps, int(round(s / dt))): s for s in snaps}
+        check_every = max(1, n_steps // 100)
+    sample_every = _num(settings, "sample_every", max(1, min(100, n_steps // 100)), positive=True, integer=True)
+    frame_every = _num(settings, "frame_every", None, positive=True, integer=True)
+    ckpt_path = settings.get("checkpoint")
+    ckpt_every = _num(settings, "checkpoint_every", 2000, positive=True, integer=True)
+    prog_every = _num(settings, "progress_every", max(1, n_steps // 100), positive=True, integer=True)
+
+    # ------------------------------------------------------------------ coefficients of Eq. (23)
+    Mf = M.ravel()
+    invM = np.zeros_like(Mf)
+    invM[free_idx] = 1.0 / Mf[free_idx]
+    lhs = 1.0 / dt**2 + alpha / (2.0 * dt)
+    cF = invM / lhs                               # multiplies (P - F + C)
+    cD = (2.0 / dt**2) / lhs                      # multiplies D_n
+    cDp = (alpha / (2.0 * dt) - 1.0 / dt**2) / lhs  # multiplies D_n-1
+    aMdt = alpha * dt * Mf                        # damping dissipation weights
+
+    Pn = np.linalg.norm(P[free_idx])
+    has_energy_force = hasattr(model, "energy_and_force")
+
+    def force_and_energy(D, want_energy):
+        if want_energy:
+            if has_energy_force:
+                E, F = model.energy_and_force(D.reshape(shape))
+            else:
+                F = model.internal_force(D.reshape(shape))
+                E = model.energy(D.reshape(shape))
+            return np.asarray(F, float).reshape(-1), float(E)
+        return np.asarray(model.internal_force(D.reshape(shape)), float).reshape(-1), None
+
+    def contact(D):
+        x = X0 + D.reshape(shape)[:, :3]
+        fc, ec, nact = contact_forces(bodies, x, k_pen)
+        C = np.zeros(6 * N)
+        C.reshape(shape)[:, :3] = fc
+        return C, ec, nact
+
+    def interp_count(D):
+        if hasattr(model, "interpenetrated_nodes"):
+            return int(np.count_nonzero(model.interpenetrated_nodes(D.reshape(shape))))
+        return 0
+
+    # ------------------------------------------------------------------ initial state
+    F0, Es0 = force_and_energy(D0, True)
+    if bodies:
+        C0, Ec0, _ = contact(D0)
+    else:
+        C0, Ec0 = np.zeros(6 * N), 0.0
+    Ek0 = 0.5 * float(np.dot(Mf * V0f, V0f))
+    E_init = Ek0 + Es0  # energy scale for a free vibration started from an initial state
+    fixed_info = dict(n_nodes=N, dt=dt, alpha=alpha, mass_scaling=ms, mode=ms_mode, damping=damping,
+                      n_fixed=fixed_idx.size, D0=D0, omega=omega, omega_el=omega_el, method=method)
+
+    if restart:
+        st = _load_checkpoint(restart, fixed_info)
+        restarted_from = st.step
+    else:
+        A0 = invM * (P - F0 + C0) - alpha * V0f
+        A0[fixed_idx] = 0.0
+        Dm = D0 - dt * V0f + 0.5 * dt * dt * A0
+        Dm[fixed_idx] = presc
+        st = _State(D=D0.copy(), Dp=Dm, step=0, damp_sum=0.0, ekin_max=Ek0, balance_err=0.0,
+                    max_interp=interp_count(D0), contact_work=0.0, max_contact=0, ek_prev_half=0.0,
+                    resets=0, last_ekin=Ek0, last_rel_res=(np.linalg.norm((P - F0 + C0)[free_idx]) / Pn
+                                                         if Pn > 0 else 0.0),
+                    frame_t=[], frame_U=[])
+        if 0 in snap_steps or relax or (not snap_steps):
+            st.frame_t.append(0.0)
+            st.frame_U.append(D0.reshape(shape).copy())
+        restarted_from = None
+
+    D, Dp = st.D.copy(), st.Dp.copy()
+    Dn1 = np.empty_like(D)
+    R = np.empty_like(D)
+    v = np.empty_like(D)
+    E_damp = st.damp_sum
+    status = "running"
+    message = ""
+    last = {}
+    steps_done = 0
+    t_loop = time.perf_counter()
+    start_step = st.step
+    end_step = n_steps
+
+    with np.errstate(over="ignore", invalid="ignore"):
+        for n in range(start_step, end_step):
+            sample = (n % sample_every == 0) or n == end_step - 1
+            check = relax and (n % check_every == 0)
+            # ---------------------------------------------------- forces at D_n
+            try:
+                F, Es = force_and_energy(D, sample)
+            except (FloatingPointError, ZeroDivisionError, SolverError) as exc:
+                status, message = "failed", f"internal force failed at step {n} (t = {n * dt:.6g} s): {exc}"
+                break
+            np.subtract(P, F, out=R)
+            if bodies:
+                C, Ec, nact = contact(D)
+                R += C
+            # ---------------------------------------------------- Eq. (23)
+            np.multiply(cF, R, out=Dn1)
+            Dn1 += cD * D
+            Dn1 += cDp * Dp
+            Dn1[fixed_idx] = presc
+            if not np.isfinite(Dn1).all():
+                status = "nonfinite"
+                message = (f"the solution became non-finite at step {n + 1} (t = {(n + 1) * dt:.6g} s) with "
+                           f"dt = {dt:.6g} s, critical step {dt_crit:.6g} s; returning the last finite "
+                           f"state, t = {n * dt:.6g} s")
+                break
+            # ---------------------------------------------------- central velocity, damping work
+            np.subtract(Dn1, Dp, out=v)
+            v *= 0.5 / dt
+            vMv = float(np.dot(Mf * v, v))
+            dd = alpha * dt * vMv
+            if n == 0 and restarted_from is None:
+                dd *= 0.5  # trapezoidal rule: the first and last samples weigh half
+            st.damp_sum += dd
+            if bodies:
+                st.contact_work += 0.5 * float(np.dot(C, Dn1 - Dp))
+            # ---------------------------------------------------- samples at t_n
+            if sample:
+                Ek = 0.5 * vMv
+                st.ekin_max = max(st.ekin_max, Ek)
+                Wext = float(np.dot(P, D - D0))
+                Edamp = st.damp_sum - (0.5 * alpha * dt * vMv if n > 0 else 0.0)
+                Ecn = Ec if bodies else 0.0
+                bal = (Ek - Ek0) + (Es - Es0) - Wext + Edamp + (Ecn - Ec0)
+                scale = max(abs(Wext), st.ekin_max, E_init, 1e-300)
+                st.balance_err = max(st.balance_err, abs(bal) / scale)
+                st.max_interp = max(st.max_interp, interp_count(D))
+                if bodies:
+                    st.max_contact = max(st.max_contact, nact)
+                st.last_ekin = Ek
+                last = dict(Ek=Ek, Es=Es - Es0, Wext=Wext, Edamp=Edamp, Ec=Ecn - Ec0, t=n * dt)
+            if check or (not relax and n == end_step - 1):
+                st.last_rel_res = (np.linalg.norm(R[free_idx]) / Pn) if Pn > 0 else float(np.linalg.norm(R[free_idx]))
+            # ---------------------------------------------------- frames
+            if n in snap_steps and n > 0:
+                st.frame_t.append(n * dt)
+                st.frame_U.append(D.reshape(shape).copy())
+            if frame_every and n > 0 and n % frame_every == 0:
+                st.frame_t.append(n * dt)
+                st.frame_U.append(D.reshape(shape).copy())
+            # ---------------------------------------------------- steady state?
+            if check and n > 0:
+                Wext_c = float(np.dot(P, D - D0))
+                Ek_c = 0.5 * vMv
+                rel_ke = Ek_c / max(abs(Wext_c), 1e-300)
+                if rel_ke < tol_ke and st.last_rel_res < tol_res:
+                    status = "steady"
+                    st.last_ekin = Ek_c
+                    message = (f"steady state at t = {n * dt:.6g} s after {n} steps: E_kin/W_ext = {rel_ke:.3g} "
+                               f"< {tol_ke:g}, residual {st.last_rel_res:.3g} < {tol_res:g}")
+                    break
+            # ---------------------------------------------------- kinetic damping (Cundall)
+            if damping == "kinetic":
+                dh = Dn1 - D
+                ek_half = 0.5 * float(np.dot(Mf * dh, dh)) / dt**2
+                if ek_half < st.ek_prev_half:
+                    # kinetic-energy peak passed: stop every node (v_n+1/2 = 0), count the loss
+                    st.damp_sum += ek_half
+                    D[:] = Dn1  # after the swap below D_n-1 = D_n+1
+                    st.resets += 1
+                    ek_half = 0.0
+                st.ek_prev_half = ek_half
+            # ---------------------------------------------------- advance
+            Dp, D, Dn1 = D, Dn1, Dp
+            st.step = n + 1
+            steps_done += 1
+            if ckpt_path and st.step % ckpt_every == 0:
+                st.D, st.Dp = D, Dp
+                _save_checkpoint(ckpt_path, st, fixed_info)
+                st.D, st.Dp = None, None
+            if st.step % prog_every == 0:
+                frac = st.step / n_steps
+                if relax and st.last_rel_res > 0:
+                    frac = max(frac, min(0.99, math.log(max(st.last_rel_res, tol_res) / 1.0) / math.log(tol_res)))
+                progress(min(frac, 1.0), f"t = {st.step * dt:.4g} s, E_kin = {st.last_ekin:.3g}, "
+                                         f"residual {st.last_rel_res:.2e}")
+            if max_wall is not None and st.step % 100 == 0 and time.perf_counter() - wall0 > max_wall:
+                status = "walltime"
+                message = f"stopped at t = {st.step * dt:.6g} s: wall-time limit {max_wall:g} s reached"
+                break
+    t_loop = time.perf_counter() - t_loop
+
+    if status == "running":
+        status = "done"
+    if status == "done":
+        if relax:
+            message = (f"no steady state within {n_steps} steps (t = {n_steps * dt:.6g} s): last residual "
+                       f"{st.last_rel_res:.3g} (tol {tol_res:g})")
+        else:
+            message = f"reached t_end = {n_steps * dt:.6g} s in {n_steps} steps of {dt:.6g} s"
+            st.frame_t.append(n_steps * dt)
+            st.frame_U.append(D.reshape(shape).copy())
+            if ckpt_path:
+                st.D, st.Dp = D, Dp
+                _save_checkpoint(ckpt_path, st, fixed_info)
+    if status == "steady":
+        if not st.frame_t or st.frame_t[-1] != st.step * dt:
+            st.frame_t.append(st.step * dt)
+            st.frame_U.append(D.reshape(shape).copy())
+
+    U = D.reshape(shape).copy()
+    ok_run = status == "done" and not relax
+    steady = status == "steady"
+    wall = time.perf_counter() - wall0
+    info = {
+        "steps": int(st.step),
+        "dt": float(dt),
+        "critical_time_step": float(dt_crit),
+        "critical_time_step_sheet": float(critical_time_step(omega_el, alpha)),
+        "critical_step_method": method,
+        "omega_max": float(omega),
+        "time_step_estimate_s": float(t_est),
+        "time_step_force_evals": int(n_est_evals),
+        "safety": float(safety),
+        "t_final": float(st.step * dt),
+        "alpha": float(alpha),
+        "damping": damping,
+        "mass_scaling": float(ms),
+        "mass_scaling_mode": ms_mode,
+        "energy_balance_error": float(st.balance_err),
+        "max_interpenetrated_nodes": int(st.max_interp),
+        "wall_time_s": float(wall),
+        "element_steps_per_second": float(n_elem * steps_done / t_loop) if t_loop > 0 and steps_done else 0.0,
+        "converged": bool(ok_run or steady),
+        "steady_state_reached": bool(steady),
+        "final_kinetic_energy": float(st.last_ekin),
+        "final_relative_residual": float(st.last_rel_res),
+        "kinetic_energy": float(last.get("Ek", 0.0)),
+        "strain_energy": float(last.get("Es", 0.0)),
+        "external_work": float(last.get("Wext", 0.0)),
+        "damping_dissipation": float(last.get("Edamp", 0.0)),
+        "contact_energy": float(last.get("Ec", 0.0)),
+        "contact_work": float(st.contact_work),
+        "max_contact_nodes": int(st.max_contact),
+        "kinetic_resets": int(st.resets),
+        "status": status,
+    }
+    info.update(info_dt)
+    if restarted_from is not None:
+        info["restarted_from_step"] = int(restarted_from)
+    frames = list(zip(st.frame_t, st.frame_U))
+    progress(1.0, message)
+    return SolveResult(U=U, converged=bool(ok_run or steady), message=message, info=info, frames=frames)
+
+
+SMALL_MESH_ELEMENTS = 2000
+"""Below this many elements the loop runs the force kernel on one thread by default: a step then
+takes tens of microseconds and the start/stop of the kernel's worker threads would dominate it."""
+
+
+def _with_threads(problem, settings, progress, relax):
+    settings = dict(settings or {})
+    threads = settings.get("threads")
+    n_elem = int(getattr(getattr(problem.model, "mesh", None), "n_elements", 0))
+    try:
+        import numba
+    except ImportError:  # pragma: no cover - numba is a dependency
+        return _integrate(problem, settings, progress, relax)
+    old = numba.get_num_threads()
+    if threads is None:
+        new = 1 if n_elem < SMALL_MESH_ELEMENTS else old
+    else:
+        new = int(_num(settings, "threads", None, positive=True, integer=True))
+        new = min(new, numba.config.NUMBA_NUM_THREADS)
+    try:
+        numba.set_num_threads(new)
+        res = _integrate(problem, settings, progress, relax)
+    finally:
+        numba.set_num_threads(old)
+    res.info["threads"] = int(new)
+    return res
+
+
+def run(problem: Problem, settings: dict | None = None, progress=no_progress) -> SolveResult:
+    """Dynamic drape (Section 4.1): integrate Eq. (23) from t = 0 to ``settings["t_end"]``.
+    converged = True when t_end was reached with a finite state.  See the module docstring."""
+    return _with_threads(problem, settings, progress, relax=False)
+
+
+def run_relax(problem: Problem, settings: dict | None = None, progress=no_progress) -> SolveResult:
+    """Dynamic relaxation (Section 4.2): damped explicit dynamics with scaled masses (default α = 5 1/s,
+    masses ×100) that stops itself once E_kin / W_ext < tol_kinetic and the relative residual force
+    |P - F + C|_free / |P|_free < tol_residual.  ``damping="kinetic"`` uses Cundall's kinetic damping
+    (all velocities zeroed at each kinetic-energy peak; no viscous damping unless ``alpha`` is given).
+    converged = steady_state_reached."""
+    return _with_threads(problem, settings, progress, relax=True)

@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import contextlib
 import inspect
+import io
 import math
 import re
 import threading
@@ -147,43 +148,53 @@ def _flat_mesh(X, quads, tris, sets) -> ShellMesh:
 
 
 class _Builder:
-    """Thin helper over gmsh's built-in kernel for transfinite (structured) quad panels."""
+    """Thin helper over gmsh's OpenCASCADE kernel for transfinite (structured) quad panels.
+
+    OpenCASCADE, not gmsh's built-in kernel: with the built-in kernel gmsh places the nodes of a
+    transfinite circle arc up to ~1e-9 rad off uniform (and line nodes ~1e-12 off), which breaks
+    the meshes' mirror symmetries at that level; with OpenCASCADE they are uniform to rounding."""
 
     def __init__(self, gmsh):
-        self.gmsh, self.geo = gmsh, gmsh.model.geo
+        self.gmsh, self.occ = gmsh, gmsh.model.occ
+        self.curves: list[tuple[int, int]] = []       # (curve tag, elements)
+        self.surfaces: list[int] = []
         self.groups: dict[tuple[int, str], list[int]] = {}
 
     def point(self, x: float, y: float) -> int:
-        return self.geo.addPoint(float(x), float(y), 0.0)
+        return self.occ.addPoint(float(x), float(y), 0.0)
 
     def line(self, a: int, b: int, n: int, *groups: str) -> int:
         """Straight edge a->b with n elements."""
-        return self._curve(self.geo.addLine(a, b), n, groups)
+        return self._curve(self.occ.addLine(a, b), n, groups)
 
     def arc(self, a: int, centre: int, b: int, n: int, *groups: str) -> int:
         """Circular arc a->b (< 180 deg) about centre with n elements, uniform in angle."""
-        return self._curve(self.geo.addCircleArc(a, centre, b), n, groups)
+        return self._curve(self.occ.addCircleArc(a, centre, b), n, groups)
 
     def _curve(self, tag, n, groups):
-        self.geo.mesh.setTransfiniteCurve(tag, n + 1)
+        self.curves.append((tag, n))
         for g in groups:
             self.groups.setdefault((1, g), []).append(tag)
         return tag
 
-    def panel(self, *signed_curves: int) -> None:
-        """Structured, recombined panel bounded by four curves (negative tag = reversed)."""
-        s = self.geo.addPlaneSurface([self.geo.addCurveLoop(list(signed_curves))])
-        self.geo.mesh.setTransfiniteSurface(s)
-        self.geo.mesh.setRecombine(2, s)
+    def panel(self, *curves: int) -> None:
+        """Structured, recombined panel bounded by four curves that form a closed loop."""
+        self.surfaces.append(self.occ.addPlaneSurface([self.occ.addCurveLoop(list(curves))]))
 
     def points_group(self, name: str, pts: list[int]) -> None:
         self.groups[(0, name)] = list(pts)
 
     def mesh(self) -> ShellMesh:
-        self.geo.synchronize()
+        self.occ.synchronize()
+        m = self.gmsh.model
+        for tag, n in self.curves:
+            m.mesh.setTransfiniteCurve(tag, n + 1)
+        for s in self.surfaces:
+            m.mesh.setTransfiniteSurface(s)
+            m.mesh.setRecombine(2, s)
         for (dim, name), tags in self.groups.items():
-            self.gmsh.model.addPhysicalGroup(dim, tags, name=name)
-        self.gmsh.model.mesh.generate(2)
+            m.addPhysicalGroup(dim, tags, name=name)
+        m.mesh.generate(2)
         return _flat_mesh(*_extract(self.gmsh))
 
 
@@ -237,7 +248,7 @@ def square_on_square(counts: tuple[int, int, int], sheet: float = 20.0,
             k1 = (k + 1) % 4
             e_in = b.line(inner[k], inner[k1], a, "clamped")
             e_out = b.line(outer[k], outer[k1], a, "outer")
-            b.panel(e_in, diag[k1], -e_out, -diag[k])
+            b.panel(e_in, diag[k1], e_out, diag[k])
         return b.mesh()
 
 
@@ -265,7 +276,7 @@ def disc_on_disc(counts: tuple[int, int], diameter: float = 25.4,
             k1 = (k + 1) % 4
             a_in = b.arc(inner[k], o, inner[k1], nc // 4, "clamped")
             a_out = b.arc(outer[k], o, outer[k1], nc // 4, "outer")
-            b.panel(a_in, ray[k1], -a_out, -ray[k])
+            b.panel(a_in, ray[k1], a_out, ray[k])
         return b.mesh()        # the arcs' centre point is no mesh node: _extract drops it
 
 
@@ -295,7 +306,7 @@ def square_on_disc(counts: tuple[int, int], sheet: float = 50.0,
             k1 = (k + 1) % 4
             a_in = b.arc(inner[k], o, inner[k1], nc // 4, "clamped")
             e_out = b.line(outer[k], outer[k1], nc // 4, "outer")
-            b.panel(a_in, diag[k1], -e_out, -diag[k])
+            b.panel(a_in, diag[k1], e_out, diag[k])
         return b.mesh()        # the arcs' centre point is no mesh node: _extract drops it
 
 
@@ -331,6 +342,8 @@ def from_file(path) -> ShellMesh:
     p = Path(path)
     if not p.is_file():
         raise InputError(f"mesh file {str(path)!r} does not exist")
+    if p.stat().st_size == 0:
+        raise InputError(f"mesh file {str(path)!r} is empty")
     if p.suffix.lower() == ".geo":
         X, quads, tris, sets = _mesh_geo(p)
         D = None
@@ -343,32 +356,51 @@ def from_file(path) -> ShellMesh:
 
 
 def _mesh_geo(p: Path):
+    """Open a .geo with gmsh and mesh it in 2-D, recombined (gmsh's error line -> InputError)."""
     with _gmsh_model("from_file") as gmsh:
         gmsh.logger.start()
         try:
             gmsh.option.setNumber("Mesh.RecombineAll", 1)
             gmsh.open(str(p))
             gmsh.model.mesh.generate(2)
-            err = gmsh.logger.getLastError()
-        except Exception as e:              # gmsh raises plain Exception with its log line
-            raise InputError(f"gmsh cannot mesh {p.name}: {str(e).splitlines()[0] if str(e) else 'error'}") from None
+            errors = [m for m in gmsh.logger.get() if m.startswith("Error")]
+        except Exception as e:              # gmsh raises a plain Exception with its log line
+            errors = [str(e) or "error"]
+            _reset_geo_parser(gmsh)
         finally:
             gmsh.logger.stop()
-        if err:
-            raise InputError(f"gmsh cannot mesh {p.name}: {err.splitlines()[0]}")
+        if errors:
+            raise InputError(f"gmsh cannot mesh {p.name}: {errors[0].splitlines()[0]}")
         if gmsh.model.getDimension() < 2:
             raise InputError(f"{p.name} defines no surface to mesh")
         return _extract(gmsh)
 
 
+def _reset_geo_parser(gmsh) -> None:
+    """gmsh 4.15 keeps a stale token after a .geo syntax error, so the next .geo parsed in this
+    process fails with "line 0: syntax error (;)"; parsing a throwaway file consumes it."""
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as d:
+        f = Path(d) / "reset.geo"
+        f.write_text("solidshell_reset = 0;\n")
+        try:
+            gmsh.merge(str(f))
+        except Exception:
+            pass
+
+
 def _read_meshio(p: Path):
     import meshio
 
-    try:
-        m = meshio.read(str(p))
-    except Exception as e:                  # meshio raises many types (ReadError, KeyError, ...)
-        msg = str(e).splitlines()[0] if str(e) else type(e).__name__
-        raise InputError(f"cannot read mesh file {p.name}: {msg}") from None
+    out = io.StringIO()
+    try:   # meshio prints its errors and may even sys.exit(1) on an unreadable file
+        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(out):
+            m = meshio.read(str(p))
+    except (Exception, SystemExit) as e:    # ReadError, KeyError, ValueError, SystemExit, ...
+        msg = next((line for line in [str(e)] + out.getvalue().splitlines() if line.strip()
+                    and not line.strip().isdigit()), type(e).__name__)
+        raise InputError(f"cannot read mesh file {p.name}: {msg.strip()}") from None
     X = np.asarray(m.points, dtype=float)
     if X.ndim != 2 or len(X) == 0:
         raise InputError(f"mesh file {p.name} holds no nodes")

@@ -1,9 +1,25 @@
-"""solidshell: fabric drape with ANS solid-shell elements (Xie, Sze & Zhou, FEAD 106 (2015) 85-102)."""
+"""solidshell: fabric drape with ANS solid-shell elements (Xie, Sze & Zhou, FEAD 106 (2015) 85-102).
+
+Public face (DESIGN.md): ShellMesh, Fabric, IsotropicShell, Model, solve_static, run_scene.
+Solver and scene entry points are imported on first use, so ``import solidshell`` stays light.
+"""
 
 from .errors import InputError, SolverError
 from .material import Fabric, IsotropicShell
 from .mesh import ShellMesh
+from .model import Model
 
 __version__ = "0.1.0"
 
-__all__ = ["ShellMesh", "Fabric", "IsotropicShell", "InputError", "SolverError", "__version__"]
+__all__ = ["ShellMesh", "Fabric", "IsotropicShell", "Model", "solve_static", "run_scene",
+           "InputError", "SolverError", "__version__"]
+
+_LAZY = {"solve_static": "solidshell.solvers.static", "run_scene": "solidshell.runner"}
+
+
+def __getattr__(name):
+    if name in _LAZY:
+        import importlib
+
+        return getattr(importlib.import_module(_LAZY[name]), name)
+    raise AttributeError(f"module 'solidshell' has no attribute {name!r}")

@@ -56,10 +56,11 @@ def _sign_quasi(xo, xn, conn_e, nn, i, mu):
     return -1.0
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, error_model="numpy")
 def _element_force(e, xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r_z,
-                   quasi, mu, fe, gs, gz, zs):
-    """Energy of element e; its force into fe (nn,6).  gs, gz, zs: workspaces (nt,), (nn,), (nn,)."""
+                   quasi, mu, fe, gs, gz, zs, at, dt):
+    """Energy of element e; its force into fe (nn,6).  Workspaces: gs (nt,), gz, zs (nn,),
+    at, dt (nt,3) (tying-point tangent and director)."""
     nn = conn.shape[1]
     ngp = dN.shape[0]
     nt = alpha.shape[0]
@@ -120,28 +121,26 @@ def _element_force(e, xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r_z
     for t in range(nt):
         s = 0.0
         for c in range(3):
-            at = 0.0
-            dt = 0.0
+            av = 0.0
+            dv = 0.0
             for i in range(nn):
-                at += alpha[t, i] * xo[ce[i], c]
-                dt += beta[t, i] * xn[ce[i], c]
-            s += at * dt
+                av += alpha[t, i] * xo[ce[i], c]
+                dv += beta[t, i] * xn[ce[i], c]
+            at[t, c] = av
+            dt[t, c] = dv
+            s += av * dv
         gs[t] = s - r_s[e, t]
     for t in range(nt):
         q = 0.0
         for u in range(nt):
             q += Cs[e, t, u] * gs[u]
         energy += 0.5 * q * gs[t]
-        zs[0] = q  # reuse as scalar holder
-        for c in range(3):
-            at = 0.0
-            dt = 0.0
-            for i in range(nn):
-                at += alpha[t, i] * xo[ce[i], c]
-                dt += beta[t, i] * xn[ce[i], c]
-            for i in range(nn):
-                fe[i, c] += q * alpha[t, i] * dt
-                fe[i, 3 + c] += q * beta[t, i] * at
+        for i in range(nn):
+            qa = q * alpha[t, i]
+            qb = q * beta[t, i]
+            for c in range(3):
+                fe[i, c] += qa * dt[t, c]
+                fe[i, 3 + c] += qb * at[t, c]
     # ---- ANS thickness strain at the nodes (Eq. 5 / Eq. 15), Green or Eq. (24)
     for i in range(nn):
         p = ce[i]
@@ -183,15 +182,22 @@ def energy_force(xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r_z, qua
         gs = np.empty(max(nt, 1))
         gz = np.empty(nn)
         zs = np.empty(nn)
+        at = np.empty((max(nt, 1), 3))
+        dt = np.empty((max(nt, 1), 3))
         for e in range(th * chunk, min(M, (th + 1) * chunk)):
             w_out[e] = _element_force(e, xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r_z,
-                                      quasi, mu, f_out[e], gs, gz, zs)
+                                      quasi, mu, f_out[e], gs, gz, zs, at, dt)
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, error_model="numpy")
 def _element_tangent(e, xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r_z,
-                     quasi, mu, Ke, B, D, Bs, oo, on, nz, gs, gz, zs, at, dt):
-    """Tangent k_t of Eq. (9) of element e into Ke (nd,nd), nd = 6 nn (dof 6i+c: U_o then U_n)."""
+                     quasi, mu, Ke, B, D, oo, on, nz, gs, gz, zs, at, dt, v4):
+    """Tangent k_t of Eq. (9) of element e into Ke (nd,nd), nd = 6 nn (dof 6i+c: U_o then U_n).
+
+    Material part sum B^T C B over the strain rows (membrane+bending per point, then shear tying,
+    then nodal thickness); geometric part sum sigma * d2(strain) as multiples of I3 between nodal
+    vectors.  Row-major axpy loops (inner loop over contiguous columns) so that LLVM vectorises.
+    """
     nn = conn.shape[1]
     ngp = dN.shape[0]
     nt = alpha.shape[0]
@@ -207,8 +213,15 @@ def _element_tangent(e, xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r
         for c in range(3):
             for d in range(3):
                 nz[i, c, d] = 0.0
+    a1 = v4[0]
+    a2 = v4[1]
+    b1 = v4[2]
+    b2 = v4[3]
+    st = v4[4]
+    sig = v4[5]
     for g in range(ngp):
-        a1 = np.zeros(3); a2 = np.zeros(3); b1 = np.zeros(3); b2 = np.zeros(3)
+        for c in range(3):
+            a1[c] = 0.0; a2[c] = 0.0; b1[c] = 0.0; b2[c] = 0.0
         for i in range(nn):
             p = ce[i]
             for c in range(3):
@@ -216,7 +229,6 @@ def _element_tangent(e, xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r
                 a2[c] += dN[g, i, 1] * xo[p, c]
                 b1[c] += dN[g, i, 0] * xn[p, c]
                 b2[c] += dN[g, i, 1] * xn[p, c]
-        st = np.empty(6)
         st[0] = 0.5 * (a1[0] * a1[0] + a1[1] * a1[1] + a1[2] * a1[2]) - r_mb[e, g, 0]
         st[1] = 0.5 * (a2[0] * a2[0] + a2[1] * a2[1] + a2[2] * a2[2]) - r_mb[e, g, 1]
         st[2] = (a1[0] * a2[0] + a1[1] * a2[1] + a1[2] * a2[2]) - r_mb[e, g, 2]
@@ -224,16 +236,10 @@ def _element_tangent(e, xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r
         st[4] = (a2[0] * b2[0] + a2[1] * b2[1] + a2[2] * b2[2]) - r_mb[e, g, 4]
         st[5] = (a1[0] * b2[0] + a1[1] * b2[1] + a1[2] * b2[2]
                  + a2[0] * b1[0] + a2[1] * b1[1] + a2[2] * b1[2]) - r_mb[e, g, 5]
-        C = Cmb[e, g]
-        sig = np.zeros(6)
         for r in range(3):
-            for s in range(3):
-                sig[r] += C[0, r, s] * st[s]
-                sig[3 + r] += C[1, r, s] * st[3 + s]
-        # B: rows = (e11, e22, e12, k11, k22, k12), cols = element dofs
-        for r in range(6):
-            for a in range(nd):
-                B[r, a] = 0.0
+            sig[r] = Cmb[e, g, 0, r, 0] * st[0] + Cmb[e, g, 0, r, 1] * st[1] + Cmb[e, g, 0, r, 2] * st[2]
+            sig[3 + r] = Cmb[e, g, 1, r, 0] * st[3] + Cmb[e, g, 1, r, 1] * st[4] + Cmb[e, g, 1, r, 2] * st[5]
+        # B rows (e11, e22, e12, k11, k22, k12) over the element dofs
         for i in range(nn):
             d1 = dN[g, i, 0]
             d2 = dN[g, i, 1]
@@ -242,24 +248,28 @@ def _element_tangent(e, xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r
                 B[0, o + c] = d1 * a1[c]
                 B[1, o + c] = d2 * a2[c]
                 B[2, o + c] = d1 * a2[c] + d2 * a1[c]
+                B[0, o + 3 + c] = 0.0
+                B[1, o + 3 + c] = 0.0
+                B[2, o + 3 + c] = 0.0
                 B[3, o + c] = d1 * b1[c]
                 B[3, o + 3 + c] = d1 * a1[c]
                 B[4, o + c] = d2 * b2[c]
                 B[4, o + 3 + c] = d2 * a2[c]
                 B[5, o + c] = d1 * b2[c] + d2 * b1[c]
                 B[5, o + 3 + c] = d2 * a1[c] + d1 * a2[c]
-        # D = C B (block diagonal C), then Ke += B^T D on the upper triangle
         for r in range(3):
-            for a in range(nd):
-                D[r, a] = C[0, r, 0] * B[0, a] + C[0, r, 1] * B[1, a] + C[0, r, 2] * B[2, a]
-                D[3 + r, a] = C[1, r, 0] * B[3, a] + C[1, r, 1] * B[4, a] + C[1, r, 2] * B[5, a]
+            c0 = Cmb[e, g, 0, r, 0]; c1 = Cmb[e, g, 0, r, 1]; c2 = Cmb[e, g, 0, r, 2]
+            k0 = Cmb[e, g, 1, r, 0]; k1 = Cmb[e, g, 1, r, 1]; k2 = Cmb[e, g, 1, r, 2]
+            for b in range(nd):
+                D[r, b] = c0 * B[0, b] + c1 * B[1, b] + c2 * B[2, b]
+                D[3 + r, b] = k0 * B[3, b] + k1 * B[4, b] + k2 * B[5, b]
         for a in range(nd):
-            for b in range(a, nd):
-                v = 0.0
-                for r in range(6):
-                    v += B[r, a] * D[r, b]
-                Ke[a, b] += v
-        # geometric part (scalar multiples of I3 between nodal vectors)
+            # membrane rows vanish on director dofs: skip them there
+            r0 = 3 if (a % 6) >= 3 else 0
+            for r in range(r0, 6):
+                bra = B[r, a]
+                for b in range(nd):
+                    Ke[a, b] += bra * D[r, b]
         for i in range(nn):
             di1 = dN[g, i, 0]
             di2 = dN[g, i, 1]
@@ -268,7 +278,7 @@ def _element_tangent(e, xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r
                 dj2 = dN[g, j, 1]
                 oo[i, j] += sig[0] * di1 * dj1 + sig[1] * di2 * dj2 + sig[2] * (di1 * dj2 + di2 * dj1)
                 on[i, j] += sig[3] * di1 * dj1 + sig[4] * di2 * dj2 + sig[5] * (di1 * dj2 + di2 * dj1)
-    # shear tying strains
+    # shear tying strains: rows of B reused for them
     for t in range(nt):
         s = 0.0
         for c in range(3):
@@ -283,8 +293,8 @@ def _element_tangent(e, xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r
         gs[t] = s - r_s[e, t]
         for i in range(nn):
             for c in range(3):
-                Bs[t, 6 * i + c] = alpha[t, i] * dt[t, c]
-                Bs[t, 6 * i + 3 + c] = beta[t, i] * at[t, c]
+                B[t, 6 * i + c] = alpha[t, i] * dt[t, c]
+                B[t, 6 * i + 3 + c] = beta[t, i] * at[t, c]
     for t in range(nt):
         q = 0.0
         for u in range(nt):
@@ -292,74 +302,56 @@ def _element_tangent(e, xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r
         for i in range(nn):
             for j in range(nn):
                 on[i, j] += q * alpha[t, i] * beta[t, j]
-        for a in range(nd):
+        for b in range(nd):
             v = 0.0
             for u in range(nt):
-                v += Cs[e, t, u] * Bs[u, a]
-            D[t, a] = v
+                v += Cs[e, t, u] * B[u, b]
+            D[t, b] = v
     for a in range(nd):
-        for b in range(a, nd):
-            v = 0.0
-            for t in range(nt):
-                v += Bs[t, a] * D[t, b]
-            Ke[a, b] += v
-    # thickness strains at the nodes
+        for t in range(nt):
+            bta = B[t, a]
+            for b in range(nd):
+                Ke[a, b] += bta * D[t, b]
+    # thickness strains at the nodes: d eps_i / d x_ni = w_i x_ni (w_i = 1 Green, s_i/|x_ni| Eq. 24)
     for i in range(nn):
         p = ce[i]
         xx = xn[p, 0] ** 2 + xn[p, 1] ** 2 + xn[p, 2] ** 2
         if quasi:
             zs[i] = _sign_quasi(xo, xn, ce, nn, i, mu)
             gz[i] = zs[i] * np.sqrt(xx) - r_z[e, i]
+            zs[i] = zs[i] / np.sqrt(xx)
         else:
             gz[i] = 0.5 * xx - r_z[e, i]
+            zs[i] = 1.0
     for i in range(nn):
         p = ce[i]
         q = 0.0
         for j in range(nn):
             q += Cz[e, i, j] * gz[j]
         if quasi:
-            ln = np.sqrt(xn[p, 0] ** 2 + xn[p, 1] ** 2 + xn[p, 2] ** 2)
+            ln2 = xn[p, 0] ** 2 + xn[p, 1] ** 2 + xn[p, 2] ** 2
             for c in range(3):
                 for d in range(3):
-                    dd = xn[p, c] * xn[p, d] / (ln * ln)
-                    nz[i, c, d] += q * zs[i] * ((1.0 if c == d else 0.0) - dd) / ln
+                    nz[i, c, d] += q * zs[i] * ((1.0 if c == d else 0.0) - xn[p, c] * xn[p, d] / ln2)
         else:
             for c in range(3):
                 nz[i, c, c] += q
         for j in range(nn):
             pj = ce[j]
-            cij = Cz[e, i, j]
-            if quasi:
-                si = zs[i] / np.sqrt(xn[p, 0] ** 2 + xn[p, 1] ** 2 + xn[p, 2] ** 2)
-                sj = zs[j] / np.sqrt(xn[pj, 0] ** 2 + xn[pj, 1] ** 2 + xn[pj, 2] ** 2)
-            else:
-                si = 1.0
-                sj = 1.0
+            cij = Cz[e, i, j] * zs[i] * zs[j]
             for c in range(3):
                 for d in range(3):
-                    a = 6 * i + 3 + c
-                    b = 6 * j + 3 + d
-                    if b >= a:
-                        Ke[a, b] += cij * si * sj * xn[p, c] * xn[pj, d]
-    # add the geometric blocks, then mirror the upper triangle
+                    Ke[6 * i + 3 + c, 6 * j + 3 + d] += cij * xn[p, c] * xn[pj, d]
+    # geometric blocks
     for i in range(nn):
         for j in range(nn):
             for c in range(3):
-                a = 6 * i + c
-                b = 6 * j + c
-                if b >= a:
-                    Ke[a, b] += oo[i, j]
-                b = 6 * j + 3 + c
-                if b >= a:
-                    Ke[a, b] += on[i, j]
-                else:
-                    Ke[b, a] += on[i, j]
+                Ke[6 * i + c, 6 * j + c] += oo[i, j]
+                Ke[6 * i + c, 6 * j + 3 + c] += on[i, j]
+                Ke[6 * j + 3 + c, 6 * i + c] += on[i, j]
         for c in range(3):
-            for d in range(c, 3):
+            for d in range(3):
                 Ke[6 * i + 3 + c, 6 * i + 3 + d] += nz[i, c, d]
-    for a in range(nd):
-        for b in range(a + 1, nd):
-            Ke[b, a] = Ke[a, b]
 
 
 @njit(cache=True, parallel=True, fastmath=_FM)
@@ -372,9 +364,9 @@ def force_tangent(xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r_z, qu
     nd = 6 * nn
     chunk = (M + nth - 1) // nth
     for th in prange(nth):
-        B = np.empty((6, nd))
+        B = np.empty((max(6, nt), nd))
         D = np.empty((max(6, nt), nd))
-        Bs = np.empty((max(nt, 1), nd))
+        v4 = np.empty((6, 6))
         oo = np.empty((nn, nn))
         on = np.empty((nn, nn))
         nz = np.empty((nn, 3, 3))
@@ -385,6 +377,6 @@ def force_tangent(xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r_z, qu
         dt = np.empty((max(nt, 1), 3))
         for e in range(th * chunk, min(M, (th + 1) * chunk)):
             w_out[e] = _element_force(e, xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r_z,
-                                      quasi, mu, f_out[e], gs, gz, zs)
+                                      quasi, mu, f_out[e], gs, gz, zs, at, dt)
             _element_tangent(e, xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r_z,
-                             quasi, mu, K_out[e], B, D, Bs, oo, on, nz, gs, gz, zs, at, dt)
+                             quasi, mu, K_out[e], B, D, oo, on, nz, gs, gz, zs, at, dt, v4)

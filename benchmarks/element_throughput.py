@@ -1,0 +1,81 @@
+"""Element evaluations per second of the batched kernels (issue 3 speed figures).
+
+Usage: python benchmarks/element_throughput.py [--elements 10000] [--repeats 7]
+
+Measures, for quads and for triangles on a randomly deformed flat sheet: the internal force kernel
+(energy + force, the explicit solver's hot path), the force + tangent kernel, and the whole
+Model.force_and_tangent including CSR assembly.  Numba's first-call (compile or cache load) time is
+reported separately; figures are medians over repeats.  Compare figures within one run: the machine
+is shared.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+from numba import get_num_threads
+
+from solidshell import IsotropicShell, ShellMesh
+from solidshell.elements import core
+from solidshell.model import Model
+
+
+def sheet(n: int, tri: bool) -> ShellMesh:
+    x = np.linspace(0.0, 1.0, n + 1)
+    X, Y = np.meshgrid(x, x)
+    P = np.column_stack([X.ravel(), Y.ravel(), np.zeros(X.size)])
+    a = (np.arange(n)[None, :] + (n + 1) * np.arange(n)[:, None]).ravel()
+    q = np.column_stack([a, a + 1, a + n + 2, a + n + 1])
+    if tri:
+        return ShellMesh(P, tris=np.vstack([q[:, [0, 1, 2]], q[:, [0, 2, 3]]]), check=False)
+    return ShellMesh(P, quads=q, check=False)
+
+
+def median_time(fn, repeats: int) -> float:
+    ts = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn()
+        ts.append(time.perf_counter() - t0)
+    return float(np.median(ts))
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--elements", type=int, default=10000)
+    ap.add_argument("--repeats", type=int, default=7)
+    args = ap.parse_args(argv)
+    print(f"numba threads: {get_num_threads()}")
+    for tri in (False, True):
+        n = int(round(np.sqrt(args.elements / (2 if tri else 1))))
+        mesh = sheet(n, tri)
+        model = Model(mesh, IsotropicShell(E=1e5, nu=0.3, h=0.01))
+        U = 0.05 * np.random.default_rng(0).standard_normal((mesh.n_nodes, 6))
+        b = model.blocks[0]
+        M = len(b.conn)
+        xo, xn = model._current(U)
+        fe = np.empty((M, b.nn, 6))
+        we = np.empty(M)
+        Ke = np.empty((M, 6 * b.nn, 6 * b.nn))
+        nth = get_num_threads()
+        t0 = time.perf_counter()
+        core.energy_force(*b.args(xo, xn, False, 0.5), fe, we, nth)
+        core.force_tangent(*b.args(xo, xn, False, 0.5), fe, we, Ke, nth)
+        model.force_and_tangent(U)
+        first = time.perf_counter() - t0
+        tf = median_time(lambda: core.energy_force(*b.args(xo, xn, False, 0.5), fe, we, nth), args.repeats)
+        tk = median_time(lambda: core.force_tangent(*b.args(xo, xn, False, 0.5), fe, we, Ke, nth), args.repeats)
+        tF = median_time(lambda: model.internal_force(U), args.repeats)
+        tA = median_time(lambda: model.force_and_tangent(U), args.repeats)
+        name = "tri3 " if tri else "quad4"
+        print(f"{name} M={M:6d}  first call (compile/cache load) {first:6.2f} s")
+        print(f"  force kernel          {M / tf / 1e6:8.3f} M elem/s   ({tf * 1e3:7.2f} ms)")
+        print(f"  force+tangent kernel  {M / tk / 1e3:8.1f} k elem/s   ({tk * 1e3:7.2f} ms)")
+        print(f"  Model.internal_force  {M / tF / 1e6:8.3f} M elem/s   ({tF * 1e3:7.2f} ms, incl. gather/scatter)")
+        print(f"  Model.force_and_tangent {M / tA / 1e3:6.1f} k elem/s   ({tA * 1e3:7.2f} ms, incl. CSR assembly)")
+
+
+if __name__ == "__main__":
+    main()

@@ -28,6 +28,8 @@ class _Block:
         self.dofs = element_dofs(self.conn)
         c = module.precompute(Xo[conn], Xn[conn], section.C_m, section.C_b, section.C_t,
                               float(section.E_z), float(section.warp_angle_rad))
+        # Eq. (24) measures |x_n| - 1 against |X_n| (not |X_n|^2/2 as the Green strain does)
+        c["r_zq"] = np.sqrt(2.0 * c["r_z"])
         self.c = c
         self.dN = np.ascontiguousarray(module.DN_GP)
         self.alpha = np.ascontiguousarray(module.ALPHA)
@@ -36,7 +38,7 @@ class _Block:
     def args(self, xo, xn, quasi, mu):
         c = self.c
         return (xo, xn, self.conn, self.dN, self.alpha, self.beta, c["Cmb"], c["Cs"], c["Cz"],
-                c["r_mb"], c["r_s"], c["r_z"], quasi, mu)
+                c["r_mb"], c["r_s"], c["r_zq"] if quasi else c["r_z"], quasi, mu)
 
 
 class Model:

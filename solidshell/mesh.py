@@ -78,7 +78,9 @@ class ShellMesh:
             n = np.linalg.norm(D, axis=1)
             if not np.all(np.isfinite(n)) or np.any(n <= 0.0):
                 raise InputError("every director must be a finite non-zero vector")
-            self.directors = D / n[:, None]
+            # leave already-unit directors bit-for-bit (a file round trip must not change them)
+            unit = np.abs(n - 1.0) <= 4 * np.finfo(float).eps
+            self.directors = np.where(unit[:, None], D, D / n[:, None])
         self.node_sets = {}
         for k, v in (node_sets or {}).items():
             self.add_node_set(k, v)

@@ -119,6 +119,11 @@ def _cmd_run(args) -> int:
 
 def main(argv=None) -> int:
     """Entry point; returns the exit status (the console script exits with it)."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    # let "--mesh -3x4" reach the density check (argparse would take -3x4 for an option)
+    for i in range(len(argv) - 2, -1, -1):
+        if argv[i] == "--mesh" and argv[i + 1].startswith("-") and argv[i + 1][1:2].isdigit():
+            argv[i:i + 2] = [f"--mesh={argv[i + 1]}"]
     try:
         args = _parser().parse_args(argv)
         if args.command == "scenes":

@@ -140,6 +140,13 @@ def _bodies(scene):
 
 
 # --------------------------------------------------------------------------- views
+def _cax(ax):
+    """A colour-bar axes exactly as tall as ``ax`` (which has equal aspect)."""
+    from mpl_toolkits.axes_grid1 import make_axes_locatable
+
+    return make_axes_locatable(ax).append_axes("right", size="4%", pad=0.12)
+
+
 def _top(ax, fig, mesh, X, norm, cmap, bodies):
     from matplotlib.collections import PolyCollection
 
@@ -163,7 +170,43 @@ def _top(ax, fig, mesh, X, norm, cmap, bodies):
     ax.set_xlabel("x [cm]  (warp)")
     ax.set_ylabel("y [cm]  (weft)")
     ax.grid(True, lw=0.3, alpha=0.5)
-    cb = fig.colorbar(pc, ax=ax, shrink=0.85)
+    cb = fig.colorbar(pc, cax=_cax(ax))
+    cb.set_label("height z [cm]")
+
+
+def _side(ax, fig, mesh, X, norm, cmap, bodies):
+    """Projection on the x-z plane (looking along +y), faces coloured by height."""
+    import matplotlib.patches as mpatches
+    from matplotlib.collections import PolyCollection
+
+    lo, hi = X.min(0), X.max(0)
+    for b in bodies:
+        c = np.asarray(b.get("centre", (0.0, 0.0, 0.0)), float)
+        kw = dict(facecolor="0.85", edgecolor="0.3", lw=0.8, ls="--", zorder=0)
+        if b["type"] == "sphere":
+            ax.add_patch(mpatches.Circle((c[0], c[2]), b["radius"], **kw))
+            lo, hi = np.minimum(lo, c - b["radius"]), np.maximum(hi, c + b["radius"])
+        elif b["type"] == "pedestal":
+            half = b["size"] / 2 if b.get("shape") != "disc" else b["diameter"] / 2
+            depth = max(c[2] - lo[2], 0.1 * (hi[0] - lo[0]))
+            ax.add_patch(mpatches.Rectangle((c[0] - half, c[2] - depth), 2 * half, depth, **kw))
+            lo[2] = min(lo[2], c[2] - depth)
+            hi[2] = max(hi[2], c[2])
+    polys = [p[:, [0, 2]] for p in _polys(mesh, X)]
+    z = _cells_z(mesh, X)
+    pc = PolyCollection(polys, array=z, cmap=cmap, norm=norm, edgecolors="face", linewidths=1.2, zorder=2)
+    ax.add_collection(pc)
+    ax.add_collection(PolyCollection(polys, facecolors="none", edgecolors="k",
+                                     linewidths=_edge_width(mesh) * 0.7, zorder=3))
+    span = max(hi[0] - lo[0], hi[2] - lo[2], 1e-9)
+    pad = 0.04 * span
+    ax.set_xlim(lo[0] - pad, hi[0] + pad)
+    ax.set_ylim(lo[2] - pad, hi[2] + pad)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [cm]  (warp)")
+    ax.set_ylabel("z [cm]")
+    ax.grid(True, lw=0.3, alpha=0.5)
+    cb = fig.colorbar(pc, cax=_cax(ax))
     cb.set_label("height z [cm]")
 
 
@@ -205,8 +248,8 @@ def _three_d(ax, fig, mesh, X, norm, cmap, bodies, elev, azim):
     cb.set_label("height z [cm]")
 
 
-VIEWS = {"top": None, "iso": (30.0, -60.0), "side": (0.0, -90.0)}
-_VIEW_NAMES = {"top": "top view", "iso": "isometric view", "side": "side view (looking along +y)"}
+VIEWS = {"top": None, "iso": (30.0, -60.0), "side": None}
+_VIEW_NAMES = {"top": "top view", "iso": "isometric view", "side": "side view (x-z projection)"}
 
 
 def render(path, mesh, U=None, view: str = "iso", title: str | None = None, scene=None,
@@ -227,17 +270,16 @@ def render(path, mesh, U=None, view: str = "iso", title: str | None = None, scen
         if view == "top":
             ax = fig.add_subplot(111)
             _top(ax, fig, mesh, X, norm, _CMAP, bodies)
+        elif view == "side":
+            ax = fig.add_subplot(111)
+            _side(ax, fig, mesh, X, norm, _CMAP, bodies)
         else:
             elev, azim = VIEWS[view]
             ax = fig.add_subplot(111, projection="3d")
             _three_d(ax, fig, mesh, X, norm, _CMAP, bodies, elev, azim)
-            if view == "side":
-                ax.set_yticklabels([])
-                ax.set_ylabel("")
         head = title or "solidshell"
         sub = f"{_VIEW_NAMES[view]}" + (f" -- {subtitle}" if subtitle else "")
-        fig.suptitle(head, fontsize=11)
-        ax.set_title(sub, fontsize=9)
+        ax.set_title(f"{head}\n{sub}", fontsize=9.5)
         with atomic_path(path) as tmp:
             fig.savefig(tmp, dpi=dpi, format="png", bbox_inches="tight", pad_inches=0.15)
     finally:

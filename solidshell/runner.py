@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from . import io as sio
-from .errors import InputError
+from .errors import InputError, SolverError
 from .scenes import Scene, check_density, load
 
 MESH_SUFFIXES = (".msh", ".geo", ".vtu", ".vtk", ".xdmf", ".inp", ".med")
@@ -98,10 +98,13 @@ def build_scene_mesh(scene: Scene, mesh=None):
 def support_mask(scene: Scene, mesh) -> np.ndarray:
     """(N,6) bool: clamped sets fix all six dofs, fixed_translations sets fix U_o."""
     fixed = np.zeros((mesh.n_nodes, 6), dtype=bool)
-    for name in scene.supports.get("clamped", ()):
-        fixed[mesh.node_set(name)] = True
-    for name in scene.supports.get("fixed_translations", ()):
-        fixed[mesh.node_set(name), :3] = True
+    for kind, dofs in (("clamped", slice(0, 6)), ("fixed_translations", slice(0, 3))):
+        for name in scene.supports.get(kind, ()):
+            try:
+                idx = mesh.node_set(name)
+            except InputError as e:
+                raise InputError(f"{scene.source}: supports.{kind}: {e}") from None
+            fixed[idx, dofs] = True
     return fixed
 
 
@@ -299,9 +302,14 @@ def _run(sc, kind, mesh_arg, out_dir, cb, settings, timings, t_start) -> RunOutp
     if kind != "none":
         cb(0.05, "setting up")
         t = time.perf_counter()
-        from . import solvers
-        from .model import Model
-        from .problem import Problem
+        try:
+            from . import solvers
+            from .model import Model
+            from .problem import Problem
+            fn = solvers.get(kind)
+        except ImportError as e:
+            raise SolverError(f"solver {kind!r} is not available in this installation ({e}); "
+                              f"the mesh is written") from None
 
         model = Model(mesh, material, thickness_strain=sc.model["thickness_strain"], mu=sc.model["mu"])
         loads = loads_extra.copy()
@@ -311,7 +319,6 @@ def _run(sc, kind, mesh_arg, out_dir, cb, settings, timings, t_start) -> RunOutp
         s = sc.solver_settings(kind)
         s.update(settings)
         summary["settings"] = s
-        fn = solvers.get(kind)
         timings["setup"] = time.perf_counter() - t
         t = time.perf_counter()
         result = fn(problem, dict(s), _phase(cb, 0.08, 0.9))
@@ -325,8 +332,9 @@ def _run(sc, kind, mesh_arg, out_dir, cb, settings, timings, t_start) -> RunOutp
             summary["max_displacement"] = float(np.max(np.linalg.norm(U[:, :3], axis=1)))
             summary["min_z"] = float(np.min(mesh.nodes[:, 2] + U[:, 2]))
         for k, v in (result.info or {}).items():
-            key = k if k not in summary else f"solver_{k}"
-            summary[key] = v
+            if k in summary and (summary[k] == v or k in ("solver", "converged")):
+                continue                        # already said (the info repeats it)
+            summary[k if k not in summary else f"solver_{k}"] = v
         summary["frames"] = len(result.frames or [])
         if finite:
             try:

@@ -19,7 +19,8 @@ Scene file format
     recipe = "square_on_square"           #   strip(length, width), square_on_square(sheet, pedestal),
     sheet = 20.0                          #   disc_on_disc(diameter, pedestal_diameter),
     pedestal = 10.0                       #   square_on_disc(sheet, pedestal_diameter), square(size)
-    # file = "my_sheet.msh"               # OR a gmsh .msh/.geo file, relative to this scene file
+    # file = "my_sheet.msh"               # OR a gmsh .msh/.geo file (or any mesh meshio reads:
+                                          #   .vtu, .xdmf, ...), relative to this scene file
 
     [mesh]
     density = "48x16x4"                   # recipe density (see solidshell.meshing); default mesh
@@ -294,8 +295,6 @@ class Scene:
             f = Path(_str(ctx, "geometry.file", g["file"]))
             if not f.is_absolute():
                 f = (base_dir or Path.cwd()) / f
-            if f.suffix.lower() not in (".msh", ".geo"):
-                raise ctx.err("geometry.file", f"must be a gmsh .msh or .geo file, got {f.name!r}")
             geometry = {"file": f}
             recipe = None
         else:

@@ -70,18 +70,21 @@ def parse_density(text: str, n_fields: int, form: str | None = None) -> tuple[in
 
 # --------------------------------------------------------------------------- gmsh plumbing
 @contextlib.contextmanager
-def _gmsh_model(name: str):
-    """A fresh, silent gmsh model; gmsh is initialised and finalised here unless the caller
-    already runs a gmsh session, in which case only the temporary model is removed."""
+def _gmsh_model(name: str, options: dict[str, float] | None = None):
+    """A fresh, silent gmsh model with the given numeric options.  gmsh is initialised and
+    finalised here unless the caller already runs a gmsh session; then only the temporary model
+    is removed and the caller's option values are restored."""
     import gmsh
 
+    options = {"General.Terminal": 0, **(options or {})}
     with _GMSH_LOCK:
         owner = not gmsh.isInitialized()
         if owner:
             gmsh.initialize(readConfigFiles=False, interruptible=False)
-        terminal = gmsh.option.getNumber("General.Terminal")
+        saved = {k: gmsh.option.getNumber(k) for k in options}
         try:
-            gmsh.option.setNumber("General.Terminal", 0)
+            for k, v in options.items():
+                gmsh.option.setNumber(k, v)
             gmsh.model.add(name)
             yield gmsh
         finally:
@@ -89,7 +92,8 @@ def _gmsh_model(name: str):
                 gmsh.finalize()
             else:
                 gmsh.model.remove()
-                gmsh.option.setNumber("General.Terminal", terminal)
+                for k, v in saved.items():
+                    gmsh.option.setNumber(k, v)
 
 
 def _extract(gmsh) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, np.ndarray]]:
@@ -336,9 +340,10 @@ def from_file(path) -> ShellMesh:
     """Mesh from a file: a gmsh ``.geo`` (meshed in 2-D by gmsh, recombined into quads where it
     can) or any mesh file meshio reads (``.msh``, ``.vtu``, ``.xdmf``, ...).  Node sets come from
     physical groups of points and curves, by physical name, or from ``set:<name>`` point data
-    written by :meth:`ShellMesh.to_meshio`.  A flat (z = const) mesh is oriented counter-clockwise
-    seen from +Z with directors +Z unless the file stores directors; a curved one keeps its
-    orientation and gets averaged-normal directors.  Lengths are taken as cm."""
+    written by :meth:`ShellMesh.to_meshio`.  Directors stored in the file (``director`` point
+    data) are kept with the file's element order; otherwise a flat (z = const) mesh is turned
+    counter-clockwise seen from +Z with directors +Z, and a curved one keeps its element order and
+    gets averaged-normal directors.  Lengths are taken as cm."""
     p = Path(path)
     if not p.is_file():
         raise InputError(f"mesh file {str(path)!r} does not exist")
@@ -349,18 +354,17 @@ def from_file(path) -> ShellMesh:
         D = None
     else:
         X, quads, tris, sets, D = _read_meshio(p)
-    if np.ptp(X[:, 2]) <= 1e-12 * max(float(np.ptp(X, axis=0).max()), 1.0):
-        quads, tris = _orient_up(X, quads), _orient_up(X, tris)
-        D = np.tile([0.0, 0.0, 1.0], (len(X), 1)) if D is None else D
+    if D is None and np.ptp(X[:, 2]) <= 1e-12 * max(float(np.ptp(X, axis=0).max()), 1.0):
+        return _flat_mesh(X, quads, tris, sets)
     return ShellMesh(X, quads, tris, directors=D, node_sets=sets)
 
 
 def _mesh_geo(p: Path):
     """Open a .geo with gmsh and mesh it in 2-D, recombined (gmsh's error line -> InputError)."""
-    with _gmsh_model("from_file") as gmsh:
+    # RecombineAll is set before opening, so that the user's file can still turn it off
+    with _gmsh_model("from_file", {"Mesh.RecombineAll": 1}) as gmsh:
         gmsh.logger.start()
         try:
-            gmsh.option.setNumber("Mesh.RecombineAll", 1)
             gmsh.open(str(p))
             gmsh.model.mesh.generate(2)
             errors = [m for m in gmsh.logger.get() if m.startswith("Error")]

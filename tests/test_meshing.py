@@ -321,6 +321,27 @@ def test_from_file_vtu_keeps_sets_and_directors(tmp_path):
     assert all(np.array_equal(r.node_set(k), m.node_set(k)) for k in m.node_sets)
 
 
+def test_from_file_keeps_stored_directors(tmp_path):
+    # an upside-down flat mesh (clockwise from +Z, directors -Z) is consistent: keep it as stored
+    m = build_mesh("square", "2x2")
+    down = ShellMesh(m.nodes, m.quads[:, ::-1], directors=-m.directors)
+    down.to_meshio().write(tmp_path / "down.vtu")
+    r = from_file(tmp_path / "down.vtu")
+    assert np.array_equal(r.quads, down.quads) and np.array_equal(r.directors, down.directors)
+
+
+def test_from_file_geo_inside_a_users_gmsh_session(tmp_path):
+    import gmsh
+    (tmp_path / "sheet.geo").write_text(GEO)
+    gmsh.initialize(readConfigFiles=False, interruptible=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        _check_geo_mesh(from_file(tmp_path / "sheet.geo"))
+        assert gmsh.option.getNumber("Mesh.RecombineAll") == 0     # the user's option restored
+    finally:
+        gmsh.finalize()
+
+
 def test_from_file_unstructured_geo_is_recombined(tmp_path):
     (tmp_path / "disc.geo").write_text(
         "Point(1)={0,0,0,1}; Point(2)={3,0,0,1}; Point(3)={-3,0,0,1};\n"
@@ -340,6 +361,7 @@ def test_from_file_unstructured_geo_is_recombined(tmp_path):
     ("bad.geo", b"Point(1) = {0, 0, 0\nfoo bar;\n", "gmsh cannot mesh"),
     ("nosurface.geo", b"Point(1) = {0,0,0}; Point(2) = {1,0,0}; Line(1) = {1,2};\n", "no surface"),
     ("lines.vtu", None, "no quad or triangle"),
+    ("mesh.txt", b"1 2 3\n", "cannot read"),
 ])
 def test_from_file_rejects(tmp_path, name, content, match):
     path = tmp_path / name

@@ -117,7 +117,7 @@ class _State:
     """Everything that changes during the run: saved in checkpoints, restored on restart."""
 
     FIELDS = ("D", "Dp", "step", "damp_sum", "ekin_max", "balance_err", "max_interp", "contact_work",
-              "max_contact", "ek_prev_half", "resets", "last_ekin", "last_rel_res", "frame_t", "frame_U")
+              "max_contact", "max_pen", "ek_prev_half", "resets", "last_ekin", "last_rel_res", "frame_t", "frame_U")
 
     def __init__(self, **kw):
         self.__dict__.update(kw)
@@ -154,7 +154,7 @@ def _load_checkpoint(path, fixed_info: dict) -> _State:
         kw = {k: z[k].copy() for k in _State.FIELDS}
     for k in ("step", "max_interp", "max_contact", "resets"):
         kw[k] = int(kw[k])
-    for k in ("damp_sum", "ekin_max", "balance_err", "contact_work", "ek_prev_half", "last_ekin", "last_rel_res"):
+    for k in ("damp_sum", "max_pen", "ekin_max", "balance_err", "contact_work", "ek_prev_half", "last_ekin", "last_rel_res"):
         kw[k] = float(kw[k])
     kw["frame_t"] = [float(t) for t in kw["frame_t"]]
     kw["frame_U"] = [u for u in kw["frame_U"]]
@@ -320,7 +320,8 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
         fc, ec, nact = contact_forces(bodies, x, k_pen)
         C = np.zeros(6 * N)
         C.reshape(shape)[:, :3] = fc
-        return C, ec, nact
+        pen = float(np.max(np.linalg.norm(fc, axis=1) / k_pen)) if nact else 0.0
+        return C, ec, nact, pen
 
     def interp_count(D):
         if hasattr(model, "interpenetrated_nodes"):
@@ -330,7 +331,7 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
     # ------------------------------------------------------------------ initial state
     F0, Es0 = force_and_energy(D0, True)
     if bodies:
-        C0, Ec0, _ = contact(D0)
+        C0, Ec0, _, _ = contact(D0)
     else:
         C0, Ec0 = np.zeros(6 * N), 0.0
     Ek0 = 0.5 * float(np.dot(Mf * V0f, V0f))
@@ -347,7 +348,7 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
         Dm = D0 - dt * V0f + 0.5 * dt * dt * A0
         Dm[fixed_idx] = presc
         st = _State(D=D0.copy(), Dp=Dm, step=0, damp_sum=0.0, ekin_max=Ek0, balance_err=0.0,
-                    max_interp=interp_count(D0), contact_work=0.0, max_contact=0, ek_prev_half=0.0,
+                    max_interp=interp_count(D0), contact_work=0.0, max_contact=0, max_pen=0.0, ek_prev_half=0.0,
                     resets=0, last_ekin=Ek0, last_rel_res=(np.linalg.norm((P - F0 + C0)[free_idx]) / Pn
                                                          if Pn > 0 else 0.0),
                     frame_t=[], frame_U=[])
@@ -381,8 +382,10 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
                 break
             np.subtract(P, F, out=R)
             if bodies:
-                C, Ec, nact = contact(D)
+                C, Ec, nact, pen = contact(D)
                 R += C
+                if pen > st.max_pen:
+                    st.max_pen = pen
             # ---------------------------------------------------- Eq. (23)
             np.multiply(cF, R, out=Dn1)
             Dn1 += cD * D
@@ -522,6 +525,7 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
         "contact_energy": float(last.get("Ec", 0.0)),
         "contact_work": float(st.contact_work),
         "max_contact_nodes": int(st.max_contact),
+        "max_contact_penetration": float(st.max_pen),  # deepest, over every step (p = |f|/k)
         "kinetic_resets": int(st.resets),
         "status": status,
     }

@@ -58,14 +58,18 @@ def _sign_quasi(xo, xn, conn_e, nn, i, mu):
 
 @njit(cache=True, fastmath=_FM, error_model="numpy")
 def _element_force(e, xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r_z,
-                   quasi, mu, fe, gs, gz, zs, at, dt):
+                   quasi, mu, fe, gs, gz, zs, at, dt, xe):
     """Energy of element e; its force into fe (nn,6).  Workspaces: gs (nt,), gz, zs (nn,),
-    at, dt (nt,3) (tying-point tangent and director)."""
+    at, dt (nt,3) (tying-point tangent and director), xe (nn,6) (the element's x_o | x_n)."""
     nn = conn.shape[1]
     ngp = dN.shape[0]
     nt = alpha.shape[0]
     ce = conn[e]
     for i in range(nn):
+        p = ce[i]
+        for c in range(3):
+            xe[i, c] = xo[p, c]
+            xe[i, 3 + c] = xn[p, c]
         for c in range(6):
             fe[i, c] = 0.0
     energy = 0.0
@@ -74,13 +78,12 @@ def _element_force(e, xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r_z
         a1x = 0.0; a1y = 0.0; a1z = 0.0; a2x = 0.0; a2y = 0.0; a2z = 0.0
         b1x = 0.0; b1y = 0.0; b1z = 0.0; b2x = 0.0; b2y = 0.0; b2z = 0.0
         for i in range(nn):
-            p = ce[i]
             d1 = dN[g, i, 0]
             d2 = dN[g, i, 1]
-            a1x += d1 * xo[p, 0]; a1y += d1 * xo[p, 1]; a1z += d1 * xo[p, 2]
-            a2x += d2 * xo[p, 0]; a2y += d2 * xo[p, 1]; a2z += d2 * xo[p, 2]
-            b1x += d1 * xn[p, 0]; b1y += d1 * xn[p, 1]; b1z += d1 * xn[p, 2]
-            b2x += d2 * xn[p, 0]; b2y += d2 * xn[p, 1]; b2z += d2 * xn[p, 2]
+            a1x += d1 * xe[i, 0]; a1y += d1 * xe[i, 1]; a1z += d1 * xe[i, 2]
+            a2x += d2 * xe[i, 0]; a2y += d2 * xe[i, 1]; a2z += d2 * xe[i, 2]
+            b1x += d1 * xe[i, 3]; b1y += d1 * xe[i, 4]; b1z += d1 * xe[i, 5]
+            b2x += d2 * xe[i, 3]; b2y += d2 * xe[i, 4]; b2z += d2 * xe[i, 5]
         e0 = 0.5 * (a1x * a1x + a1y * a1y + a1z * a1z) - r_mb[e, g, 0]
         e1 = 0.5 * (a2x * a2x + a2y * a2y + a2z * a2z) - r_mb[e, g, 1]
         e2 = (a1x * a2x + a1y * a2y + a1z * a2z) - r_mb[e, g, 2]
@@ -124,8 +127,8 @@ def _element_force(e, xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r_z
             av = 0.0
             dv = 0.0
             for i in range(nn):
-                av += alpha[t, i] * xo[ce[i], c]
-                dv += beta[t, i] * xn[ce[i], c]
+                av += alpha[t, i] * xe[i, c]
+                dv += beta[t, i] * xe[i, 3 + c]
             at[t, c] = av
             dt[t, c] = dv
             s += av * dv
@@ -143,8 +146,7 @@ def _element_force(e, xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r_z
                 fe[i, 3 + c] += qb * at[t, c]
     # ---- ANS thickness strain at the nodes (Eq. 5 / Eq. 15), Green or Eq. (24)
     for i in range(nn):
-        p = ce[i]
-        xx = xn[p, 0] * xn[p, 0] + xn[p, 1] * xn[p, 1] + xn[p, 2] * xn[p, 2]
+        xx = xe[i, 3] * xe[i, 3] + xe[i, 4] * xe[i, 4] + xe[i, 5] * xe[i, 5]
         if quasi:
             zs[i] = _sign_quasi(xo, xn, ce, nn, i, mu)
             gz[i] = zs[i] * np.sqrt(xx) - r_z[e, i]
@@ -155,13 +157,12 @@ def _element_force(e, xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r_z
         for j in range(nn):
             q += Cz[e, i, j] * gz[j]
         energy += 0.5 * q * gz[i]
-        p = ce[i]
         if quasi:
-            sc = q * zs[i] / np.sqrt(xn[p, 0] ** 2 + xn[p, 1] ** 2 + xn[p, 2] ** 2)
+            sc = q * zs[i] / np.sqrt(xe[i, 3] ** 2 + xe[i, 4] ** 2 + xe[i, 5] ** 2)
         else:
             sc = q
         for c in range(3):
-            fe[i, 3 + c] += sc * xn[p, c]
+            fe[i, 3 + c] += sc * xe[i, 3 + c]
     return energy
 
 
@@ -184,9 +185,10 @@ def energy_force(xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r_z, qua
         zs = np.empty(nn)
         at = np.empty((max(nt, 1), 3))
         dt = np.empty((max(nt, 1), 3))
+        xe = np.empty((nn, 6))
         for e in range(th * chunk, min(M, (th + 1) * chunk)):
             w_out[e] = _element_force(e, xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r_z,
-                                      quasi, mu, f_out[e], gs, gz, zs, at, dt)
+                                      quasi, mu, f_out[e], gs, gz, zs, at, dt, xe)
 
 
 @njit(cache=True, fastmath=_FM, error_model="numpy")
@@ -375,8 +377,9 @@ def force_tangent(xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r_z, qu
         zs = np.empty(nn)
         at = np.empty((max(nt, 1), 3))
         dt = np.empty((max(nt, 1), 3))
+        xe = np.empty((nn, 6))
         for e in range(th * chunk, min(M, (th + 1) * chunk)):
             w_out[e] = _element_force(e, xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r_z,
-                                      quasi, mu, f_out[e], gs, gz, zs, at, dt)
+                                      quasi, mu, f_out[e], gs, gz, zs, at, dt, xe)
             _element_tangent(e, xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r_z,
                              quasi, mu, K_out[e], B, D, oo, on, nz, gs, gz, zs, at, dt, v4)

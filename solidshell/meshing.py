@@ -7,17 +7,14 @@ Pedestal scenes mesh only the hanging part; its edge on the pedestal is the node
 
 Mesh densities use the paper's names (Sections 3-6):
 
-=================== =========== ================================================= ==============
-recipe              density     meaning                                           paper
-=================== =========== ================================================= ==============
-``strip``           ``NxM``     N along the strip (X) x M across                  3.1: 10x1, 20x1
-``square_on_square`` ``AxBx4``  4 trapezoidal panels, A along the pedestal edge,   3.2, 3.5, 6.1,
-                                B outward                                         6.2
-``disc_on_disc``    ``RxC``     R radial x C around                               3.3: 10x40
-``square_on_disc``  ``RxC``     R outward x C around (C divisible by 8)           3.4: 30x240
-``square``          ``NxM``     N along X x M along Y, whole sheet                4.1, 4.2, 6.4
-``from_file``       --          a user's ``.geo`` (meshed by gmsh) or mesh file   --
-=================== =========== ================================================= ==============
+- ``strip`` ``NxM``: N along the strip (X) x M across (3.1: 10x1, 20x1)
+- ``square_on_square`` ``AxBx4``: 4 trapezoidal panels, A along the pedestal edge x B outward
+  (3.2: 24x8x4, 48x16x4; 3.5: 45x15x4; 6.1/6.2 level 0: 6x2x4)
+- ``disc_on_disc`` ``RxC``: R radial x C around, 4 | C (3.3: 10x40, 20x80)
+- ``square_on_disc`` ``RxC``: R outward x C around, 8 | C (3.4: 30x240; 6.3 level 0: 4x32)
+- ``square`` ``NxM``: whole sheet, N along X x M along Y (4.1: 40x40, 50x50; 4.2: 60x60,
+  100x100; 6.4 level 0: 16x16)
+- ``from_file``: a user's ``.geo`` (meshed by gmsh) or a mesh file (meshio)
 
 Use :func:`build_mesh` (``build_mesh("square_on_square", "48x16x4")``) or the :data:`RECIPES`
 registry.  gmsh is used through its Python API with a private model, silent (``General.Terminal``

@@ -193,9 +193,10 @@ def energy_force(xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r_z, qua
 
 @njit(cache=True, fastmath=_FM, error_model="numpy")
 def _element_tangent(e, xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r_z,
-                     quasi, mu, Ke, B, D, oo, on, nz, gs, gz, zs, at, dt, v4):
+                     quasi, mu, Ke, B, D, oo, on, nz, gs, gz, zs, at, dt, v4, xe):
     """Tangent k_t of Eq. (9) of element e into Ke (nd,nd), nd = 6 nn (dof 6i+c: U_o then U_n).
 
+    ``xe`` (nn,6) must hold the element's [x_o | x_n], as _element_force leaves it.
     Material part sum B^T C B over the strain rows (membrane+bending per point, then shear tying,
     then nodal thickness); geometric part sum sigma * d2(strain) as multiples of I3 between nodal
     vectors.  Row-major axpy loops (inner loop over contiguous columns) so that LLVM vectorises.
@@ -225,12 +226,11 @@ def _element_tangent(e, xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r
         for c in range(3):
             a1[c] = 0.0; a2[c] = 0.0; b1[c] = 0.0; b2[c] = 0.0
         for i in range(nn):
-            p = ce[i]
             for c in range(3):
-                a1[c] += dN[g, i, 0] * xo[p, c]
-                a2[c] += dN[g, i, 1] * xo[p, c]
-                b1[c] += dN[g, i, 0] * xn[p, c]
-                b2[c] += dN[g, i, 1] * xn[p, c]
+                a1[c] += dN[g, i, 0] * xe[i, c]
+                a2[c] += dN[g, i, 1] * xe[i, c]
+                b1[c] += dN[g, i, 0] * xe[i, 3 + c]
+                b2[c] += dN[g, i, 1] * xe[i, 3 + c]
         st[0] = 0.5 * (a1[0] * a1[0] + a1[1] * a1[1] + a1[2] * a1[2]) - r_mb[e, g, 0]
         st[1] = 0.5 * (a2[0] * a2[0] + a2[1] * a2[1] + a2[2] * a2[2]) - r_mb[e, g, 1]
         st[2] = (a1[0] * a2[0] + a1[1] * a2[1] + a1[2] * a2[2]) - r_mb[e, g, 2]
@@ -287,8 +287,8 @@ def _element_tangent(e, xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r
             av = 0.0
             dv = 0.0
             for i in range(nn):
-                av += alpha[t, i] * xo[ce[i], c]
-                dv += beta[t, i] * xn[ce[i], c]
+                av += alpha[t, i] * xe[i, c]
+                dv += beta[t, i] * xe[i, 3 + c]
             at[t, c] = av
             dt[t, c] = dv
             s += av * dv
@@ -316,8 +316,7 @@ def _element_tangent(e, xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r
                 Ke[a, b] += bta * D[t, b]
     # thickness strains at the nodes: d eps_i / d x_ni = w_i x_ni (w_i = 1 Green, s_i/|x_ni| Eq. 24)
     for i in range(nn):
-        p = ce[i]
-        xx = xn[p, 0] ** 2 + xn[p, 1] ** 2 + xn[p, 2] ** 2
+        xx = xe[i, 3] ** 2 + xe[i, 4] ** 2 + xe[i, 5] ** 2
         if quasi:
             zs[i] = _sign_quasi(xo, xn, ce, nn, i, mu)
             gz[i] = zs[i] * np.sqrt(xx) - r_z[e, i]
@@ -326,24 +325,22 @@ def _element_tangent(e, xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r
             gz[i] = 0.5 * xx - r_z[e, i]
             zs[i] = 1.0
     for i in range(nn):
-        p = ce[i]
         q = 0.0
         for j in range(nn):
             q += Cz[e, i, j] * gz[j]
         if quasi:
-            ln2 = xn[p, 0] ** 2 + xn[p, 1] ** 2 + xn[p, 2] ** 2
+            ln2 = xe[i, 3] ** 2 + xe[i, 4] ** 2 + xe[i, 5] ** 2
             for c in range(3):
                 for d in range(3):
-                    nz[i, c, d] += q * zs[i] * ((1.0 if c == d else 0.0) - xn[p, c] * xn[p, d] / ln2)
+                    nz[i, c, d] += q * zs[i] * ((1.0 if c == d else 0.0) - xe[i, 3 + c] * xe[i, 3 + d] / ln2)
         else:
             for c in range(3):
                 nz[i, c, c] += q
         for j in range(nn):
-            pj = ce[j]
             cij = Cz[e, i, j] * zs[i] * zs[j]
             for c in range(3):
                 for d in range(3):
-                    Ke[6 * i + 3 + c, 6 * j + 3 + d] += cij * xn[p, c] * xn[pj, d]
+                    Ke[6 * i + 3 + c, 6 * j + 3 + d] += cij * xe[i, 3 + c] * xe[j, 3 + d]
     # geometric blocks
     for i in range(nn):
         for j in range(nn):
@@ -382,4 +379,4 @@ def force_tangent(xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r_z, qu
             w_out[e] = _element_force(e, xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r_z,
                                       quasi, mu, f_out[e], gs, gz, zs, at, dt, xe)
             _element_tangent(e, xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r_z,
-                             quasi, mu, K_out[e], B, D, oo, on, nz, gs, gz, zs, at, dt, v4)
+                             quasi, mu, K_out[e], B, D, oo, on, nz, gs, gz, zs, at, dt, v4, xe)

@@ -19,7 +19,8 @@ Methods (``method=``)
     whose U diagonal has as many negative entries as K has negative eigenvalues, Sylvester's law);
     sigma grows tenfold until the factorisation is positive definite and shrinks tenfold on the
     next iteration.  Every direction is therefore a descent direction of Pi and the iteration
-    cannot climb to a saddle or a maximum.  A failed load step is bisected automatically.
+    cannot climb to a saddle or a maximum.  Loads are applied in adaptive sub-steps with a
+    path-extrapolating predictor; a failed sub-step is cut back automatically.
 ``"arclength"``  Crisfield's cylindrical arc-length method (load factor as an extra unknown, the
     quadratic constraint |Delta D| = Delta l, root chosen by the smallest angle with the previous
     increment), which follows the equilibrium path through limit points; the last step lands exactly
@@ -235,6 +236,8 @@ class _Opts:
     L_f: float = 1.0
     max_step: float = 1.0
     armijo: float = 1e-4
+    curvilinear: bool = True
+    accel_ratio: float = 1.0
 
 
 def _converged(rel, e_ratio, o):
@@ -279,10 +282,28 @@ def _newton_level(sys, D, lam, o, stats):
             return D, False, "no descent direction (non-finite or uphill Newton step)", rel
         pmax = float(np.abs(p).max())
         alpha = min(1.0, o.max_step / pmax) if pmax > 0 else 1.0
+        acc = None
+        if o.curvilinear and pmax > 0:
+            # second-order ("geodesic acceleration") correction of the Newton step: with
+            # r_pp = d^2 g(D + t p)/dt^2 at t = 0 (finite difference of one extra force evaluation),
+            # acc = -K^-1 r_pp and the search runs along D + t p + t^2/2 acc.  A displacement-only
+            # shell cannot rotate along a straight line without stretching; acc bends the step
+            # onto the rotation arc and removes that spurious membrane strain.
+            hs = min(1.0, 1e-2 * o.L_f / pmax)
+            _, Gh = sys.potential_and_gradient(D + hs * p, lam)
+            Kp = A @ p[f]
+            rpp = 2.0 / (hs * hs) * (Gh[f] - g - hs * Kp)
+            if np.all(np.isfinite(rpp)):
+                acc = np.zeros_like(D)
+                acc[f] = -lu.solve(rpp)
+                sys.n_solves += 0     # back-substitution with the same factorisation
+                if not (np.all(np.isfinite(acc)) and
+                        0.5 * np.linalg.norm(acc) <= o.accel_ratio * np.linalg.norm(p)):
+                    acc = None
         accepted = False
         gnorm = float(np.linalg.norm(g))
         for _ in range(40):
-            Dt = D + alpha * p
+            Dt = D + alpha * p if acc is None else D + alpha * p + 0.5 * alpha * alpha * acc
             Pit, Gt = sys.potential_and_gradient(Dt, lam)
             if np.isfinite(Pit):
                 dec = Pit - Pi
@@ -374,45 +395,85 @@ def _predictor(sys, D, lam0, lam1):
     return Dp
 
 
-def _load_stepping(sys, D, factors, o, method, stats, progress, path, max_cutbacks, predictor):
+def _extrapolate(hist, lam):
+    """Lagrange extrapolation of the converged path (up to its last 3 points) to load factor lam."""
+    pts = hist[-3:]
+    out = np.zeros_like(pts[-1][1])
+    for i, (li, Di) in enumerate(pts):
+        w = 1.0
+        for j, (lj, _) in enumerate(pts):
+            if j != i:
+                w *= (lam - lj) / (li - lj)
+        out += w * Di
+    return out
+
+
+def _load_stepping(sys, D, factors, o, method, stats, progress, path, max_cutbacks, predictor,
+                   increment, min_increment):
+    """Reach every load factor in turn.  Method "paper" goes straight to each factor (as the paper
+    does).  Method "newton" sub-steps adaptively: the increment starts at ``increment`` times the
+    final factor, doubles after a step that converged in <= 4 iterations, halves after one that
+    needed >= 12, and a failed step is retried with a quarter of the increment (at most
+    ``max_cutbacks`` times in a row, never below ``min_increment``).  The start of every step is
+    the lower-potential of two predictions: the tangent (linearised) predictor and the quadratic
+    extrapolation of the last three converged states -- the latter follows the curved path of large
+    rotations, which the linearised step cannot (see the module notes)."""
     level = _newton_level if method == "newton" else _paper_level
     lam = stats["load_factor"]
-    target_final = factors[-1] if factors else lam
+    final = factors[-1] if factors else lam
+    scale = max(abs(final), 1e-300)
+    hist = [(lam, D.copy())]
     msg = ""
     rel = np.nan
+    dl = increment * scale
     for target in factors:
         cut = 0
-        trial = target
         while True:
-            D0 = sys.apply_prescribed(D, trial)
-            if predictor and method == "newton" and trial != lam:
+            if method == "newton":
+                step = math.copysign(min(abs(dl), abs(target - lam)), target - lam)
+                trial = target if abs(target - (lam + step)) <= 1e-12 * scale else lam + step
+            else:
+                trial = target
+            cands = [sys.apply_prescribed(D, trial)]
+            if method == "newton" and predictor and trial != lam:
+                if len(hist) >= 2:
+                    cands.append(sys.apply_prescribed(_extrapolate(hist, trial), trial))
                 try:
-                    Dp = _predictor(sys, D, lam, trial)
-                    if np.all(np.isfinite(Dp)):
-                        Pa = sys.potential_and_gradient(D0, trial)[0]
-                        Pb = sys.potential_and_gradient(Dp, trial)[0]
-                        if np.isfinite(Pb) and Pb < Pa:
-                            D0 = Dp
+                    cands.append(_predictor(sys, D, lam, trial))
                 except RuntimeError:
                     pass
+            D0 = cands[0]
+            if len(cands) > 1:
+                pis = [sys.potential_and_gradient(cd, trial)[0] for cd in cands]
+                pis = [pi if np.isfinite(pi) and np.all(np.isfinite(cd)) else np.inf
+                       for pi, cd in zip(pis, cands)]
+                D0 = cands[int(np.argmin(pis))]
+            it0 = stats["iterations"]
             Dn, ok, msg, rel = level(sys, D0, trial, o, stats)
+            nit = stats["iterations"] - it0
             if ok:
                 D, lam = Dn, trial
+                hist.append((lam, D.copy()))
                 stats["load_steps"] += 1
                 stats["load_factor"] = lam
+                stats["final_relative_residual"] = rel
                 path.append((lam, D.reshape(sys.n, 6).copy()))
-                progress(min(1.0, abs(lam) / max(abs(target_final), 1e-300)), f"load factor {lam:.4g}")
-                if trial == target:
+                progress(min(1.0, abs(lam) / scale), f"load factor {lam:.4g}")
+                cut = 0
+                if nit <= 4:
+                    dl *= 2.0
+                elif nit >= 12:
+                    dl *= 0.5
+                if lam == target:
                     break
-                trial = target
                 continue
-            if method != "newton" or cut >= max_cutbacks:
+            if method != "newton" or cut >= max_cutbacks or abs(dl) * 0.25 < min_increment * scale:
                 stats["final_relative_residual"] = rel
                 return Dn, False, (f"load step to factor {trial:.4g} failed: {msg}"
                                    + (f" after {cut} cut-backs" if cut else "")), rel
             cut += 1
             stats["cutbacks"] += 1
-            trial = lam + 0.5 * (trial - lam)
+            dl = 0.25 * (trial - lam)
     return D, True, msg, rel
 
 
@@ -542,7 +603,9 @@ def _stability(sys, D, eig_max_dofs):
 
 def solve_static(model, fixed, loads, load_factors=None, method="newton", prescribed=None, *,
                  tol=1e-8, energy_tol=1e-12, max_iter=None, c=1e-2, L_f=None, max_step=None,
-                 U0=None, predictor=True, max_cutbacks=8, arc_length_initial=0.1,
+                 U0=None, predictor=True, increment=1.0, min_increment=1e-6, max_cutbacks=8,
+                 curvilinear=False,
+                 arc_length_initial=0.1,
                  max_arc_steps=500, check_stability=True, eig_max_dofs=60000, contact=None,
                  contact_stiffness=None, progress=None) -> StaticResult:
     """Static equilibrium of ``model`` under dead ``loads`` and ``prescribed`` fixed dofs.
@@ -557,13 +620,16 @@ def solve_static(model, fixed, loads, load_factors=None, method="newton", prescr
     method : "newton" (default) | "paper" (Eqs. 16-18) | "arclength" (Crisfield)
     prescribed : (N,6) values of the fixed dofs at load factor 1 (default 0: clamped)
     tol, energy_tol : relative residual and energy-norm tolerances
-    max_iter : iterations per load step (default 100 for newton/arclength, 5000 for paper)
+    max_iter : iterations per load step (default 30 for newton/arclength -- newton then cuts the
+        step back --, 5000 for paper)
     c, L_f : the paper's multiplier constant (1e-3..1e-2) and free-hanging length (default: largest
         distance from a free node to the nearest fixed one)
     max_step : cap on max|dD| per Newton update [length] (default L_f / 2), method newton
     U0 : (N,6) starting state (default zero)
-    predictor : linearised predictor at every new load level (newton)
-    max_cutbacks : bisections of a failed load step (newton)
+    predictor : predict the start of every new load level (newton; tangent or path extrapolation)
+    increment, min_increment : first and smallest automatic sub-step, as fractions of the final
+        load factor (newton sub-steps adaptively between the requested factors)
+    max_cutbacks : consecutive cut-backs of a failed sub-step (newton)
     arc_length_initial : first arc-length step as a fraction of the target load factor
     check_stability : report positive_definite and min_tangent_eigenvalue of the final state
     contact, contact_stiffness : rigid bodies (solidshell.contact) and the penalty [force/length]
@@ -588,8 +654,9 @@ def solve_static(model, fixed, loads, load_factors=None, method="newton", prescr
         raise InputError("every dof is fixed: nothing to solve")
     Lf = float(L_f) if L_f is not None else _free_length(model.mesh, fixed)
     o = _Opts(tol=float(tol), energy_tol=float(energy_tol),
-              max_iter=int(max_iter if max_iter is not None else (5000 if method == "paper" else 100)),
-              c=float(c), L_f=Lf, max_step=float(max_step) if max_step is not None else 0.5 * Lf)
+              max_iter=int(max_iter if max_iter is not None else (5000 if method == "paper" else 300)),
+              c=float(c), L_f=Lf, max_step=float(max_step) if max_step is not None else 0.5 * Lf,
+              curvilinear=bool(curvilinear))
     if not (o.c > 0.0):
         raise InputError(f"c must be positive, got {c!r}")
     D = np.zeros(6 * n) if U0 is None else np.asarray(U0, dtype=float).reshape(-1).copy()
@@ -603,7 +670,7 @@ def solve_static(model, fixed, loads, load_factors=None, method="newton", prescr
                                           arc_length_initial * factors[-1], max_arc_steps)
         else:
             D, ok, msg, rel = _load_stepping(sys, D, factors, o, method, stats, progress, path,
-                                             max_cutbacks, predictor)
+                                             max_cutbacks, predictor, increment, min_increment)
     except (FloatingPointError, np.linalg.LinAlgError, RuntimeError) as exc:
         ok, msg, rel = False, f"{type(exc).__name__}: {exc}", np.nan
     if ok:
@@ -644,7 +711,7 @@ def solve_static(model, fixed, loads, load_factors=None, method="newton", prescr
 
 # ============================================================================ registry entry
 _SETTINGS = {"method", "c", "tol", "energy_tol", "max_iter", "load_steps", "load_factors", "L_f",
-             "max_step", "predictor", "max_cutbacks", "arc_length_initial", "max_arc_steps",
+             "max_step", "predictor", "increment", "min_increment", "max_cutbacks", "arc_length_initial", "max_arc_steps",
              "check_stability", "eig_max_dofs", "contact_stiffness"}
 
 
@@ -653,7 +720,7 @@ def run(problem, settings: dict | None = None, progress=None) -> SolveResult:
 
     settings: method ("newton" | "paper" | "arclength"), c, tol, energy_tol, max_iter,
     load_steps (int n -> factors 1/n, 2/n, ..., 1) or load_factors (list), L_f, max_step, predictor,
-    max_cutbacks, arc_length_initial, max_arc_steps, check_stability, eig_max_dofs,
+    increment, min_increment, max_cutbacks, arc_length_initial, max_arc_steps, check_stability, eig_max_dofs,
     contact_stiffness.  Other keys (meant for other solvers) are ignored.
     """
     settings = dict(settings or {})

@@ -94,7 +94,7 @@ class RigidBody:
         gap, n = self.penetration(x)
         p = np.maximum(-gap, 0.0)
         kp = np.asarray(k, dtype=float) * p
-        return kp[:, None] * n, 0.5 * float(np.dot(kp, p))
+        return kp[:, None] * n, 0.5 * float(np.add.reduce(kp * p))  # no BLAS: see explicit._dot
 
     def active(self, x) -> np.ndarray:
         """(N,) bool: points in contact (gap < 0)."""
@@ -136,7 +136,7 @@ class Plane(RigidBody):
         self.offset = _pos(offset, "contact offset", allow_zero=True)
 
     def signed_distance(self, x):
-        return (x - self.point) @ self.normal, np.broadcast_to(self.normal, x.shape).copy()
+        return ((x - self.point) * self.normal).sum(axis=1), np.broadcast_to(self.normal, x.shape).copy()
 
     def __repr__(self):
         return f"Plane(point={self.point.tolist()}, normal={self.normal.tolist()}, offset={self.offset})"

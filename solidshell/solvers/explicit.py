@@ -76,6 +76,18 @@ _RELAX_KEYS = _RUN_KEYS - {"t_end", "snapshots"} | {"damping", "tol_kinetic", "t
                                                      "check_every", "t_max", "max_steps"}
 
 
+# ============================================================================ small helpers
+# Vector reductions on the hot path avoid BLAS (np.dot, np.linalg.norm of 1-D arrays): a threaded
+# OpenBLAS on a busy machine was measured at 3-15 ms for one 10^4-long dot product, against 25 us
+# for the plain pairwise sum below.
+def _dot(a, b) -> float:
+    return float(np.add.reduce(a * b))
+
+
+def _norm(a) -> float:
+    return math.sqrt(float(np.add.reduce(a * a)))
+
+
 # ============================================================================ settings helpers
 def _num(settings, key, default, *, positive=False, nonneg=False, integer=False):
     v = settings.get(key, default)
@@ -302,7 +314,7 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
     cDp = (alpha / (2.0 * dt) - 1.0 / dt**2) / lhs  # multiplies D_n-1
     aMdt = alpha * dt * Mf                        # damping dissipation weights
 
-    Pn = np.linalg.norm(P[free_idx])
+    Pn = _norm(P[free_idx])
     has_energy_force = hasattr(model, "energy_and_force")
 
     def force_and_energy(D, want_energy):
@@ -334,7 +346,7 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
         C0, Ec0, _, _ = contact(D0)
     else:
         C0, Ec0 = np.zeros(6 * N), 0.0
-    Ek0 = 0.5 * float(np.dot(Mf * V0f, V0f))
+    Ek0 = 0.5 * _dot(Mf * V0f, V0f)
     E_init = Ek0 + Es0  # energy scale for a free vibration started from an initial state
     fixed_info = dict(n_nodes=N, dt=dt, alpha=alpha, mass_scaling=ms, mode=ms_mode, damping=damping,
                       n_fixed=fixed_idx.size, D0=D0, omega=omega, omega_el=omega_el, method=method)
@@ -349,7 +361,7 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
         Dm[fixed_idx] = presc
         st = _State(D=D0.copy(), Dp=Dm, step=0, damp_sum=0.0, ekin_max=Ek0, balance_err=0.0,
                     max_interp=interp_count(D0), contact_work=0.0, max_contact=0, max_pen=0.0, ek_prev_half=0.0,
-                    resets=0, last_ekin=Ek0, last_rel_res=(np.linalg.norm((P - F0 + C0)[free_idx]) / Pn
+                    resets=0, last_ekin=Ek0, last_rel_res=(_norm((P - F0 + C0)[free_idx]) / Pn
                                                          if Pn > 0 else 0.0),
                     frame_t=[], frame_U=[])
         if 0 in snap_steps or relax or (not snap_steps):
@@ -400,18 +412,18 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
             # ---------------------------------------------------- central velocity, damping work
             np.subtract(Dn1, Dp, out=v)
             v *= 0.5 / dt
-            vMv = float(np.dot(Mf * v, v))
+            vMv = _dot(Mf * v, v)
             dd = alpha * dt * vMv
             if n == 0 and restarted_from is None:
                 dd *= 0.5  # trapezoidal rule: the first and last samples weigh half
             st.damp_sum += dd
             if bodies:
-                st.contact_work += 0.5 * float(np.dot(C, Dn1 - Dp))
+                st.contact_work += 0.5 * _dot(C, Dn1 - Dp)
             # ---------------------------------------------------- samples at t_n
             if sample:
                 Ek = 0.5 * vMv
                 st.ekin_max = max(st.ekin_max, Ek)
-                Wext = float(np.dot(P, D - D0))
+                Wext = _dot(P, D - D0)
                 Edamp = st.damp_sum - (0.5 * alpha * dt * vMv if n > 0 else 0.0)
                 Ecn = Ec if bodies else 0.0
                 bal = (Ek - Ek0) + (Es - Es0) - Wext + Edamp + (Ecn - Ec0)
@@ -423,7 +435,7 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
                 st.last_ekin = Ek
                 last = dict(Ek=Ek, Es=Es - Es0, Wext=Wext, Edamp=Edamp, Ec=Ecn - Ec0, t=n * dt)
             if check or (not relax and n == end_step - 1):
-                st.last_rel_res = (np.linalg.norm(R[free_idx]) / Pn) if Pn > 0 else float(np.linalg.norm(R[free_idx]))
+                st.last_rel_res = (_norm(R[free_idx]) / Pn) if Pn > 0 else _norm(R[free_idx])
             # ---------------------------------------------------- frames
             if n in snap_steps and n > 0:
                 st.frame_t.append(n * dt)
@@ -433,7 +445,7 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
                 st.frame_U.append(D.reshape(shape).copy())
             # ---------------------------------------------------- steady state?
             if check and n > 0:
-                Wext_c = float(np.dot(P, D - D0))
+                Wext_c = _dot(P, D - D0)
                 Ek_c = 0.5 * vMv
                 rel_ke = Ek_c / max(abs(Wext_c), 1e-300)
                 if rel_ke < tol_ke and st.last_rel_res < tol_res:
@@ -445,7 +457,7 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
             # ---------------------------------------------------- kinetic damping (Cundall)
             if damping == "kinetic":
                 dh = Dn1 - D
-                ek_half = 0.5 * float(np.dot(Mf * dh, dh)) / dt**2
+                ek_half = 0.5 * _dot(Mf * dh, dh) / dt**2
                 if ek_half < st.ek_prev_half:
                     # kinetic-energy peak passed: stop every node (v_n+1/2 = 0), count the loss
                     st.damp_sum += ek_half
@@ -537,9 +549,12 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
     return SolveResult(U=U, converged=bool(ok_run or steady), message=message, info=info, frames=frames)
 
 
-SMALL_MESH_ELEMENTS = 2000
+SMALL_MESH_ELEMENTS = 10000
 """Below this many elements the loop runs the force kernel on one thread by default: a step then
-takes tens of microseconds and the start/stop of the kernel's worker threads would dominate it."""
+takes micro- to milliseconds and starting/joining the kernel's worker threads every step costs more
+than it saves.  Measured (benchmarks/explicit_throughput.py, 2-core machine under load 7): 20 quads
+45 us/step on 1 thread vs 2.4 ms on 2; 1600 quads 6.5e5 vs 1.3e5 element-steps/s; 6400 quads
+9.7e5 vs 3.6e5.  On an idle many-core machine the crossover is lower: pass ``threads``."""
 
 
 def _with_threads(problem, settings, progress, relax):

@@ -1,0 +1,96 @@
+"""Throughput of the explicit loop (Eq. 23): element-steps per second.
+
+A wool sheet hung by two adjacent corners (Section 4.1) on n x n quads, gravity, alpha = 5 1/s; the
+loop is timed for a fixed number of steps (the critical-step estimate is excluded: it is given).
+Each size is timed ``--repeats`` times and the median is reported, and the whole measurement is run
+twice (``--passes``) so that the spread between passes shows the machine's noise.  The force kernel
+alone (model.internal_force) is timed the same way, so that the loop's own overhead is the ratio of
+the two -- a ratio inside one run, which shared machines do not distort as much as absolute times.
+
+    python benchmarks/explicit_throughput.py [--sizes 10 20 40] [--steps 300] [--threads 1]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+import time
+
+import numpy as np
+
+from solidshell import Fabric, ShellMesh
+from solidshell.model import Model
+from solidshell.problem import Problem
+from solidshell.solvers import explicit
+from solidshell.units import G0
+
+
+def hung_sheet(n: int, size: float = 20.0):
+    x = np.linspace(0.0, size, n + 1)
+    X, Y = np.meshgrid(x, x, indexing="xy")
+    nodes = np.column_stack([X.ravel(), Y.ravel(), np.zeros(X.size)])
+    idx = np.arange((n + 1) ** 2).reshape(n + 1, n + 1)
+    q = np.column_stack([idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, 1:].ravel(), idx[1:, :-1].ravel()])
+    mesh = ShellMesh(nodes, quads=q)
+    model = Model(mesh, Fabric.wool())
+    fixed = np.zeros((mesh.n_nodes, 6), bool)
+    fixed[[idx[-1, 0], idx[-1, -1]]] = True  # two adjacent corners (y = size)
+    loads = np.zeros((mesh.n_nodes, 6))
+    loads[:, 2] = -model.lumped_mass()[:, 0] * G0
+    return Problem(model, fixed, loads, name=f"hung {n}x{n}")
+
+
+def measure(n: int, steps: int, repeats: int, threads):
+    prob = hung_sheet(n)
+    m = prob.model
+    U = np.zeros((m.n_nodes, 6))
+    m.internal_force(U)  # compile / warm
+    s0 = explicit.run(prob, {"t_end": 1e-5, "threads": threads})
+    dtc = s0.info["critical_time_step"]
+    loop, kern = [], []
+    import numba
+    old = numba.get_num_threads()
+    for _ in range(repeats):
+        r = explicit.run(prob, {"t_end": steps * 0.9 * dtc, "critical_time_step": dtc, "threads": threads,
+                                "sample_every": 100})
+        loop.append(r.info["element_steps_per_second"])
+        numba.set_num_threads(r.info["threads"])
+        t = time.perf_counter()
+        for _ in range(steps):
+            m.internal_force(U)
+        kern.append(m.mesh.n_elements * steps / (time.perf_counter() - t))
+        numba.set_num_threads(old)
+    return dict(elements=m.mesh.n_elements, steps=steps, threads=r.info["threads"],
+                loop_element_steps_per_s=statistics.median(loop),
+                kernel_element_evals_per_s=statistics.median(kern),
+                loop_over_kernel=statistics.median(loop) / statistics.median(kern),
+                critical_time_step_s=dtc, time_step_force_evals=s0.info["time_step_force_evals"])
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--sizes", type=int, nargs="+", default=[10, 20, 40])
+    ap.add_argument("--steps", type=int, default=300)
+    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--passes", type=int, default=2)
+    ap.add_argument("--threads", type=int, default=None, help="numba threads (default: solver's choice)")
+    ap.add_argument("--json", default=None, help="write the results here")
+    a = ap.parse_args(argv)
+    out = []
+    for p in range(a.passes):
+        for n in a.sizes:
+            r = measure(n, a.steps, a.repeats, a.threads)
+            r["pass"] = p + 1
+            out.append(r)
+            print(f"pass {p + 1}  {n:>3}x{n:<3} ({r['elements']:>5} quads, {r['threads']} thr): loop "
+                  f"{r['loop_element_steps_per_s']:.3g} el-steps/s, kernel {r['kernel_element_evals_per_s']:.3g} "
+                  f"el/s, loop/kernel {r['loop_over_kernel']:.2f}, dt_crit {r['critical_time_step_s']:.3g} s",
+                  flush=True)
+    if a.json:
+        with open(a.json, "w") as fh:
+            json.dump(out, fh, indent=1)
+
+
+if __name__ == "__main__":
+    main()

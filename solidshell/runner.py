@@ -78,18 +78,22 @@ def build_scene_mesh(scene: Scene, mesh=None):
 
     if isinstance(mesh, ShellMesh):
         return mesh, "user ShellMesh"
-    if mesh is not None and (isinstance(mesh, Path) or str(mesh).lower().endswith(MESH_SUFFIXES)):
-        from . import meshing
-        p = Path(mesh)
-        return meshing.from_file(p), str(p)
     from . import meshing
 
+    def read(p: Path):
+        try:
+            return meshing.from_file(p), str(p)
+        except InputError as e:
+            msg = str(e)
+            raise InputError(msg if p.name in msg else f"mesh file {p}: {msg}") from None
+
+    if mesh is not None and (isinstance(mesh, Path) or str(mesh).lower().endswith(MESH_SUFFIXES)):
+        return read(Path(mesh))
     if "file" in scene.geometry:
         if mesh is not None:
             raise InputError(f"scene {scene.name!r} reads its mesh from {scene.geometry['file']}; "
                              f"a density ({mesh!r}) applies to recipe geometries only")
-        p = Path(scene.geometry["file"])
-        return meshing.from_file(p), str(p)
+        return read(Path(scene.geometry["file"]))
     density = scene.density if mesh is None else check_density(str(mesh), scene.recipe, "--mesh")
     params = {k: v for k, v in scene.geometry.items() if k != "recipe"}
     return meshing.build_mesh(scene.recipe, density, **params), density

@@ -43,18 +43,22 @@ class RunOutput:
 
 # --------------------------------------------------------------------------- progress
 class _Bar:
-    """progress(fraction, text) drawn as a tqdm bar on stderr, shown only after one second."""
+    """progress(fraction, text) drawn as a tqdm bar on stderr, shown only after one second and
+    only when stderr is a terminal (logs and pipes stay clean)."""
 
     def __init__(self, label: str):
         from tqdm import tqdm
 
-        self.bar = tqdm(total=1000, desc=label, file=sys.stderr, delay=1.0, leave=False,
+        tty = hasattr(sys.stderr, "isatty") and sys.stderr.isatty()
+        self.bar = tqdm(total=1000, desc=label, file=sys.stderr, delay=1.0, leave=False, disable=not tty,
                         bar_format="{desc}: {percentage:3.0f}%|{bar}| {elapsed}<{remaining} {postfix}")
 
     def __call__(self, fraction: float, text: str = "") -> None:
         try:
             n = int(round(1000 * min(max(float(fraction), 0.0), 1.0)))
         except (TypeError, ValueError):
+            return
+        if self.bar.disable:
             return
         if text:
             self.bar.set_postfix_str(str(text)[:60], refresh=False)

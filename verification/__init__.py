@@ -1,0 +1,90 @@
+"""Verification of the solid-shell elements against independent references (DESIGN.md, Verification).
+
+Each module prints its error table and writes ``verification/out/<name>.json`` (+ a PNG where useful):
+
+* ``python -m verification.plates``   square plate, uniform pressure, clamped / simply supported, vs the
+  Kirchhoff series of ``reference/plates.json`` (quads, triangles, a/h = 100 and 1000);
+* ``python -m verification.locking``  cantilever strip vs Timoshenko beam theory for L/h = 10..10^4
+  (shear locking) and pure bending with nu = 0.3 (thickness locking);
+* ``python -m verification.patch``    membrane and bending patch tests on distorted meshes;
+* ``python -m verification.report``   all of the above into ``verification/out/report.md``.
+
+This file holds the small shared helpers: structured meshes, linear (small-deflection) solves.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import scipy.sparse.linalg as spla
+
+OUT = Path(__file__).resolve().parent / "out"
+REFERENCE = Path(__file__).resolve().parent.parent / "reference"
+
+
+def rect_grid(nx: int, ny: int, lx: float, ly: float, x0: float = 0.0, y0: float = 0.0):
+    """(nodes (N,3), quads (nx*ny,4)) of a structured grid on [x0,x0+lx] x [y0,y0+ly], counter-
+    clockwise quads; node (i, j) has index j*(nx+1) + i."""
+    x = x0 + np.linspace(0.0, lx, nx + 1)
+    y = y0 + np.linspace(0.0, ly, ny + 1)
+    X, Y = np.meshgrid(x, y)                       # (ny+1, nx+1)
+    nodes = np.column_stack([X.ravel(), Y.ravel(), np.zeros(X.size)])
+    i, j = np.meshgrid(np.arange(nx), np.arange(ny))
+    n0 = (j * (nx + 1) + i).ravel()
+    quads = np.column_stack([n0, n0 + 1, n0 + nx + 2, n0 + nx + 1])
+    return nodes, quads
+
+
+def split_quads(quads: np.ndarray, pattern: str = "/") -> np.ndarray:
+    """Triangles from counter-clockwise quads (1,2,3,4): "/" cuts along 1-3, "\\" along 2-4,
+    "x" alternates the two in a checkerboard (needs the structured numbering only for looks)."""
+    q = np.asarray(quads)
+    t13 = np.concatenate([q[:, [0, 1, 2]], q[:, [0, 2, 3]]])
+    t24 = np.concatenate([q[:, [0, 1, 3]], q[:, [1, 2, 3]]])
+    if pattern == "/":
+        return t13
+    if pattern == "\\":
+        return t24
+    if pattern == "x":
+        alt = (np.arange(len(q)) % 2).astype(bool)
+        return np.concatenate([q[~alt][:, [0, 1, 2]], q[~alt][:, [0, 2, 3]],
+                               q[alt][:, [0, 1, 3]], q[alt][:, [1, 2, 3]]])
+    raise ValueError(f"unknown split pattern {pattern!r}")
+
+
+def linear_solve(model, fixed: np.ndarray, loads: np.ndarray, prescribed: np.ndarray | None = None):
+    """Small-deflection solution: K(0) u = f on the free dofs, with u = prescribed on the fixed
+    ones.  Returns U (N,6) and the reactions R (N,6) = K u - f (zero on free dofs up to round-off)."""
+    N = model.n_nodes
+    K = model.tangent(np.zeros((N, 6))).tocsr()
+    fixed = np.asarray(fixed, dtype=bool).ravel()
+    f = np.asarray(loads, dtype=float).ravel()
+    u = np.zeros(6 * N) if prescribed is None else np.asarray(prescribed, dtype=float).ravel().copy()
+    u[~fixed] = 0.0
+    free = np.flatnonzero(~fixed)
+    rhs = f[free] - K[free][:, fixed] @ u[fixed] if fixed.any() else f[free]
+    Kff = K[free][:, free].tocsc()
+    u[free] = spla.spsolve(Kff, rhs)
+    R = K @ u - f
+    return u.reshape(N, 6), R.reshape(N, 6)
+
+
+def rate(e_coarse: float, e_fine: float, ratio: float = 2.0):
+    """Observed order log(|e_coarse/e_fine|)/log(ratio) (None if either is zero)."""
+    if e_coarse == 0 or e_fine == 0:
+        return None
+    return float(np.log(abs(e_coarse / e_fine)) / np.log(ratio))
+
+
+def write_json(name: str, data) -> Path:
+    OUT.mkdir(exist_ok=True)
+    p = OUT / f"{name}.json"
+    p.write_text(json.dumps(data, indent=1, default=float))
+    return p
+
+
+def plate_reference() -> dict:
+    """The stored Kirchhoff references (reference/plates.json, made by reference/kirchhoff_plate.py)."""
+    return json.loads((REFERENCE / "plates.json").read_text())

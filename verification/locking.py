@@ -1,0 +1,194 @@
+"""Shear and thickness locking: cantilever plate strip vs closed-form beam/plate theory.
+
+Strip [0,L] x [-b/2, b/2], L = 10, b = 1, one element across the width, n = 8 elements along
+(other meshes by option), thickness h = L / ratio for ratio = L/h = 10 ... 10 000, E = 1.
+
+1. Shear locking (nu = 0), end shear P = 1 split equally on the tip nodes (U_o,z), root nodes clamped
+   (U_o = U_n = 0).  Reference: Timoshenko beam delta = P L^3/(3EI) + P L/(kappa G A), kappa = 5/6
+   (reference/beams.py; exact for a nu = 0 Reissner-Mindlin strip).  Meshes: 8x1 quads; the same
+   quads split into two triangles along diagonal 1-3 ("/") and along 2-4 ("\\").  A locking element's
+   error grows like (L/h)^2; a locking-free one has an error independent of L/h.  The 8x1 quad, one
+   element across a nu = 0 strip, is exactly the 2-node Timoshenko beam element with mid-element
+   (tied) shear, whose tip deflection is delta - P L (L/n)^2/(12EI) (too stiff by 0.39 % for n = 8),
+   also printed: the quad should match it to round-off.
+2. Thickness locking (nu = 0.3), end moment M = 1 as generalised forces M/2 on U_n,x of the two tip
+   nodes (a couple of forces +-F at z = +-h/2 does virtual work F h dU_n,x, so a moment M enters the
+   U_n,x dofs directly).  Root support that lets the anticlastic curvature develop: U_o = 0 and
+   U_n,x = 0 on the root nodes, U_n,y and U_n,z free.  Then the uniform moment state (kappa_x =
+   M/EI, kappa_y = -nu kappa_x) is an exact plate solution, representable by both elements, and the
+   plane-stress references are: tip U_n,x = M L/(EI), tip w = -M L^2/(2EI), U_n,y difference across
+   the width = +nu kappa_x b ("free").  With U_n,y = 0 imposed on every node the curvature is
+   cylindrical and the references carry a factor (1 - nu^2) ("restrained").  A thickness-locked
+   solid-shell would be 1.099x (free) / 1.225x (restrained) too stiff.  Also reported: a fully
+   clamped root (U_n = 0 also restrains the anticlastic curvature at the root, so the strip is
+   slightly stiffer than EI -- informative only, no closed form).
+
+Run: ``python -m verification.locking`` -> tables and verification/out/locking.json, locking.png.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+
+import numpy as np
+
+from solidshell import IsotropicShell, Model, ShellMesh
+
+from . import OUT, REFERENCE, linear_solve, rect_grid, split_quads, write_json
+
+L, B, E = 10.0, 1.0, 1.0
+RATIOS = (10.0, 100.0, 1000.0, 10000.0)
+
+
+def _beams():
+    spec = importlib.util.spec_from_file_location("reference_beams", REFERENCE / "beams.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+beams = _beams()
+
+
+def strip_mesh(n: int = 8, m: int = 1, kind: str = "quad") -> ShellMesh:
+    nodes, quads = rect_grid(n, m, L, B, 0.0, -B / 2)
+    if kind == "quad":
+        return ShellMesh(nodes, quads=quads)
+    return ShellMesh(nodes, tris=split_quads(quads, {"tri/": "/", "tri\\": "\\", "trix": "x"}[kind]))
+
+
+def _ends(mesh):
+    x = mesh.nodes[:, 0]
+    return np.flatnonzero(np.abs(x) < 1e-9 * L), np.flatnonzero(np.abs(x - L) < 1e-9 * L)
+
+
+def tip_load(ratio: float, kind: str = "quad", n: int = 8, m: int = 1, P: float = 1.0) -> dict:
+    h = L / ratio
+    mesh = strip_mesh(n, m, kind)
+    model = Model(mesh, IsotropicShell(E=E, nu=0.0, h=h))
+    root, tip = _ends(mesh)
+    fixed = np.zeros((mesh.n_nodes, 6), dtype=bool)
+    fixed[root] = True
+    loads = np.zeros((mesh.n_nodes, 6))
+    # end shear P uniform over the width: line-load shares of the tip nodes (P/2 each for m = 1)
+    w = np.zeros(mesh.n_nodes)
+    ys = np.sort(mesh.nodes[tip, 1])
+    for i in tip:
+        y = mesh.nodes[i, 1]
+        k = np.searchsorted(ys, y)
+        lo = ys[k - 1] if k > 0 else y
+        hi = ys[k + 1] if k + 1 < len(ys) else y
+        w[i] = 0.5 * (hi - lo) / B
+    loads[tip, 2] = P * w[tip]
+    U, _ = linear_solve(model, fixed, loads)
+    d = float(np.mean(U[tip, 2]))
+    ref = beams.timoshenko_tip_deflection(P, L, E, B, h)
+    disc = beams.discrete_timoshenko_tip_deflection(P, L, E, B, h, n)
+    return dict(kind=kind, n=n, m=m, L_over_h=ratio, tip=d, timoshenko=ref, rel_error=(d - ref) / ref,
+                beam_element=disc, rel_error_vs_beam_element=(d - disc) / disc,
+                tip_spread=float(np.ptp(U[tip, 2]) / abs(d)))
+
+
+def end_moment(ratio: float, kind: str = "quad", nu: float = 0.3, support: str = "free", n: int = 8,
+               m: int = 1, M: float = 1.0) -> dict:
+    h = L / ratio
+    mesh = strip_mesh(n, m, kind)
+    model = Model(mesh, IsotropicShell(E=E, nu=nu, h=h))
+    root, tip = _ends(mesh)
+    fixed = np.zeros((mesh.n_nodes, 6), dtype=bool)
+    fixed[root, :3] = True
+    fixed[root, 3] = True                      # U_n,x = 0: no rotation about the width axis
+    if support == "clamped":
+        fixed[root, 3:] = True
+    elif support == "restrained":
+        fixed[:, 4] = True                     # U_n,y = 0 everywhere: cylindrical bending
+    elif support != "free":
+        raise ValueError(support)
+    loads = np.zeros((mesh.n_nodes, 6))
+    ys = np.sort(mesh.nodes[tip, 1])
+    for i in tip:                              # moment per width M/B, tributary widths
+        y = mesh.nodes[i, 1]
+        k = np.searchsorted(ys, y)
+        lo = ys[k - 1] if k > 0 else y
+        hi = ys[k + 1] if k + 1 < len(ys) else y
+        loads[i, 3] = M * 0.5 * (hi - lo) / B
+    U, _ = linear_solve(model, fixed, loads)
+    ref = beams.end_moment_small(M, L, E, B, h, nu, "restrained" if support == "restrained" else "free")
+    rot = float(np.mean(U[tip, 3]))            # U_n,x = -dw/dx = kappa_x L at the tip
+    w = float(np.mean(U[tip, 2]))
+    out = dict(kind=kind, n=n, m=m, L_over_h=ratio, nu=nu, support=support,
+               tip_rotation=rot, tip_rotation_ref=ref["tip_rotation"],
+               rel_error_rotation=(rot - ref["tip_rotation"]) / ref["tip_rotation"],
+               tip_deflection=-w, tip_deflection_ref=ref["tip_deflection"],
+               rel_error_deflection=(-w - ref["tip_deflection"]) / ref["tip_deflection"])
+    # anticlastic curvature from the tip U_n,y (U_n,y = -dw/dy, kappa_y = dU_n,y/dy)
+    yt = mesh.nodes[tip, 1]
+    ky = float(np.polyfit(yt, U[tip, 4], 1)[0])
+    out.update(kappa_y=ky, kappa_y_ref=ref["kappa_y"], kappa_x=rot / L)
+    return out
+
+
+def run(ratios=RATIOS, n=8, verbose=True):
+    shear = []
+    if verbose:
+        print(f"Shear locking: cantilever {n}x1, nu = 0, tip load; error vs Timoshenko beam "
+              f"(and vs the {n}-element Timoshenko beam, {beams.discrete_timoshenko_tip_deflection(1, L, E, B, L / 1000, n) / beams.timoshenko_tip_deflection(1, L, E, B, L / 1000) - 1:+.3%} vs Timoshenko)")
+        print(f"{'mesh':6s} {'L/h':>7s} {'tip/ref - 1':>12s} {'vs beam el.':>12s}")
+    for kind in ("quad", "tri/", "tri\\"):
+        for r in ratios:
+            row = tip_load(r, kind, n)
+            shear.append(row)
+            if verbose:
+                print(f"{kind:6s} {r:7.0f} {row['rel_error']:+12.4e} {row['rel_error_vs_beam_element']:+12.4e}")
+    bend = []
+    if verbose:
+        print("Thickness locking: end moment, nu = 0.3, vs plane-stress theory")
+        print(f"{'mesh':6s} {'support':10s} {'L/h':>7s} {'rot/ref - 1':>12s} {'w/ref - 1':>12s} {'kappa_y/kappa_x':>16s}")
+    for kind in ("quad", "tri/", "tri\\"):
+        for support in ("free", "restrained", "clamped"):
+            for r in ratios:
+                row = end_moment(r, kind, 0.3, support, n)
+                bend.append(row)
+                if verbose:
+                    print(f"{kind:6s} {support:10s} {r:7.0f} {row['rel_error_rotation']:+12.4e} "
+                          f"{row['rel_error_deflection']:+12.4e} {row['kappa_y'] / row['kappa_x']:16.6f}")
+    return shear, bend
+
+
+def plot(shear, path):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6, 4))
+    for kind, mk in (("quad", "o"), ("tri/", "^"), ("tri\\", "v")):
+        sel = [r for r in shear if r["kind"] == kind]
+        ax.loglog([r["L_over_h"] for r in sel], [max(abs(r["rel_error"]), 1e-16) for r in sel], marker=mk,
+                  label=kind)
+    ax.axhline(0.01, color="grey", lw=0.5)
+    ax.set_xlabel("L/h")
+    ax.set_ylabel("|tip deflection error| vs Timoshenko")
+    ax.set_title("cantilever strip 8x1, tip load, nu = 0")
+    ax.grid(True, which="both", lw=0.3)
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description="shear and thickness locking checks")
+    ap.add_argument("-n", type=int, default=8, help="elements along the strip")
+    args = ap.parse_args(argv)
+    shear, bend = run(n=args.n)
+    p = write_json("locking", {"description": __doc__.splitlines()[0], "L": L, "b": B, "E": E,
+                               "tip_load": shear, "end_moment": bend})
+    plot(shear, OUT / "locking.png")
+    print("wrote", p, "and", OUT / "locking.png")
+    return shear, bend
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,157 @@
+"""Square plate under uniform pressure: solid-shell centre deflection vs the Kirchhoff series.
+
+Plate [0,a]^2, a = 1, nu = 0.3, thickness h = a/100 and a/1000, E chosen so that D = E h^3/(12(1-nu^2))
+= 1 and q = 1, so the Kirchhoff centre deflection is w_c = alpha (reference/plates.json:
+SS 0.00406235, clamped 0.00126532).  Full plate, N x N quads (N = 4, 8, 16, 32), the same quads split
+into two triangles along one diagonal ("/"), and along alternating diagonals ("x").
+
+Small deflection: one linear solve K(0) u = f.  Load: pressure q on the U_o,z dofs, lumped by the
+nodal areas (q A/4 per quad corner, q A/3 per triangle corner; for bilinear/linear interpolation of
+w on a flat uniform mesh this equals the consistent load).
+
+Boundary conditions (director-based shell, U_n ~ (-w_x, -w_y, 0) in the Kirchhoff limit):
+* clamped: U_o = 0 and U_n = 0 on the edge nodes;
+* simply supported, "hard" (primary): U_o = 0 and the tangential component of U_n = 0 (on x = const
+  edges U_n,y = 0, on y = const edges U_n,x = 0).  This is the Reissner-Mindlin hard support: the
+  rotation about the edge normal is zero, like the Kirchhoff plate along a straight supported edge
+  (w = 0 along the edge => dw/ds = 0), and it has no boundary layer, so it converges to Navier;
+* simply supported, "soft": U_o = 0 only, U_n free (the rotation about the normal is free).  For a
+  Reissner-Mindlin plate this has a boundary layer of width ~h and converges to Navier only as
+  h/a -> 0; reported for comparison (its differences from "hard" measure that layer, not an error).
+Membrane dofs are fixed in both SS cases; in a linear solve of a flat plate membrane and bending are
+uncoupled, so the in-plane constraint does not change w.
+
+The shear deformation of a Reissner-Mindlin plate adds to w_c, for the hard SS plate exactly
+Marcus' moment sum M_c/(kappa G h) (reference/plates.json "mindlin_ss_shear_coefficient"): a relative
+5.2 (h/a)^2, i.e. 5e-4 at a/h = 100 and 5e-6 at a/h = 1000 -- below the errors measured here; the
+comparison is with the Kirchhoff value.
+
+Run: ``python -m verification.plates [--quick]`` -> table, verification/out/plates.json, plates.png.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+from solidshell import IsotropicShell, Model, ShellMesh
+
+from . import OUT, linear_solve, plate_reference, rate, rect_grid, split_quads, write_json
+
+NU = 0.3
+A = 1.0
+
+
+def square_plate_mesh(n: int, kind: str = "quad") -> ShellMesh:
+    nodes, quads = rect_grid(n, n, A, A)
+    if kind == "quad":
+        return ShellMesh(nodes, quads=quads)
+    pattern = {"tri": "/", "tri/": "/", "tri\\": "\\", "trix": "x"}[kind]
+    return ShellMesh(nodes, tris=split_quads(quads, pattern))
+
+
+def plate_bc(mesh: ShellMesh, support: str) -> np.ndarray:
+    X = mesh.nodes
+    tol = 1e-9 * A
+    on_x = (np.abs(X[:, 0]) < tol) | (np.abs(X[:, 0] - A) < tol)   # edges x = 0, a
+    on_y = (np.abs(X[:, 1]) < tol) | (np.abs(X[:, 1] - A) < tol)   # edges y = 0, a
+    edge = on_x | on_y
+    fixed = np.zeros((mesh.n_nodes, 6), dtype=bool)
+    fixed[edge, :3] = True
+    if support == "clamped":
+        fixed[edge, 3:] = True
+    elif support == "ss_hard":
+        fixed[on_x, 4] = True      # U_n,y: the tangential component along x = const edges
+        fixed[on_y, 3] = True      # U_n,x along y = const edges
+    elif support != "ss_soft":
+        raise ValueError(support)
+    return fixed
+
+
+def centre_deflection(n: int, kind: str, support: str, a_over_h: float) -> float:
+    """-U_o,z at the centre for q = 1, D = 1 (so it equals alpha for a Kirchhoff plate)."""
+    h = A / a_over_h
+    E = 12.0 * (1.0 - NU**2) / h**3            # D = 1
+    mesh = square_plate_mesh(n, kind)
+    model = Model(mesh, IsotropicShell(E=E, nu=NU, h=h))
+    loads = np.zeros((mesh.n_nodes, 6))
+    loads[:, 2] = -1.0 * model.nodal_areas()   # q = 1 downwards
+    U, _ = linear_solve(model, plate_bc(mesh, support), loads)
+    ic = int(np.argmin(np.sum((mesh.nodes[:, :2] - 0.5 * A) ** 2, axis=1)))
+    assert np.allclose(mesh.nodes[ic, :2], 0.5 * A)
+    return float(-U[ic, 2])
+
+
+def run(ns=(4, 8, 16, 32), kinds=("quad", "tri", "trix"), supports=("clamped", "ss_hard", "ss_soft"),
+        ratios=(100.0, 1000.0), verbose=True):
+    ref = plate_reference()["alpha"]
+    exact = {"clamped": ref["clamped"], "ss_hard": ref["simply_supported"], "ss_soft": ref["simply_supported"]}
+    rows = []
+    if verbose:
+        print(f"{'support':8s} {'mesh':5s} {'a/h':>6s} {'N':>3s} {'w_c D/(q a^4)':>14s} {'rel.err':>10s} {'rate':>6s}")
+    for support in supports:
+        for kind in kinds:
+            for ah in ratios:
+                prev = None
+                for n in ns:
+                    t0 = time.perf_counter()
+                    w = centre_deflection(n, kind, support, ah)
+                    err = (w - exact[support]) / exact[support]
+                    r = rate(prev, err) if prev is not None else None
+                    rows.append(dict(support=support, mesh=kind, a_over_h=ah, n=n, alpha=w, exact=exact[support],
+                                     rel_error=err, rate=r, seconds=time.perf_counter() - t0))
+                    if verbose:
+                        rs = "" if r is None else f"{r:6.2f}"
+                        print(f"{support:8s} {kind:5s} {ah:6.0f} {n:3d} {w:14.8f} {err:+10.3e} {rs:>6s}")
+                    prev = err
+    return rows
+
+
+def plot(rows, path):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 3, figsize=(13, 4), sharey=True)
+    for ax, support in zip(axes, ("clamped", "ss_hard", "ss_soft")):
+        for kind, mk in (("quad", "o"), ("tri", "^"), ("trix", "s")):
+            for ah, ls in ((100.0, "-"), (1000.0, "--")):
+                sel = [r for r in rows if r["support"] == support and r["mesh"] == kind and r["a_over_h"] == ah]
+                if not sel:
+                    continue
+                ax.loglog([A / r["n"] for r in sel], [max(abs(r["rel_error"]), 1e-16) for r in sel], ls, marker=mk,
+                          label=f"{kind}, a/h={ah:.0f}")
+        hh = np.array([A / 4, A / 32])
+        ax.loglog(hh, 0.3 * (hh / hh[0]) ** 2, "k:", label="O(h^2)")
+        ax.axhline(0.01, color="grey", lw=0.5)
+        ax.set_title(support)
+        ax.set_xlabel("element size / a")
+        ax.grid(True, which="both", lw=0.3)
+    axes[0].set_ylabel("|relative error of w_c| vs Kirchhoff series")
+    axes[0].legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description="square plate vs Kirchhoff series")
+    ap.add_argument("--quick", action="store_true", help="N = 4, 8, 16 only")
+    args = ap.parse_args(argv)
+    ns = (4, 8, 16) if args.quick else (4, 8, 16, 32)
+    rows = run(ns=ns)
+    p = write_json("plates", {"description": __doc__.splitlines()[0], "nu": NU, "a": A, "rows": rows})
+    OUT.mkdir(exist_ok=True)
+    plot(rows, OUT / "plates.png")
+    print("wrote", p, "and", OUT / "plates.png")
+    bad = [r for r in rows if r["n"] == 32 and r["mesh"] == "quad" and r["support"] != "ss_soft"
+           and abs(r["rel_error"]) > 0.01]
+    print("32x32 quads within 1%:", "yes" if not bad else f"NO ({len(bad)} cases)")
+    return rows
+
+
+if __name__ == "__main__":
+    main()

@@ -376,7 +376,8 @@ def _run(sc, kind, mesh_arg, out_dir, cb, settings, timings, t_start) -> RunOutp
         state = U if (result is not None and np.all(np.isfinite(U))) else None
         sub = _subtitle(sc, mesh_name, mesh, kind, summary)
         from .plotting import render
-        for view in sc.output["pictures"]:
+        for i, view in enumerate(sc.output["pictures"]):
+            cb(0.92 + 0.08 * i / max(1, len(sc.output["pictures"])), f"{view} picture")
             files.append(render(out / f"{view}.png", mesh, state, view=view, title=sc.title, scene=sc,
                                 subtitle=sub))
         if result is not None and kind in ("explicit", "relax") and sc.output["snapshots"] and result.frames:

@@ -520,10 +520,11 @@ class Scene:
 
     def solver_settings(self, kind: str | None = None) -> dict:
         """The free settings table of a solver kind (default: the scene's kind), with the output
-        snapshot times added as ``snapshots`` for the dynamic kinds unless the table sets them."""
+        snapshot times added as ``snapshots`` for the explicit solver unless the table sets them
+        (dynamic relaxation has no meaningful times and keeps its own frames)."""
         kind = kind or self.solver["kind"]
         s = dict(self.solver.get(kind, {}))
-        if kind in ("explicit", "relax") and self.output["snapshots"] and "snapshots" not in s:
+        if kind == "explicit" and self.output["snapshots"] and "snapshots" not in s:
             s["snapshots"] = list(self.output["snapshots"])
         return s
 

@@ -1,4 +1,5 @@
-"""Pictures of a (deformed) sheet: top, isometric and side views as PNG (matplotlib, Agg).
+"""Pictures of a (deformed) sheet as PNG (matplotlib, Agg): ``top``, ``iso`` (isometric), ``side``
+(x-z projection, looking along +y) and ``side_yz`` (y-z projection, looking along -x).
 
 Faces are shaded by height z (colour bar in cm), axes are in cm with equal aspect, and the
 scene's pedestal or sphere, when it has one, is drawn in grey.  Only :func:`render` is needed by
@@ -174,11 +175,15 @@ def _top(ax, fig, mesh, X, norm, cmap, bodies):
     cb.set_label("height z [cm]")
 
 
-def _side(ax, fig, mesh, X, norm, cmap, bodies):
-    """Projection on the x-z plane (looking along +y), faces coloured by height."""
+def _side(ax, fig, mesh, X, norm, cmap, bodies, axis=0):
+    """Projection on the x-z plane (axis 0, looking along +y) or the y-z plane (axis 1, looking
+    along -x), faces coloured by height."""
     import matplotlib.patches as mpatches
     from matplotlib.collections import PolyCollection
 
+    if axis == 1:       # rotate so that y plays the role of x below
+        X = X[:, [1, 0, 2]]
+        bodies = [dict(b, centre=tuple(np.asarray(b.get("centre", (0.0, 0.0, 0.0)))[[1, 0, 2]])) for b in bodies]
     lo, hi = X.min(0), X.max(0)
     for b in bodies:
         c = np.asarray(b.get("centre", (0.0, 0.0, 0.0)), float)
@@ -203,7 +208,7 @@ def _side(ax, fig, mesh, X, norm, cmap, bodies):
     ax.set_xlim(lo[0] - pad, hi[0] + pad)
     ax.set_ylim(lo[2] - pad, hi[2] + pad)
     ax.set_aspect("equal")
-    ax.set_xlabel("x [cm]  (warp)")
+    ax.set_xlabel("y [cm]  (weft)" if axis == 1 else "x [cm]  (warp)")
     ax.set_ylabel("z [cm]")
     ax.grid(True, lw=0.3, alpha=0.5)
     cb = fig.colorbar(pc, cax=_cax(ax))
@@ -248,8 +253,9 @@ def _three_d(ax, fig, mesh, X, norm, cmap, bodies, elev, azim):
     cb.set_label("height z [cm]")
 
 
-VIEWS = {"top": None, "iso": (30.0, -60.0), "side": None}
-_VIEW_NAMES = {"top": "top view", "iso": "isometric view", "side": "side view (x-z projection)"}
+VIEWS = {"top": None, "iso": (30.0, -60.0), "side": None, "side_yz": None}
+_VIEW_NAMES = {"top": "top view", "iso": "isometric view", "side": "side view (x-z projection)",
+               "side_yz": "side view (y-z projection)"}
 
 
 def render(path, mesh, U=None, view: str = "iso", title: str | None = None, scene=None,
@@ -270,9 +276,9 @@ def render(path, mesh, U=None, view: str = "iso", title: str | None = None, scen
         if view == "top":
             ax = fig.add_subplot(111)
             _top(ax, fig, mesh, X, norm, _CMAP, bodies)
-        elif view == "side":
+        elif view in ("side", "side_yz"):
             ax = fig.add_subplot(111)
-            _side(ax, fig, mesh, X, norm, _CMAP, bodies)
+            _side(ax, fig, mesh, X, norm, _CMAP, bodies, axis=1 if view == "side_yz" else 0)
         else:
             elev, azim = VIEWS[view]
             ax = fig.add_subplot(111, projection="3d")

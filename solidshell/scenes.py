@@ -76,7 +76,7 @@ Scene file format
 
     [output]
     snapshots = [0.0, 0.1, 0.4, 2.1]      # times [s] kept in the time series and pictured
-    pictures = ["top", "iso"]             # any of top, iso, side
+    pictures = ["top", "iso"]             # any of top, iso, side (x-z), side_yz (y-z)
 
 Scenes are immutable; :meth:`Scene.with_overrides` returns a validated copy with dotted keys set,
 e.g. ``{"mesh.density": "24x8x4", "solver.static.c": 2e-3, "material.warp_angle": 90}``.
@@ -109,7 +109,7 @@ RECIPE_PARAMS = {
 DENSITY_FACTORS = {"strip": 2, "square_on_square": 3, "disc_on_disc": 2, "square_on_disc": 2, "square": 2}
 
 SOLVER_KINDS = ("static", "explicit", "relax")
-PICTURES = ("top", "iso", "side")
+PICTURES = ("top", "iso", "side", "side_yz")
 FABRIC_FIELDS = ("tensile_warp", "tensile_weft", "shear", "bending_warp", "bending_weft", "torsion",
                  "weight", "thickness", "warp_angle", "poisson", "transverse_shear", "thickness_modulus")
 ISOTROPIC_FIELDS = ("E", "nu", "h", "density", "shear_factor")

@@ -218,7 +218,7 @@ def test_run_scene_dynamic_outputs(tmp_path, fake):
     assert fake["problem"].loads[:, 2].sum() == pytest.approx(-0.019 * 400.0)  # the weight, gf
     assert s["total_weight"] == pytest.approx(0.019 * 400.0)
     assert {"mesh.xdmf", "mesh.vtu", "result.xdmf", "result.vtu", "deformed.vtu", "series.xdmf",
-            "top.png", "iso.png", "side.png", "iso_t0.000.png", "iso_t0.100.png", "iso_t0.400.png",
+            "top.png", "iso.png", "side_yz.png", "iso_t0.000.png", "iso_t0.100.png", "iso_t0.400.png",
             "summary.json"} == set(s["files"]) == set(_leftovers(tmp_path))
     assert s["versions"]["meshio"] and s["units"]["length"] == "cm" and s["timings"]["total"] > 0
     assert seen[0] == 0.0 and seen[-1] == 1.0 and seen == sorted(seen)

@@ -162,13 +162,21 @@ def test_step_above_critical_is_refused_reduced_or_detected(strip):
         explicit.run(gstrip, {"t_end": 0.01, "dt": 1.05 * dtc})
     red = explicit.run(gstrip, {"t_end": 200 * dtc, "dt": 1.05 * dtc, "allow_reduce": True})
     assert red.info["dt"] <= 0.9 * dtc * (1 + 1e-12) and red.info["dt_requested"] == 1.05 * dtc
-    # forced through: the run blows up (the highest mode grows by ~1.8x per step at 1.05 dt_crit)
-    # and stops at once with the last finite state and a message
-    bad = explicit.run(gstrip, {"t_end": 4000 * 1.05 * dtc, "dt": 1.05 * dtc, "allow_unstable": True,
-                                "critical_time_step": dtc})
-    assert not bad.converged and bad.info["status"] == "nonfinite"
-    assert "non-finite" in bad.message and "last finite state" in bad.message
+    # forced through: the run blows up (the highest mode grows by ~1.8x per step at 1.05 dt_crit).
+    # The sampled energy balance catches it first (it creates energy) ...
+    forced = {"t_end": 4000 * 1.05 * dtc, "dt": 1.05 * dtc, "allow_unstable": True, "critical_time_step": dtc,
+              "sample_every": 10}
+    bad = explicit.run(gstrip, forced)
+    assert not bad.converged and bad.info["status"] == "diverged", bad.message
+    assert "creating energy" in bad.message and "last good state" in bad.message
     assert np.all(np.isfinite(bad.U)) and bad.info["steps"] < 4000
+    # ... and with that check off, the overflow to inf/nan stops the run at once, keeping the last
+    # good state (finite, and small: it is the last sample before the blow-up)
+    bad = explicit.run(gstrip, {**forced, "max_energy_error": 1e300})
+    assert not bad.converged and bad.info["status"] == "nonfinite", bad.message
+    assert "non-finite" in bad.message and "last good" in bad.message
+    assert np.all(np.isfinite(bad.U)) and bad.info["steps"] < 4000
+    assert np.max(np.abs(bad.U[:, :3])) < 1.0
 
 
 # ------------------------------------------------------------------------------ checkpoint

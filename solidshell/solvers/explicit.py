@@ -30,7 +30,7 @@ of alpha v_m.M.v_m dt (accumulated every step); E_contact = penalty energy at D_
 frictionless and conservative; the work of the contact forces is also accumulated and reported).
 energy_balance_error = max over samples of |dE_kin + dE_strain - W_ext + E_damp + dE_contact| /
 max(W_ext, max E_kin, initial energy), d = change since the start.  All energies use the (scaled)
-masses actually integrated.  With kinetic damping the energy removed at each reset is E_damp.
+masses actually integrated.  With kinetic damping E_damp is the kinetic energy removed at the resets.
 
 Mass scaling (Section 4.2): ``mass_scaling`` s with ``mass_scaling_mode`` "uniform" (all masses ×s,
 the paper's choice; the weight P is unchanged) or "director" (only the U_n masses ×s: the thickness
@@ -47,7 +47,9 @@ run:        t_end [s] (required), snapshots (list of times [s] to keep as frames
             ("lanczos" | "power" | "tangent"), critical_step_tol (1e-6), contact_penalty_factor
             (0.1), checkpoint (path), checkpoint_every (steps, 2000), restart (path),
             max_wall_time [s] (stop, unconverged, when exceeded), frame_every (steps), threads
-            (numba threads for the force kernel; default 1 below SMALL_MESH_ELEMENTS elements).
+            (numba threads for the force kernel; default 1 below SMALL_MESH_ELEMENTS elements),
+            max_energy_error (0.5: a sampled energy balance error above it means the run creates
+            energy -- an instability -- and stops it, returning the last good state).
 run_relax:  the same keys (alpha default 5.0, mass_scaling default 100) plus damping ("rayleigh" |
             "kinetic"), tol_kinetic (1e-6: E_kin / W_ext), tol_residual (1e-3: |P - F + C|_free /
             |P|_free), check_every (steps, 100), t_max [s] (default 20) or max_steps.
@@ -71,7 +73,7 @@ _CHECKPOINT_VERSION = 1
 _RUN_KEYS = {"t_end", "snapshots", "dt", "safety", "allow_reduce", "allow_unstable", "alpha",
              "mass_scaling", "mass_scaling_mode", "sample_every", "U0", "V0", "critical_time_step",
              "critical_step_method", "critical_step_tol", "contact_penalty_factor", "checkpoint",
-             "checkpoint_every", "restart", "max_wall_time", "frame_every", "progress_every", "threads"}
+             "checkpoint_every", "restart", "max_wall_time", "frame_every", "progress_every", "threads", "max_energy_error"}
 _RELAX_KEYS = _RUN_KEYS - {"t_end", "snapshots"} | {"damping", "tol_kinetic", "tol_residual",
                                                      "check_every", "t_max", "max_steps"}
 
@@ -370,6 +372,8 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
         restarted_from = None
 
     D, Dp = st.D.copy(), st.Dp.copy()
+    good_D, good_t = D.copy(), st.step * dt  # the last state that passed the sample checks
+    max_err = _num(settings, "max_energy_error", 0.5, positive=True)
     Dn1 = np.empty_like(D)
     R = np.empty_like(D)
     v = np.empty_like(D)
@@ -406,8 +410,8 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
             if not np.isfinite(Dn1).all():
                 status = "nonfinite"
                 message = (f"the solution became non-finite at step {n + 1} (t = {(n + 1) * dt:.6g} s) with "
-                           f"dt = {dt:.6g} s, critical step {dt_crit:.6g} s; returning the last finite "
-                           f"state, t = {n * dt:.6g} s")
+                           f"dt = {dt:.6g} s, critical step {dt_crit:.6g} s; returning the last good (finite, "
+                           f"energy-balanced) state, t = {good_t:.6g} s")
                 break
             # ---------------------------------------------------- central velocity, damping work
             np.subtract(Dn1, Dp, out=v)
@@ -428,7 +432,16 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
                 Ecn = Ec if bodies else 0.0
                 bal = (Ek - Ek0) + (Es - Es0) - Wext + Edamp + (Ecn - Ec0)
                 scale = max(abs(Wext), st.ekin_max, E_init, 1e-300)
-                st.balance_err = max(st.balance_err, abs(bal) / scale)
+                err = abs(bal) / scale
+                st.balance_err = max(st.balance_err, err)
+                if err > max_err:
+                    status = "diverged"
+                    message = (f"energy balance error {err:.3g} > {max_err:g} at step {n} (t = {n * dt:.6g} s): the "
+                               f"run is creating energy (unstable step {dt:.6g} s vs critical {dt_crit:.6g} s, or "
+                               f"a non-physical state); returning the last good state, t = {good_t:.6g} s")
+                    break
+                good_t = n * dt
+                good_D[:] = D
                 st.max_interp = max(st.max_interp, interp_count(D))
                 if bodies:
                     st.max_contact = max(st.max_contact, nact)
@@ -459,11 +472,19 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
                 dh = Dn1 - D
                 ek_half = 0.5 * _dot(Mf * dh, dh) / dt**2
                 if ek_half < st.ek_prev_half:
-                    # kinetic-energy peak passed: stop every node (v_n+1/2 = 0), count the loss
-                    st.damp_sum += ek_half
-                    D[:] = Dn1  # after the swap below D_n-1 = D_n+1
+                    # kinetic-energy peak passed (between v_n-1/2 and v_n+1/2, i.e. at D_n): restart
+                    # from D_n at rest with the start rule of t = 0, D_n+1 = D_n + dt^2/2 M^-1 R_n.
+                    # (Simply zeroing v_n+1/2 at D_n+1 turns repeated resets near equilibrium into
+                    # steepest descent with step dt^2 M^-1, unstable above omega dt = sqrt(2); the
+                    # half-step restart is stable up to omega dt = 2 like the scheme itself.)
+                    st.damp_sum += 0.5 * vMv
+                    np.multiply(invM, R, out=Dn1)
+                    Dn1 *= 0.5 * dt * dt
+                    Dn1 += D
+                    Dn1[fixed_idx] = presc
+                    dh = Dn1 - D
+                    ek_half = 0.5 * _dot(Mf * dh, dh) / dt**2
                     st.resets += 1
-                    ek_half = 0.0
                 st.ek_prev_half = ek_half
             # ---------------------------------------------------- advance
             Dp, D, Dn1 = D, Dn1, Dp
@@ -503,6 +524,8 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
             st.frame_t.append(st.step * dt)
             st.frame_U.append(D.reshape(shape).copy())
 
+    if status in ("nonfinite", "diverged"):
+        D = good_D
     U = D.reshape(shape).copy()
     ok_run = status == "done" and not relax
     steady = status == "steady"

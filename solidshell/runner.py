@@ -257,13 +257,13 @@ def run_scene(scene, mesh=None, solver=None, out_dir=None, progress=True, overri
         from .problem import no_progress
         cb = no_progress
     try:
-        return _run(sc, kind, mesh, out_dir, cb, settings, timings, t_start)
+        return _run(sc, kind, mesh, out_dir, cb, settings, timings, t_start, overrides)
     finally:
         if bar is not None:
             bar.close()
 
 
-def _run(sc, kind, mesh_arg, out_dir, cb, settings, timings, t_start) -> RunOutput:
+def _run(sc, kind, mesh_arg, out_dir, cb, settings, timings, t_start, overrides=None) -> RunOutput:
     files = []
     out = Path(out_dir) if out_dir is not None else None
     if out is not None:
@@ -296,6 +296,8 @@ def _run(sc, kind, mesh_arg, out_dir, cb, settings, timings, t_start) -> RunOutp
         "converged": None, "message": "mesh only" if kind == "none" else "",
     }
     summary["total_weight"] = float(material.weight_per_area * summary["area"])
+    summary["overrides"] = dict(overrides or {})
+    summary["scene_inputs"] = sc.summary()          # the resolved scene, to reproduce the run
 
     if out is not None:
         cb(0.03, "writing mesh")

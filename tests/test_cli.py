@@ -176,3 +176,18 @@ def test_run_strip_end_to_end(tmp_path):
     assert s["converged"] is True and s["solver"] == "static"
     assert {"result.xdmf", "result.vtu", "deformed.vtu", "top.png", "iso.png", "side.png"} <= set(s["files"])
     assert -5.0 < s["min_z"] < -3.0        # a 5 cm wool strip droops by several cm (Fig. 4)
+
+
+def test_readme_commands_and_ci():
+    """The README opens with the two commands; .ci/run ends with the test command."""
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    readme = (root / "README.md").read_text()
+    blocks = [b.split("```", 1)[0].strip() for b in readme.split("```bash\n")[1:3]]
+    assert blocks[0].startswith("python3.11 -m venv .venv && .venv/bin/pip install -e . && .venv/bin/solidshell ")
+    assert "square-pedestal" in blocks[0]
+    assert blocks[1] == "python3.11 -m venv .venv && .venv/bin/pip install -e '.[test]' && .venv/bin/python -m pytest -q"
+    ci = (root / ".ci" / "run").read_text().strip().splitlines()
+    assert ci[0] == "#!/usr/bin/env bash" and "set -euo pipefail" in ci and ci[-1] == blocks[1]
+    assert os.access(root / ".ci" / "run", os.X_OK)

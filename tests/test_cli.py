@@ -9,7 +9,8 @@ import meshio
 import numpy as np
 import pytest
 
-from test_scenes import PAPER_SCENES
+PAPER_SCENES = ["circle-pedestal", "hang-100", "hang-20", "large-square-pedestal", "sphere",
+                "square-on-disc", "square-pedestal", "strip-warp", "strip-weft"]
 
 
 def cli(*args, cwd=None):

@@ -33,8 +33,10 @@ of the first iteration of the step.  The final state is checked for stability: `
 problem has at most ``eig_max_dofs`` free dofs).  Solvers never raise on non-convergence: they return
 ``converged=False``, the last state and a one-line message.
 
-Displacement control: the fixed dofs take ``load_factor * prescribed`` (so a prescribed rotation is
-applied gradually with the load factors); dead loads are ``load_factor * loads``.
+Displacement control: the fixed dofs take ``load_factor * prescribed``; dead loads are
+``load_factor * loads``.  ``prescribed`` may also be a function ``load_factor -> (N,6)`` for
+non-proportional paths (e.g. a director rotated by an angle proportional to the load factor:
+U_n = R(lambda phi) X_n - X_n, which a linear scaling of one array would shrink).
 
 Rigid contact bodies (``contact=`` or ``Problem.contact``) enter as the penalty energy
 1/2 k p^2 on the mid-surface nodes (frictionless, Gauss-Newton tangent k n n^T); k defaults to
@@ -93,8 +95,12 @@ class _System:
         self.free = np.flatnonzero(~self.fixed_mask)
         self.fixd = np.flatnonzero(self.fixed_mask)
         self.P = np.asarray(loads, dtype=float).reshape(n, 6).ravel().copy()
-        self.presc = (np.zeros(6 * n) if prescribed is None
-                      else np.asarray(prescribed, dtype=float).reshape(n, 6).ravel().copy())
+        self.presc_fn = prescribed if callable(prescribed) else None
+        if self.presc_fn is not None:
+            self.presc = self._presc_at(1.0)
+        else:
+            self.presc = (np.zeros(6 * n) if prescribed is None
+                          else np.asarray(prescribed, dtype=float).reshape(n, 6).ravel().copy())
         if not (np.all(np.isfinite(self.P)) and np.all(np.isfinite(self.presc))):
             raise InputError("loads and prescribed values must be finite")
         self.contact = list(contact or [])
@@ -111,9 +117,19 @@ class _System:
         self._has_ef = hasattr(model, "energy_and_force")
 
     # -- vectors
+    def _presc_at(self, lam):
+        v = np.asarray(self.presc_fn(lam), dtype=float)
+        if v.size != 6 * self.n:
+            raise InputError(f"prescribed(load_factor) must return an ({self.n}, 6) array")
+        return v.reshape(-1).copy()
+
+    def prescribed_at(self, lam):
+        """Full vector whose fixed entries are the prescribed values at load factor lam."""
+        return self._presc_at(lam) if self.presc_fn is not None else lam * self.presc
+
     def apply_prescribed(self, D, lam):
         D = D.copy()
-        D[self.fixd] = lam * self.presc[self.fixd]
+        D[self.fixd] = self.prescribed_at(lam)[self.fixd]
         return D
 
     def U(self, D):
@@ -187,6 +203,11 @@ class _System:
 
 
 # ============================================================================ linear algebra
+_SINGULAR_PIVOT = 1e-14
+"""A pivot smaller than this fraction of the largest marks the tangent as numerically singular (a
+free rigid-body mode or mechanism); legitimate fabric tangents stay above ~1e-10."""
+
+
 def _factor(A):
     """SuperLU of a symmetric A with diagonal pivoting in symmetric mode.
 
@@ -197,8 +218,9 @@ def _factor(A):
     lu = splu(A, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
               options=dict(SymmetricMode=True))
     d = lu.U.diagonal()
-    if not np.all(np.isfinite(d)) or np.any(d == 0.0):
-        raise RuntimeError("singular tangent")
+    ad = np.abs(d)
+    if not np.all(np.isfinite(d)) or ad.min(initial=np.inf) <= _SINGULAR_PIVOT * ad.max(initial=0.0):
+        raise RuntimeError("singular tangent (a pivot below %.0e of the largest)" % _SINGULAR_PIVOT)
     neg = int(np.count_nonzero(d < 0.0)) if np.array_equal(lu.perm_r, lu.perm_c) else None
     return lu, neg
 
@@ -238,6 +260,8 @@ class _Opts:
     armijo: float = 1e-4
     curvilinear: bool = True
     accel_ratio: float = 1.0
+    line_search: str = "armijo"
+    radius0: float = 0.02
 
 
 def _converged(rel, e_ratio, o):
@@ -302,12 +326,42 @@ def _newton_level(sys, D, lam, o, stats):
                     acc = None
         accepted = False
         gnorm = float(np.linalg.norm(g))
+        trust = o.line_search == "trust"
+        if trust and pmax > 0:
+            radius = stats.get("radius", o.radius0)
+            alpha = min(1.0, radius / pmax)
         for _ in range(40):
             Dt = D + alpha * p if acc is None else D + alpha * p + 0.5 * alpha * alpha * acc
             Pit, Gt = sys.potential_and_gradient(Dt, lam)
+            if trust and np.isfinite(Pit):
+                # 1-D trust region along the (shifted) Newton step, radius in max-norm:
+                # model decrease m(a) = g.p (a - a^2/2) since p = -(K + sigma S)^-1 g
+                dec = Pit - Pi
+                pred = gp * (alpha - 0.5 * alpha * alpha)
+                rho = dec / pred if pred < 0.0 else 0.0
+                step = alpha * pmax
+                if abs(pred) <= 1e-11 * max(abs(Pi), 1e-300):
+                    accepted = bool(np.linalg.norm(Gt[f]) < gnorm or dec <= 0.0)
+                    if not accepted:
+                        radius = 0.25 * step
+                elif rho > 1e-4:
+                    accepted = True
+                    if rho < 0.25:
+                        radius = 0.5 * step
+                    elif rho > 0.75 and alpha < 1.0:
+                        radius = min(2.0 * radius, o.max_step)
+                else:
+                    radius = 0.25 * step
+                stats["radius"] = radius
+                if accepted:
+                    break
+                alpha = min(1.0, radius / pmax)
+                continue
             if np.isfinite(Pit):
                 dec = Pit - Pi
-                if dec <= o.armijo * alpha * gp:
+                if o.line_search == "none":
+                    accepted = True
+                elif dec <= o.armijo * alpha * gp:
                     accepted = True
                 elif abs(alpha * gp) <= 1e-11 * max(abs(Pi), 1e-300) and \
                         np.linalg.norm(Gt[f]) < gnorm:
@@ -355,7 +409,7 @@ def _paper_level(sys, D, lam, o, stats):
             since_best += 1
         stats["iterations"] += 1
         try:
-            dD = splu(sys.Kff(K)).solve(r)
+            dD = _factor(sys.Kff(K))[0].solve(r)
         except RuntimeError:
             return D, False, (f"singular tangent K_t at iteration {it} (relative residual {rel:.2e}); "
                               "the paper's scheme cannot proceed"), rel
@@ -382,7 +436,7 @@ def _predictor(sys, D, lam0, lam1):
     f, c = sys.free, sys.fixd
     dl = lam1 - lam0
     rhs = dl * sys.P[f]
-    dc = dl * sys.presc[c]
+    dc = (sys.prescribed_at(lam1) - sys.prescribed_at(lam0))[c]
     if c.size and np.any(dc):
         rhs = rhs - K[f][:, c] @ dc
     A = sys.Kff(K)
@@ -482,7 +536,7 @@ def _arc_length(sys, D, lam_target, o, stats, progress, path, dlam0, max_steps, 
     Pf = sys.P[f]
     if not np.any(Pf):
         raise InputError("arc-length needs a non-zero load on the free dofs")
-    if np.any(sys.presc):
+    if sys.presc_fn is not None or np.any(sys.presc):
         raise InputError("arc-length supports dead loads only (prescribed values must be zero)")
     lam = stats["load_factor"]
     F, K = sys.force_tangent(D)
@@ -604,7 +658,7 @@ def _stability(sys, D, eig_max_dofs):
 def solve_static(model, fixed, loads, load_factors=None, method="newton", prescribed=None, *,
                  tol=1e-8, energy_tol=1e-12, max_iter=None, c=1e-2, L_f=None, max_step=None,
                  U0=None, predictor=True, increment=1.0, min_increment=1e-6, max_cutbacks=8,
-                 curvilinear=False,
+                 curvilinear=False, line_search="trust", trust_radius=0.02,
                  arc_length_initial=0.1,
                  max_arc_steps=500, check_stability=True, eig_max_dofs=60000, contact=None,
                  contact_stiffness=None, progress=None) -> StaticResult:
@@ -618,7 +672,8 @@ def solve_static(model, fixed, loads, load_factors=None, method="newton", prescr
         ``path``; loads and prescribed values are scaled by the factor.  For ``arclength`` only the
         last factor matters (the target) and the path is chosen by the method.
     method : "newton" (default) | "paper" (Eqs. 16-18) | "arclength" (Crisfield)
-    prescribed : (N,6) values of the fixed dofs at load factor 1 (default 0: clamped)
+    prescribed : (N,6) values of the fixed dofs at load factor 1 (default 0: clamped), or a
+        function load_factor -> (N,6) giving them along the path
     tol, energy_tol : relative residual and energy-norm tolerances
     max_iter : iterations per load step (default 30 for newton/arclength -- newton then cuts the
         step back --, 5000 for paper)
@@ -656,7 +711,8 @@ def solve_static(model, fixed, loads, load_factors=None, method="newton", prescr
     o = _Opts(tol=float(tol), energy_tol=float(energy_tol),
               max_iter=int(max_iter if max_iter is not None else (5000 if method == "paper" else 300)),
               c=float(c), L_f=Lf, max_step=float(max_step) if max_step is not None else 0.5 * Lf,
-              curvilinear=bool(curvilinear))
+              curvilinear=bool(curvilinear), line_search=str(line_search),
+              radius0=float(trust_radius) * Lf)
     if not (o.c > 0.0):
         raise InputError(f"c must be positive, got {c!r}")
     D = np.zeros(6 * n) if U0 is None else np.asarray(U0, dtype=float).reshape(-1).copy()

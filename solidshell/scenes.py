@@ -295,6 +295,7 @@ class Scene:
             f = Path(_str(ctx, "geometry.file", g["file"]))
             if not f.is_absolute():
                 f = (base_dir or Path.cwd()) / f
+            raw["geometry"]["file"] = str(f)      # absolute from now on (overrides re-parse raw)
             geometry = {"file": f}
             recipe = None
         else:

@@ -16,8 +16,13 @@ The start from (D_0, V_0) uses D_-1 = D_0 - dt V_0 + dt^2/2 A_0, A_0 = M^-1 (P -
 
 Critical step
 -------------
-Estimated once at the start state by matrix-free Lanczos on M^-1 K (``timestep.py``), after mass
-scaling and including the penalty springs (``contact.combined_critical_time_step``).  The default step
+Estimated at the start state by matrix-free Lanczos on M^-1 K (``timestep.py``), after mass
+scaling and including the penalty springs (``contact.combined_critical_time_step``), and re-checked
+every ``recheck_every`` steps (default 10^4; 0: never) at the current state, warm-started from the
+last top mode (~1-2 % of the run time).  When the state has stiffened so that dt exceeds
+(1 + safety)/2 of the new critical step, the step is shortened to safety x the new one, keeping the
+half-step velocity (D_n-1 := D_n - dt_new/dt_old (D_n - D_n-1)); an explicit run then re-spaces its
+remaining steps to land on t_end.  The step is never lengthened.  The default step
 is ``safety`` (0.9) × dt_crit; a user ``dt`` above dt_crit is refused with the numbers (InputError),
 or reduced to safety × dt_crit when ``allow_reduce=True``.  A run that goes non-finite stops at
 once and returns the last finite state, converged=False and a message saying when and why.
@@ -74,7 +79,7 @@ _CHECKPOINT_VERSION = 1
 _RUN_KEYS = {"t_end", "snapshots", "dt", "safety", "allow_reduce", "allow_unstable", "alpha",
              "mass_scaling", "mass_scaling_mode", "sample_every", "U0", "V0", "critical_time_step",
              "critical_step_method", "critical_step_tol", "contact_penalty_factor", "checkpoint",
-             "checkpoint_every", "restart", "max_wall_time", "frame_every", "progress_every", "threads", "max_energy_error"}
+             "checkpoint_every", "restart", "max_wall_time", "frame_every", "progress_every", "threads", "max_energy_error", "recheck_every"}
 _RELAX_KEYS = _RUN_KEYS - {"t_end", "snapshots"} | {"damping", "tol_kinetic", "tol_residual",
                                                      "check_every", "t_max", "max_steps"}
 
@@ -132,7 +137,8 @@ class _State:
     """Everything that changes during the run: saved in checkpoints, restored on restart."""
 
     FIELDS = ("D", "Dp", "step", "damp_sum", "ekin_max", "balance_err", "max_interp", "contact_work",
-              "max_contact", "max_pen", "ek_prev_half", "resets", "last_ekin", "last_rel_res", "frame_t", "frame_U")
+              "max_contact", "max_pen", "ek_prev_half", "resets", "last_ekin", "last_rel_res", "frame_t", "frame_U",
+              "dt_cur", "n_base", "t_base", "mode", "rechecks", "reductions", "dtc_min")
 
     def __init__(self, **kw):
         self.__dict__.update(kw)
@@ -167,9 +173,9 @@ def _load_checkpoint(path, fixed_info: dict) -> _State:
                 raise InputError(f"restart file {path} does not match this run: {k} was {saved.tolist() if saved.size < 8 else '...'}, "
                                  f"now {np.asarray(v).tolist() if np.asarray(v).size < 8 else '...'}")
         kw = {k: z[k].copy() for k in _State.FIELDS}
-    for k in ("step", "max_interp", "max_contact", "resets"):
+    for k in ("step", "max_interp", "max_contact", "resets", "n_base", "rechecks", "reductions"):
         kw[k] = int(kw[k])
-    for k in ("damp_sum", "max_pen", "ekin_max", "balance_err", "contact_work", "ek_prev_half", "last_ekin", "last_rel_res"):
+    for k in ("dt_cur", "t_base", "dtc_min", "damp_sum", "max_pen", "ekin_max", "balance_err", "contact_work", "ek_prev_half", "last_ekin", "last_rel_res"):
         kw[k] = float(kw[k])
     kw["frame_t"] = [float(t) for t in kw["frame_t"]]
     kw["frame_U"] = [u for u in kw["frame_U"]]
@@ -239,6 +245,7 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
     dt_crit_user = _num(settings, "critical_time_step", None, positive=True)
     method = settings.get("critical_step_method", "lanczos")
     n_est_evals = 0
+    mode0 = None
     if saved is not None:  # a restart reuses the step of the run it continues (bit-for-bit)
         omega_el, method = saved["omega_el"], saved["method"]
     elif dt_crit_user is None:
@@ -250,6 +257,7 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
             raise InputError(f"cannot estimate the critical time step: {exc}") from None
         omega_el = est.omega_max
         n_est_evals = est.n_force_evals
+        mode0 = est.mode
     else:
         omega_el = 2.0 / dt_crit_user
         method = "given"
@@ -303,6 +311,22 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
             raise InputError(f"snapshot times must lie in [0, t_end = {t_end:g}] s, got {snaps}")
         snap_steps = {min(n_steps, int(round(s / dt))): s for s in snaps}
         check_every = max(1, n_steps // 100)
+    recheck_every = _num(settings, "recheck_every", 10000, nonneg=True, integer=True)
+    if not relax:
+        t_max = max_steps = None
+    else:
+        t_end = None
+        snaps = []
+
+    def schedule(n_base, t_base, dt):
+        """(end step, {step: snapshot time}) for the step dt taken from step n_base at time t_base."""
+        if relax:
+            if max_steps is not None:
+                return max_steps, {}
+            return n_base + int(math.ceil((t_max - t_base) / dt * (1.0 - 1e-12))), {}
+        return (n_base + int(round((t_end - t_base) / dt)),
+                {n_base + int(round((s - t_base) / dt)): s for s in snaps if s >= t_base - 0.5 * dt})
+
     sample_every = _num(settings, "sample_every", max(1, min(100, n_steps // 100)), positive=True, integer=True)
     frame_every = _num(settings, "frame_every", None, positive=True, integer=True)
     ckpt_path = settings.get("checkpoint")
@@ -313,11 +337,14 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
     Mf = M.ravel()
     invM = np.zeros_like(Mf)
     invM[free_idx] = 1.0 / Mf[free_idx]
-    lhs = 1.0 / dt**2 + alpha / (2.0 * dt)
-    cF = invM / lhs                               # multiplies (P - F + C)
-    cD = (2.0 / dt**2) / lhs                      # multiplies D_n
-    cDp = (alpha / (2.0 * dt) - 1.0 / dt**2) / lhs  # multiplies D_n-1
-    aMdt = alpha * dt * Mf                        # damping dissipation weights
+
+    def coefficients(dt):
+        lhs = 1.0 / dt**2 + alpha / (2.0 * dt)
+        return (invM / lhs,                                   # multiplies (P - F + C)
+                (2.0 / dt**2) / lhs,                          # multiplies D_n
+                (alpha / (2.0 * dt) - 1.0 / dt**2) / lhs)     # multiplies D_n-1
+
+    cF, cD, cDp = coefficients(dt)
 
     Pn = _norm(P[free_idx])
     has_energy_force = hasattr(model, "energy_and_force")
@@ -372,14 +399,22 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
                     max_interp=interp_count(D0), contact_work=0.0, max_contact=0, max_pen=0.0, ek_prev_half=0.0,
                     resets=0, last_ekin=Ek0, last_rel_res=(_norm((P - F0 + C0)[free_idx]) / Pn
                                                          if Pn > 0 else 0.0),
-                    frame_t=[], frame_U=[])
+                    frame_t=[], frame_U=[], dt_cur=dt, n_base=0, t_base=0.0,
+                    mode=(mode0 if mode0 is not None else np.zeros(6 * N)), rechecks=0, reductions=0, dtc_min=dt_crit)
         if 0 in snap_steps or relax or (not snap_steps):
             st.frame_t.append(0.0)
             st.frame_U.append(D0.reshape(shape).copy())
         restarted_from = None
 
     D, Dp = st.D.copy(), st.Dp.copy()
-    good_D, good_t = D.copy(), st.step * dt  # the last state that passed the sample checks
+    dt = st.dt_cur
+    cF, cD, cDp = coefficients(dt)
+    end_step, snap_steps = schedule(st.n_base, st.t_base, dt)
+
+    def time_of(n):
+        return st.t_base + (n - st.n_base) * dt
+
+    good_D, good_t = D.copy(), time_of(st.step)  # the last state that passed the sample checks
     max_err = _num(settings, "max_energy_error", 0.5, positive=True)
     Dn1 = np.empty_like(D)
     R = np.empty_like(D)
@@ -390,18 +425,18 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
     last = {}
     steps_done = 0
     t_loop = time.perf_counter()
-    start_step = st.step
-    end_step = n_steps
+    n = st.step
+    recheck_margin = 0.5 * (1.0 + safety)
 
     with np.errstate(over="ignore", invalid="ignore"):
-        for n in range(start_step, end_step):
+        while n < end_step:
             sample = (n % sample_every == 0) or n == end_step - 1
             check = relax and (n % check_every == 0)
             # ---------------------------------------------------- forces at D_n
             try:
                 F, Es = force_and_energy(D, sample)
             except (FloatingPointError, ZeroDivisionError, SolverError) as exc:
-                status, message = "failed", f"internal force failed at step {n} (t = {n * dt:.6g} s): {exc}"
+                status, message = "failed", f"internal force failed at step {n} (t = {time_of(n):.6g} s): {exc}"
                 break
             np.subtract(P, F, out=R)
             if bodies:
@@ -416,7 +451,7 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
             Dn1[fixed_idx] = presc
             if not np.isfinite(Dn1).all():
                 status = "nonfinite"
-                message = (f"the solution became non-finite at step {n + 1} (t = {(n + 1) * dt:.6g} s) with "
+                message = (f"the solution became non-finite at step {n + 1} (t = {time_of(n + 1):.6g} s) with "
                            f"dt = {dt:.6g} s, critical step {dt_crit:.6g} s; returning the last good (finite, "
                            f"energy-balanced) state, t = {good_t:.6g} s")
                 break
@@ -443,25 +478,25 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
                 st.balance_err = max(st.balance_err, err)
                 if err > max_err:
                     status = "diverged"
-                    message = (f"energy balance error {err:.3g} > {max_err:g} at step {n} (t = {n * dt:.6g} s): the "
+                    message = (f"energy balance error {err:.3g} > {max_err:g} at step {n} (t = {time_of(n):.6g} s): the "
                                f"run is creating energy (unstable step {dt:.6g} s vs critical {dt_crit:.6g} s, or "
                                f"a non-physical state); returning the last good state, t = {good_t:.6g} s")
                     break
-                good_t = n * dt
+                good_t = time_of(n)
                 good_D[:] = D
                 st.max_interp = max(st.max_interp, interp_count(D))
                 if bodies:
                     st.max_contact = max(st.max_contact, nact)
                 st.last_ekin = Ek
-                last = dict(Ek=Ek, Es=Es - Es0, Wext=Wext, Edamp=Edamp, Ec=Ecn - Ec0, t=n * dt)
+                last = dict(Ek=Ek, Es=Es - Es0, Wext=Wext, Edamp=Edamp, Ec=Ecn - Ec0, t=time_of(n))
             if check or (not relax and n == end_step - 1):
                 st.last_rel_res = (_norm(R[free_idx]) / Pn) if Pn > 0 else _norm(R[free_idx])
             # ---------------------------------------------------- frames
             if n in snap_steps and n > 0:
-                st.frame_t.append(n * dt)
+                st.frame_t.append(time_of(n))
                 st.frame_U.append(D.reshape(shape).copy())
             if frame_every and n > 0 and n % frame_every == 0:
-                st.frame_t.append(n * dt)
+                st.frame_t.append(time_of(n))
                 st.frame_U.append(D.reshape(shape).copy())
             # ---------------------------------------------------- steady state?
             if check and n > 0:
@@ -471,7 +506,7 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
                 if rel_ke < tol_ke and st.last_rel_res < tol_res:
                     status = "steady"
                     st.last_ekin = Ek_c
-                    message = (f"steady state at t = {n * dt:.6g} s after {n} steps: E_kin/W_ext = {rel_ke:.3g} "
+                    message = (f"steady state at t = {time_of(n):.6g} s after {n} steps: E_kin/W_ext = {rel_ke:.3g} "
                                f"< {tol_ke:g}, residual {st.last_rel_res:.3g} < {tol_res:g}")
                     break
             # ---------------------------------------------------- kinetic damping (Cundall)
@@ -495,21 +530,49 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
                 st.ek_prev_half = ek_half
             # ---------------------------------------------------- advance
             Dp, D, Dn1 = D, Dn1, Dp
-            st.step = n + 1
+            n += 1
+            st.step = n
             steps_done += 1
+            # ---------------------------------------------------- re-check the critical step
+            if recheck_every and n % recheck_every == 0 and not allow_unstable and n < end_step:
+                try:
+                    est = estimate_omega_max(model.internal_force, M, free_mask, D.reshape(shape), tol=1e-4,
+                                             v0=st.mode if np.any(st.mode) else None)
+                except ValueError:
+                    est = None  # e.g. an indefinite state: keep the step, the energy check still watches
+                if est is not None:
+                    st.rechecks += 1
+                    st.mode = est.mode
+                    w = est.omega_max
+                    if bodies:
+                        w = 2.0 / combined_critical_time_step(w, k_pen, M[:, 0])
+                    dtc_now = critical_time_step(w, alpha)
+                    st.dtc_min = min(st.dtc_min, dtc_now)
+                    if dt > recheck_margin * dtc_now:
+                        # the state has stiffened: shorten the step, keeping the velocity v_n-1/2
+                        t_now = time_of(n)
+                        new = safety * dtc_now
+                        if not relax:
+                            new = (t_end - t_now) / int(math.ceil((t_end - t_now) / new * (1.0 - 1e-12)))
+                        Dp[:] = D - (new / dt) * (D - Dp)
+                        st.t_base, st.n_base, dt = t_now, n, new
+                        st.dt_cur = dt
+                        st.reductions += 1
+                        cF, cD, cDp = coefficients(dt)
+                        end_step, snap_steps = schedule(st.n_base, st.t_base, dt)
             if ckpt_path and st.step % ckpt_every == 0:
                 st.D, st.Dp = D, Dp
                 _save_checkpoint(ckpt_path, st, fixed_info)
                 st.D, st.Dp = None, None
             if st.step % prog_every == 0:
-                frac = st.step / n_steps
+                frac = st.step / max(end_step, 1)
                 if relax and st.last_rel_res > 0:
                     frac = max(frac, min(0.99, math.log(max(st.last_rel_res, tol_res) / 1.0) / math.log(tol_res)))
-                progress(min(frac, 1.0), f"t = {st.step * dt:.4g} s, E_kin = {st.last_ekin:.3g}, "
+                progress(min(frac, 1.0), f"t = {time_of(st.step):.4g} s, E_kin = {st.last_ekin:.3g}, "
                                          f"residual {st.last_rel_res:.2e}")
             if max_wall is not None and st.step % 100 == 0 and time.perf_counter() - wall0 > max_wall:
                 status = "walltime"
-                message = f"stopped at t = {st.step * dt:.6g} s: wall-time limit {max_wall:g} s reached"
+                message = f"stopped at t = {time_of(st.step):.6g} s: wall-time limit {max_wall:g} s reached"
                 break
     t_loop = time.perf_counter() - t_loop
 
@@ -517,18 +580,20 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
         status = "done"
     if status == "done":
         if relax:
-            message = (f"no steady state within {n_steps} steps (t = {n_steps * dt:.6g} s): last residual "
+            message = (f"no steady state within {end_step} steps (t = {time_of(end_step):.6g} s): last residual "
                        f"{st.last_rel_res:.3g} (tol {tol_res:g})")
         else:
-            message = f"reached t_end = {n_steps * dt:.6g} s in {n_steps} steps of {dt:.6g} s"
-            st.frame_t.append(n_steps * dt)
+            message = (f"reached t_end = {time_of(end_step):.6g} s in {end_step} steps of {dt:.6g} s"
+                       + (f" ({st.reductions} step reduction(s) after re-checking the critical step)"
+                          if st.reductions else ""))
+            st.frame_t.append(time_of(end_step))
             st.frame_U.append(D.reshape(shape).copy())
             if ckpt_path:
                 st.D, st.Dp = D, Dp
                 _save_checkpoint(ckpt_path, st, fixed_info)
     if status == "steady":
-        if not st.frame_t or st.frame_t[-1] != st.step * dt:
-            st.frame_t.append(st.step * dt)
+        if not st.frame_t or st.frame_t[-1] != time_of(st.step):
+            st.frame_t.append(time_of(st.step))
             st.frame_U.append(D.reshape(shape).copy())
 
     if status in ("nonfinite", "diverged"):
@@ -540,14 +605,18 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
     info = {
         "steps": int(st.step),
         "dt": float(dt),
+        "dt_initial": float(fixed_info["dt"]),
         "critical_time_step": float(dt_crit),
+        "critical_time_step_min": float(st.dtc_min),
+        "time_step_rechecks": int(st.rechecks),
+        "time_step_reductions": int(st.reductions),
         "critical_time_step_sheet": float(critical_time_step(omega_el, alpha)),
         "critical_step_method": method,
         "omega_max": float(omega),
         "time_step_estimate_s": float(t_est),
         "time_step_force_evals": int(n_est_evals),
         "safety": float(safety),
-        "t_final": float(st.step * dt),
+        "t_final": float(time_of(st.step)),
         "alpha": float(alpha),
         "damping": damping,
         "mass_scaling": float(ms),

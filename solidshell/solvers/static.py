@@ -13,14 +13,23 @@ Methods (``method=``)
     paper's 1e-3 ... 1e-2 (default 1e-2); L_f the free-hanging length (default: the largest
     distance from a free node to the nearest fixed node).  No line search, no safeguard: the
     paper's scheme, kept as a reference (it needs at least ~ (max displacement)/(c L_f) iterations).
-``"newton"`` (default)  Newton on Pi with a backtracking (Armijo) line search, a step-length cap,
-    and a tangent shift K_t + sigma diag|K_t| whenever K_t is not positive definite (detected by
-    the inertia of an LDL^T-type factorisation: SuperLU with diagonal pivoting in symmetric mode,
-    whose U diagonal has as many negative entries as K has negative eigenvalues, Sylvester's law);
-    sigma grows tenfold until the factorisation is positive definite and shrinks tenfold on the
-    next iteration.  Every direction is therefore a descent direction of Pi and the iteration
-    cannot climb to a saddle or a maximum.  Loads are applied in adaptive sub-steps with a
-    path-extrapolating predictor; a failed sub-step is cut back automatically.
+``"newton"`` (default)  Newton on Pi globalised by a trust region on the step (``line_search=
+    "trust"``: the Newton step is cut to a max-norm radius that starts at 0.02 L_f and grows/shrinks
+    with the ratio of actual to predicted decrease of Pi; ``"armijo"``: backtracking line search;
+    ``"none"``), and a tangent shift K_t + sigma diag|K_t| whenever K_t is not positive definite
+    (detected by the inertia of an LDL^T-type factorisation: SuperLU with diagonal pivoting in
+    symmetric mode, whose U diagonal has as many negative entries as K has negative eigenvalues,
+    Sylvester's law); sigma grows tenfold until the factorisation is positive definite and shrinks
+    tenfold on the next iteration.  Every step is therefore a descent step of Pi and the iteration
+    cannot settle on a saddle or a maximum (the paper's scheme can: see ``positive_definite``).
+    The full load is applied at once by default (``increment=1``); a failed step is cut back and
+    the load then applied in adaptive sub-steps with a path-extrapolating predictor.
+    Why it still takes tens to a hundred iterations on a drape: with translations as the only
+    unknowns a straight Newton step cannot rotate a material line without stretching it, and the
+    membrane rigidity of a fabric is 1e5-1e6 times its bending rigidity over L^2, so the quadratic
+    convergence radius of Newton is tiny and the global phase is governed by the step control (the
+    curvilinear ``curvilinear=True`` option, a second-order "geodesic acceleration" correction of the
+    step, did not help on the strip and is off by default).
 ``"arclength"``  Crisfield's cylindrical arc-length method (load factor as an extra unknown, the
     quadratic constraint |Delta D| = Delta l, root chosen by the smallest angle with the previous
     increment), which follows the equilibrium path through limit points; the last step lands exactly
@@ -262,6 +271,7 @@ class _Opts:
     accel_ratio: float = 1.0
     line_search: str = "armijo"
     radius0: float = 0.02
+    radius_min: float = 1e-9
 
 
 def _converged(rel, e_ratio, o):
@@ -328,7 +338,7 @@ def _newton_level(sys, D, lam, o, stats):
         gnorm = float(np.linalg.norm(g))
         trust = o.line_search == "trust"
         if trust and pmax > 0:
-            radius = stats.get("radius", o.radius0)
+            radius = max(stats.get("radius", o.radius0), o.radius_min)
             alpha = min(1.0, radius / pmax)
         for _ in range(40):
             Dt = D + alpha * p if acc is None else D + alpha * p + 0.5 * alpha * alpha * acc
@@ -341,9 +351,12 @@ def _newton_level(sys, D, lam, o, stats):
                 rho = dec / pred if pred < 0.0 else 0.0
                 step = alpha * pmax
                 if abs(pred) <= 1e-11 * max(abs(Pi), 1e-300):
+                    # the decrease is below the round-off of Pi: judge the step by the residual
+                    # and leave the radius alone (it describes the global phase, not this one)
                     accepted = bool(np.linalg.norm(Gt[f]) < gnorm or dec <= 0.0)
                     if not accepted:
-                        radius = 0.25 * step
+                        alpha *= 0.25
+                        continue
                 elif rho > 1e-4:
                     accepted = True
                     if rho < 0.25:
@@ -352,6 +365,7 @@ def _newton_level(sys, D, lam, o, stats):
                         radius = min(2.0 * radius, o.max_step)
                 else:
                     radius = 0.25 * step
+                radius = max(radius, o.radius_min)
                 stats["radius"] = radius
                 if accepted:
                     break
@@ -712,7 +726,7 @@ def solve_static(model, fixed, loads, load_factors=None, method="newton", prescr
               max_iter=int(max_iter if max_iter is not None else (5000 if method == "paper" else 300)),
               c=float(c), L_f=Lf, max_step=float(max_step) if max_step is not None else 0.5 * Lf,
               curvilinear=bool(curvilinear), line_search=str(line_search),
-              radius0=float(trust_radius) * Lf)
+              radius0=float(trust_radius) * Lf, radius_min=1e-9 * Lf)
     if not (o.c > 0.0):
         raise InputError(f"c must be positive, got {c!r}")
     D = np.zeros(6 * n) if U0 is None else np.asarray(U0, dtype=float).reshape(-1).copy()

@@ -204,3 +204,19 @@ def test_bad_input():
         solve_static(model, fixed, P, method="dynamic")
     with pytest.raises(ValueError):
         solve_static(model, np.ones_like(fixed), P)
+
+
+def test_penalty_contact_with_floor():
+    """The strip hangs onto a floor 2 cm below the clamp (frictionless penalty contact): it rests on
+    it without sinking more than a small fraction of its thickness."""
+    from solidshell.contact import Plane
+
+    mesh, model, fixed, P = wool_strip(20, "warp")
+    r = solve_static(model, fixed, P, contact=[Plane((0.0, 0.0, -2.0))])
+    assert r.converged, r.message
+    x = mesh.nodes + r.U[:, :3]
+    # default penalty: a node carrying its own weight sinks 1e-3 h; the touching tip carries a few
+    # nodal weights plus the bending reaction, so allow 2 % of h (h = 0.0593 cm)
+    assert x[:, 2].min() > -2.0 - 0.02 * 0.0593
+    assert np.count_nonzero(x[:, 2] < -2.0 + 1e-3) >= 1
+    assert r.info["contact_stiffness"] > 0

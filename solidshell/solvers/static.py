@@ -781,7 +781,8 @@ def solve_static(model, fixed, loads, load_factors=None, method="newton", prescr
 
 # ============================================================================ registry entry
 _SETTINGS = {"method", "c", "tol", "energy_tol", "max_iter", "load_steps", "load_factors", "L_f",
-             "max_step", "predictor", "increment", "min_increment", "max_cutbacks", "arc_length_initial", "max_arc_steps",
+             "max_step", "predictor", "increment", "min_increment", "max_cutbacks", "line_search",
+             "trust_radius", "curvilinear", "arc_length_initial", "max_arc_steps",
              "check_stability", "eig_max_dofs", "contact_stiffness"}
 
 
@@ -790,7 +791,7 @@ def run(problem, settings: dict | None = None, progress=None) -> SolveResult:
 
     settings: method ("newton" | "paper" | "arclength"), c, tol, energy_tol, max_iter,
     load_steps (int n -> factors 1/n, 2/n, ..., 1) or load_factors (list), L_f, max_step, predictor,
-    increment, min_increment, max_cutbacks, arc_length_initial, max_arc_steps, check_stability, eig_max_dofs,
+    increment, min_increment, max_cutbacks, line_search, trust_radius, curvilinear, arc_length_initial, max_arc_steps, check_stability, eig_max_dofs,
     contact_stiffness.  Other keys (meant for other solvers) are ignored.
     """
     settings = dict(settings or {})

@@ -272,6 +272,8 @@ class _Opts:
     line_search: str = "armijo"
     radius0: float = 0.02
     radius_min: float = 1e-9
+    tr_shrink: float = 0.25
+    tr_grow: float = 0.75
 
 
 def _converged(rel, e_ratio, o):
@@ -359,9 +361,9 @@ def _newton_level(sys, D, lam, o, stats):
                         continue
                 elif rho > 1e-4:
                     accepted = True
-                    if rho < 0.25:
+                    if rho < o.tr_shrink:
                         radius = 0.5 * step
-                    elif rho > 0.75 and alpha < 1.0:
+                    elif rho > o.tr_grow and alpha < 1.0:
                         radius = min(2.0 * radius, o.max_step)
                 else:
                     radius = 0.25 * step

@@ -1,0 +1,100 @@
+"""Fast subsets of the element verification (verification/*.py) against independent references.
+
+Every tolerance is stated next to the measured value it has to admit and the failure it must catch.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from verification import locking, patch, plates
+
+# ----------------------------------------------------------------------------- shear locking
+@pytest.mark.parametrize("ratio", [10.0, 1000.0, 10000.0])
+def test_cantilever_quads_no_shear_locking(ratio):
+    row = locking.tip_load(ratio, "quad", n=8)
+    # vs the continuum (Timoshenko beam incl. shear): the brief's 1 %; measured -0.39 % at every L/h
+    # (a shear-locking quad is off by a factor ~(L/h)^2 at L/h = 1000)
+    assert abs(row["rel_error"]) < 0.01
+    # vs the exact 8-element Timoshenko beam with tied shear (reference/beams.py), which the 8x1 ANS
+    # quad is for nu = 0: measured 5e-13, 4e-9, 3.4e-7 at L/h = 10, 1e3, 1e4 -- round-off growing
+    # like eps (L/h)^2 (membrane/shear vs bending stiffness); 2e-6 admits that and fails for any
+    # change in the element's shear interpolation (which moves the result by >1e-4)
+    assert abs(row["rel_error_vs_beam_element"]) < 2e-6
+
+
+@pytest.mark.parametrize("kind", ["tri/", "tri\\"])
+def test_cantilever_triangles_error_does_not_grow_with_slenderness(kind):
+    errs = [locking.tip_load(r, kind, n=8)["rel_error"] for r in (10.0, 1000.0, 10000.0)]
+    # measured -0.379 %, -0.391 %, -0.391 %: within the 1 % of the quads and flat in L/h; a locking
+    # triangle's error would approach -100 % as L/h grows
+    assert all(abs(e) < 0.01 for e in errs)
+    assert abs(errs[-1]) < 1.1 * abs(errs[0]) + 1e-4
+
+
+# ----------------------------------------------------------------------------- thickness locking
+@pytest.mark.parametrize("kind", ["quad", "tri/"])
+@pytest.mark.parametrize("support", ["free", "restrained"])
+def test_pure_bending_plane_stress_nu03(kind, support):
+    row = locking.end_moment(100.0, kind, 0.3, support)
+    # uniform curvature is exactly representable, so the plane-stress value M = EI kappa (free) or
+    # M = D b kappa (restrained) must come out to round-off (measured < 5e-11 at L/h = 100); thickness
+    # locking would make it 9.9 % (free) or 22.5 % (restrained) too stiff, and a plate stiffness D in
+    # the free case (anticlastic curvature suppressed) 9 % too stiff
+    assert abs(row["rel_error_rotation"]) < 1e-8
+    assert abs(row["rel_error_deflection"]) < 1e-8
+    expected_ky = -0.3 * row["kappa_x"] if support == "free" else 0.0
+    assert abs(row["kappa_y"] - expected_ky) < 1e-8 * abs(row["kappa_x"])
+
+
+# ----------------------------------------------------------------------------- patch tests
+@pytest.mark.parametrize("kind", ["quads", "tris", "mixed", "quads-rot", "tris-rot", "mixed-rot"])
+@pytest.mark.parametrize("case", ["membrane", "bending"])
+def test_patch(kind, case):
+    row = patch.run_one(kind, case)
+    # MacNeal-Harder patch, L/h = 240.  Measured: displacements <= 8e-11, energy <= 1.3e-10, residual
+    # <= 1.1e-8 -- the residual's round-off floor is ~ 2e-13 (L/h)^2 (see patch.thickness_scan:
+    # residual * (h/L)^2 stays 1e-14..2e-13 from h = 0.1 to 1e-4), so it is bounded by 1e-12 (L/h)^2
+    # = 5.8e-8.  A patch-test failure is an O(1e-3..1) error that does not shrink with h.
+    assert row["displacement_error"] < 1e-9
+    assert abs(row["energy_error"]) < 1e-9
+    assert row["equilibrium_residual"] < 1e-12 * (0.24 / patch.MAT.h) ** 2
+    if "bending_strain_error" in row:
+        assert row["bending_strain_error"] < 1e-9
+
+
+# ----------------------------------------------------------------------------- plates
+@pytest.mark.parametrize("support,lo,hi", [
+    # 16x16 quads, a/h = 1000 (Kirchhoff regime: the Mindlin shear correction is 5e-6), vs the series
+    # (reference/plates.json).  Measured -0.288 % (clamped) and -0.126 % (hard SS), the O(h^2)
+    # discretisation error of a sequence with observed rate 2.00-2.03 from N = 8 to 32; bands of about
+    # +-40 % around them: a wrong boundary condition (clamped <-> SS is a factor 3), a stiffness error
+    # of a few tenths of a percent, or a shear-tying error (tying the quad's director at the corners
+    # instead of the edge mid-points gives -99.9 %) leaves the band.  (Soft and hard SS differ by only
+    # 1e-5 here, at a/h = 1000, so this test does not distinguish them.)
+    ("clamped", -0.0040, -0.0017),
+    ("ss_hard", -0.0018, -0.0007),
+])
+def test_plate_16x16_quads(support, lo, hi):
+    ref = plates.plate_reference()["alpha"]
+    exact = ref["clamped"] if support == "clamped" else ref["simply_supported"]
+    w = plates.centre_deflection(16, "quad", support, 1000.0)
+    assert lo < (w - exact) / exact < hi
+
+
+def test_plate_32x32_quads_within_one_percent():
+    # the brief's requirement: <= 1 % at 32x32 quads; measured -0.071 % (clamped), -0.031 % (SS), a/h=1000
+    ref = plates.plate_reference()["alpha"]
+    for support, exact in (("clamped", ref["clamped"]), ("ss_hard", ref["simply_supported"])):
+        w = plates.centre_deflection(32, "quad", support, 1000.0)
+        assert abs(w - exact) / exact < 0.01
+
+
+@pytest.mark.parametrize("support", ["clamped", "ss_hard"])
+def test_triangle_is_mitc3(support):
+    # the solid-shell triangle on a flat plate must coincide with an independent MITC3 code
+    # (verification/plates.py): measured 1e-13..4e-10 relative difference; 1e-8 bounds the round-off
+    # at a/h = 1000 while any deviation of Eqs. (12)-(14) from the Nedelec shear field shows as >1e-3
+    a = plates.centre_deflection(8, "tri", support, 1000.0)
+    b = plates.mitc3_plate(8, support, 1000.0)
+    assert abs(a - b) / abs(b) < 1e-8

@@ -104,7 +104,7 @@ def main(argv=None):
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
 
-        fig, ax = plt.subplots(figsize=(6, 5))
+        fig, ax = plt.subplots(figsize=(7.5, 5.5))
         for cut, col in (("warp", "C0"), ("weft", "C3")):
             ax.plot(ref[cut]["curve"]["x"], ref[cut]["curve"]["z"], "-", color=col, lw=2,
                     label=f"{cut}: elastica")
@@ -116,7 +116,7 @@ def main(argv=None):
         ax.set_xlabel("x [cm]")
         ax.set_ylabel("z [cm]")
         ax.set_title("5x1 cm wool strip under self-weight (side view)")
-        ax.legend(fontsize=8)
+        ax.legend(fontsize=8, loc="center left", bbox_to_anchor=(1.02, 0.5))
         ax.grid(alpha=0.3)
         fig.tight_layout()
         png = os.path.join(a.out, "strip_side_view.png")

@@ -330,3 +330,29 @@ def test_recheck_shortens_the_step_when_the_state_stiffens(tmp_path):
     again = explicit.run(prob, {**s2, "restart": ck})
     assert again.info["restarted_from_step"] > 0
     assert np.array_equal(again.U, good.U) and again.info["dt"] == i["dt"]
+
+
+def test_strip_relaxes_over_a_pedestal_edge_without_entering_it():
+    from solidshell.contact import Pedestal
+
+    h = Fabric.wool().thickness
+    mesh = plate(12, 1, 4.0, 1.0, z=h / 2)   # lower face on the pedestal top (z = 0)
+    mesh.nodes[:, :2] -= 0.5
+    model = Model(mesh, Fabric.wool())
+    fixed = np.zeros((mesh.n_nodes, 6), bool)
+    fixed[mesh.nodes[:, 0] < 0.1] = True      # held at the left end only: the rest lies free on top
+    loads = np.zeros((mesh.n_nodes, 6))
+    loads[:, 2] = -model.lumped_mass()[:, 0] * G0
+    ped = Pedestal((0, 0, 0), half_widths=(1.0, 1.0), edge_radius=0.1, offset=h / 2)
+    res = get("relax")(Problem(model, fixed, loads, contact=[ped]),
+                       {"damping": "kinetic", "mass_scaling": 1e4, "mass_scaling_mode": "director"})
+    assert res.converged, res.message
+    x = mesh.nodes + res.U[:, :3]
+    gap, _ = ped.penetration(x)
+    # resting weight on the penalty spring sinks g / (0.1 w_max^2) ~ 1e-4 cm here (w_max ~ 6e4
+    # with the director masses x1e4); 1e-3 cm is 1/60 of the thickness
+    assert gap.min() > -1e-3 and res.info["max_contact_penetration"] < 1e-3
+    assert res.info["max_contact_nodes"] > 0
+    assert x[:, 2].min() < -1.0                           # the overhang droops over the edge
+    on_top = x[:, 0] < 0.9
+    assert np.all(x[on_top, 2] > h / 2 - 1e-3)             # nothing sinks into the top face

@@ -220,3 +220,41 @@ def test_penalty_contact_with_floor():
     assert x[:, 2].min() > -2.0 - 0.02 * 0.0593
     assert np.count_nonzero(x[:, 2] < -2.0 + 1e-3) >= 1
     assert r.info["contact_stiffness"] > 0
+
+
+def test_arclength_passes_limit_point_of_shallow_arch():
+    """Half of a shallow pinned parabolic arch (span 10, rise 0.15, h 0.1; symmetry at mid-span)
+    under a central dead load beyond its snap-through load: the arc-length path climbs to a limit
+    point, follows the unstable branch with *decreasing* load while the deflection keeps growing,
+    and reaches the target load on the inverted (stable) branch; load-controlled Newton at the
+    same load lands on the same inverted state."""
+    from solidshell import ShellMesh
+
+    S, rise, nx = 10.0, 0.15, 10
+    x = np.linspace(0.0, S / 2, nx + 1)
+    z = rise * (1 - (2 * x / S - 1) ** 2)
+    nodes = np.array([[xi, y, zi] for y in (0.0, 1.0) for xi, zi in zip(x, z)])
+    quads = np.array([[i, i + 1, nx + 2 + i, nx + 1 + i] for i in range(nx)])
+    mesh = ShellMesh(nodes, quads=quads)
+    model = Model(mesh, IsotropicShell(E=1.2e6, nu=0.0, h=0.1))
+    fixed = np.zeros((mesh.n_nodes, 6), bool)
+    end = np.flatnonzero(np.isclose(nodes[:, 0], 0.0))
+    mid = np.flatnonzero(np.isclose(nodes[:, 0], S / 2))
+    fixed[end, :3] = True                       # pinned support
+    fixed[:, 1] = fixed[:, 4] = True            # plane problem
+    fixed[mid, 0] = fixed[mid, 3] = True        # symmetry plane
+    P = np.zeros((mesh.n_nodes, 6))
+    P[mid, 2] = -5.0 / len(mid)                 # half of a central load of 10 (limit load ~4)
+    r = solve_static(model, fixed, P, method="arclength")
+    assert r.converged, r.message
+    lam = np.array([l for l, _ in r.path])
+    w = np.array([-U[mid, 2].mean() for _, U in r.path])
+    k = int(np.flatnonzero(np.diff(lam) < 0)[0])   # first limit point
+    assert 0.1 < lam[k] < 0.9                   # a limit point below the target load ...
+    assert lam[k + 1:].min() < lam[k] - 0.1     # ... passed with decreasing load ...
+    assert np.all(np.diff(w) > 0)               # ... while the deflection grows monotonically
+    assert w[-1] > 2 * rise                     # snapped through: inverted
+    assert r.info["positive_definite"] is True
+    n = solve_static(model, fixed, P)
+    assert n.converged, n.message
+    assert np.abs(n.U - r.U).max() < 1e-6

@@ -23,6 +23,13 @@ Strip [0,L] x [-b/2, b/2], L = 10, b = 1, one element across the width, n = 8 el
    clamped root (U_n = 0 also restrains the anticlastic curvature at the root, so the strip is
    slightly stiffer than EI -- informative only, no closed form).
 
+3. MacNeal & Harder's straight cantilever (1985): 6 rectangular / trapezoidal / parallelogram quads,
+   L = 6, b = 0.2, h = 0.1, E = 1e7, nu = 0.3, unit tip load out of plane (plate bending; reference
+   0.4321) and in plane (membrane, in-plane bending of the strip; reference 0.1081).  The in-plane
+   case exposes the membrane of Eq. (6): a plain bilinear (Q4) membrane with no enhanced or
+   incompatible modes, which shear-locks in in-plane bending (the paper applies ANS only to the
+   transverse shear and thickness strains).
+
 Run: ``python -m verification.locking`` -> tables and verification/out/locking.json, locking.png.
 """
 
@@ -129,6 +136,44 @@ def end_moment(ratio: float, kind: str = "quad", nu: float = 0.3, support: str =
     return out
 
 
+# ---------------------------------------------------------------------------------------------
+# MacNeal & Harder (1985) straight cantilever: L = 6, width 0.2, thickness 0.1, E = 1e7, nu = 0.3,
+# 6 elements (rectangular, trapezoidal with +-45 deg sides, parallelogram with 45 deg sides), unit
+# tip load.  References (MacNeal-Harder's, = beam theory incl. shear): out-of-plane 0.4321 (the
+# plate bending of this element), in-plane 0.1081 (its membrane, in-plane bending of the strip).
+MH_REF = {"out-of-plane": 0.4321, "in-plane": 0.1081}
+
+
+def macneal_harder_mesh(shape: str) -> ShellMesh:
+    xb = np.arange(7, dtype=float)                    # bottom edge (y = 0) node x
+    xt = xb.copy()                                    # top edge (y = 0.2)
+    if shape == "trapezoidal":
+        xt[1:6] += 0.2 * np.array([1, -1, 1, -1, 1])  # alternating 45 deg sides
+    elif shape == "parallelogram":
+        xt[1:6] += 0.2                                # all sides at 45 deg
+    elif shape != "rectangular":
+        raise ValueError(shape)
+    nodes = np.zeros((14, 3))
+    nodes[:7, 0] = xb
+    nodes[7:, 0] = xt
+    nodes[7:, 1] = 0.2
+    quads = np.array([[i, i + 1, i + 8, i + 7] for i in range(6)])
+    return ShellMesh(nodes, quads=quads)
+
+
+def macneal_harder_beam(shape: str, load: str) -> dict:
+    mesh = macneal_harder_mesh(shape)
+    model = Model(mesh, IsotropicShell(E=1.0e7, nu=0.3, h=0.1))
+    fixed = np.zeros((14, 6), dtype=bool)
+    fixed[[0, 7]] = True
+    loads = np.zeros((14, 6))
+    comp = 2 if load == "out-of-plane" else 1
+    loads[[6, 13], comp] = 0.5
+    U, _ = linear_solve(model, fixed, loads)
+    tip = float(np.mean(U[[6, 13], comp]))
+    return dict(shape=shape, load=load, tip=tip, reference=MH_REF[load], normalised=tip / MH_REF[load])
+
+
 def run(ratios=RATIOS, n=8, verbose=True):
     shear = []
     if verbose:
@@ -153,7 +198,16 @@ def run(ratios=RATIOS, n=8, verbose=True):
                 if verbose:
                     print(f"{kind:6s} {support:10s} {r:7.0f} {row['rel_error_rotation']:+12.4e} "
                           f"{row['rel_error_deflection']:+12.4e} {row['kappa_y'] / row['kappa_x']:16.6f}")
-    return shear, bend
+    mh = []
+    if verbose:
+        print("MacNeal-Harder straight cantilever (6 elements), tip displacement / reference:")
+    for load in ("out-of-plane", "in-plane"):
+        for shape in ("rectangular", "trapezoidal", "parallelogram"):
+            row = macneal_harder_beam(shape, load)
+            mh.append(row)
+            if verbose:
+                print(f"  {load:13s} {shape:14s} {row['tip']:.5e}  normalised {row['normalised']:.4f}")
+    return shear, bend, mh
 
 
 def plot(shear, path):
@@ -182,12 +236,12 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description="shear and thickness locking checks")
     ap.add_argument("-n", type=int, default=8, help="elements along the strip")
     args = ap.parse_args(argv)
-    shear, bend = run(n=args.n)
+    shear, bend, mh = run(n=args.n)
     p = write_json("locking", {"description": __doc__.splitlines()[0], "L": L, "b": B, "E": E,
-                               "tip_load": shear, "end_moment": bend})
+                               "tip_load": shear, "end_moment": bend, "macneal_harder_beam": mh})
     plot(shear, OUT / "locking.png")
     print("wrote", p, "and", OUT / "locking.png")
-    return shear, bend
+    return shear, bend, mh
 
 
 if __name__ == "__main__":

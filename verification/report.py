@@ -57,6 +57,12 @@ def locking_section(d) -> list[str]:
     for r in d["end_moment"]:
         L.append(f"| {r['kind']} | {r['support']} | {r['L_over_h']:.0f} | {_fmt(r['rel_error_rotation'])} | "
                  f"{_fmt(r['rel_error_deflection'])} | {r['kappa_y'] / r['kappa_x']:.6f} |")
+    mh = d.get("macneal_harder_beam")
+    if mh:
+        L += ["", "MacNeal–Harder straight cantilever (6 quads), tip displacement / reference:", "",
+              "| load | shape | tip | normalised |", "|---|---|---|---|"]
+        for r in mh:
+            L.append(f"| {r['load']} | {r['shape']} | {r['tip']:.5e} | {r['normalised']:.4f} |")
     return L + [""]
 
 

@@ -199,6 +199,12 @@ def test_missing_and_broken_files(tmp_path):
         scenes.load(tmp_path / "absent.toml")
     with pytest.raises(InputError, match="not valid TOML"):
         scenes.load(write(tmp_path, 'name = "x"\ntitle = ['))
+    binary = tmp_path / "binary.toml"
+    binary.write_bytes(b"name = \"\xff\xfe\"\n")
+    with pytest.raises(InputError, match="UTF-8"):
+        scenes.load(binary)
+    with pytest.raises(InputError, match="is a directory|not found"):
+        scenes.load(str(tmp_path) + "/")
     with pytest.raises(InputError, match="required"):
         scenes.load(write(tmp_path, 'name = "x"\n[geometry]\nrecipe = "square"\nsize = 1.0\n'))
 

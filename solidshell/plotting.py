@@ -248,6 +248,9 @@ def _three_d(ax, fig, mesh, X, norm, cmap, bodies, elev, azim):
     ax.set_ylabel("y [cm]")
     ax.set_zlabel("z [cm]")
     ax.tick_params(labelsize=7)
+    from matplotlib.ticker import MaxNLocator
+    for a in (ax.xaxis, ax.yaxis, ax.zaxis):
+        a.set_major_locator(MaxNLocator(5))
     sm.set_array(z)
     cb = fig.colorbar(sm, ax=ax, shrink=0.6, pad=0.14)
     cb.set_label("height z [cm]")

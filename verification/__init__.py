@@ -88,3 +88,28 @@ def write_json(name: str, data) -> Path:
 def plate_reference() -> dict:
     """The stored Kirchhoff references (reference/plates.json, made by reference/kirchhoff_plate.py)."""
     return json.loads((REFERENCE / "plates.json").read_text())
+
+
+def buckling_factors(model, fixed: np.ndarray, loads: np.ndarray, k: int = 3, eps: float = 1e-6):
+    """Linearised buckling: the smallest load factors lambda with (K_0 + lambda K_G) phi = 0, where the
+    pre-buckling state is the linear solution u_1 under ``loads`` and the load-stiffness
+    K_G = (K_t(eps u_1) - K_t(-eps u_1)) / (2 eps) is taken from the element's own tangent (so this
+    checks the geometric -- Green-strain -- part of Eq. (9)).  The initial-displacement terms that
+    the difference quotient also contains are O(h^2/L^2) relative for thin plates.
+    Solved densely as -K_G phi = mu K_0 phi on the free dofs, lambda = 1/mu for the largest mu > 0.
+    Returns (lambdas (k,), modes (N,6,k))."""
+    import scipy.linalg as sla
+
+    U1, _ = linear_solve(model, fixed, loads)
+    K0 = model.tangent(np.zeros_like(U1)).toarray()
+    KG = (model.tangent(eps * U1).toarray() - model.tangent(-eps * U1).toarray()) / (2.0 * eps)
+    free = np.flatnonzero(~np.asarray(fixed, dtype=bool).ravel())
+    A = -KG[np.ix_(free, free)]
+    A = 0.5 * (A + A.T)
+    B = K0[np.ix_(free, free)]
+    mu, vec = sla.eigh(A, 0.5 * (B + B.T))
+    order = np.argsort(mu)[::-1][:k]
+    lam = 1.0 / mu[order]
+    modes = np.zeros((6 * model.n_nodes, k))
+    modes[free] = vec[:, order]
+    return lam, modes.reshape(model.n_nodes, 6, k)

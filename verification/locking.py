@@ -30,6 +30,8 @@ Strip [0,L] x [-b/2, b/2], L = 10, b = 1, one element across the width, n = 8 el
    incompatible modes, which shear-locks in in-plane bending (the paper applies ANS only to the
    transverse shear and thickness strains).
 
+4. Euler buckling of the strip (axial tip load): a check of the geometric stiffness.
+
 Run: ``python -m verification.locking`` -> tables and verification/out/locking.json, locking.png.
 """
 
@@ -42,7 +44,7 @@ import numpy as np
 
 from solidshell import IsotropicShell, Model, ShellMesh
 
-from . import OUT, REFERENCE, linear_solve, rect_grid, split_quads, write_json
+from . import OUT, REFERENCE, buckling_factors, linear_solve, rect_grid, split_quads, write_json
 
 L, B, E = 10.0, 1.0, 1.0
 RATIOS = (10.0, 100.0, 1000.0, 10000.0)
@@ -174,6 +176,26 @@ def macneal_harder_beam(shape: str, load: str) -> dict:
     return dict(shape=shape, load=load, tip=tip, reference=MH_REF[load], normalised=tip / MH_REF[load])
 
 
+def column_buckling(n: int = 8, kind: str = "quad", ratio: float = 100.0) -> dict:
+    """Euler buckling of the cantilever strip (nu = 0) under an axial compressive tip load: P_cr =
+    pi^2 E I / (4 L^2) (Timoshenko's shear correction 1/(1 + P_E/(kappa G A)) is 1 - 5e-5 at L/h = 100).
+    Checks the element's geometric stiffness (the Green-strain part of the tangent)."""
+    h = L / ratio
+    mesh = strip_mesh(n, 1, kind)
+    model = Model(mesh, IsotropicShell(E=E, nu=0.0, h=h))
+    root, tip = _ends(mesh)
+    fixed = np.zeros((mesh.n_nodes, 6), dtype=bool)
+    fixed[root] = True
+    loads = np.zeros((mesh.n_nodes, 6))
+    loads[tip, 0] = -1.0 / len(tip)
+    lam, _ = buckling_factors(model, fixed, loads, k=2)
+    EI = E * B * h**3 / 12
+    PE = np.pi**2 * EI / (4 * L**2)
+    Pcr = PE / (1 + PE / (5 / 6 * E / 2 * B * h))
+    return dict(n=n, kind=kind, L_over_h=ratio, P_cr=float(lam[0]), reference=Pcr, rel_error=float(lam[0] / Pcr - 1),
+                second_over_first=float(lam[1] / lam[0]))
+
+
 def run(ratios=RATIOS, n=8, verbose=True):
     shear = []
     if verbose:
@@ -207,7 +229,16 @@ def run(ratios=RATIOS, n=8, verbose=True):
             mh.append(row)
             if verbose:
                 print(f"  {load:13s} {shape:14s} {row['tip']:.5e}  normalised {row['normalised']:.4f}")
-    return shear, bend, mh
+    col = []
+    if verbose:
+        print("Euler buckling of the cantilever strip, L/h = 100 (reference pi^2 EI/(4L^2), 2nd/1st = 9):")
+    for kind in ("quad", "tri/"):
+        for nn in (8, 16, 32):
+            row = column_buckling(nn, kind)
+            col.append(row)
+            if verbose:
+                print(f"  {kind:5s} n={nn:3d}  P_cr/ref - 1 = {row['rel_error']:+.3e}   2nd/1st {row['second_over_first']:.3f}")
+    return shear, bend, mh, col
 
 
 def plot(shear, path):
@@ -236,12 +267,13 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description="shear and thickness locking checks")
     ap.add_argument("-n", type=int, default=8, help="elements along the strip")
     args = ap.parse_args(argv)
-    shear, bend, mh = run(n=args.n)
+    shear, bend, mh, col = run(n=args.n)
     p = write_json("locking", {"description": __doc__.splitlines()[0], "L": L, "b": B, "E": E,
-                               "tip_load": shear, "end_moment": bend, "macneal_harder_beam": mh})
+                               "tip_load": shear, "end_moment": bend, "macneal_harder_beam": mh,
+                               "column_buckling": col})
     plot(shear, OUT / "locking.png")
     print("wrote", p, "and", OUT / "locking.png")
-    return shear, bend, mh
+    return shear, bend, mh, col
 
 
 if __name__ == "__main__":

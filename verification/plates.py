@@ -44,7 +44,7 @@ import numpy as np
 
 from solidshell import IsotropicShell, Model, ShellMesh
 
-from . import OUT, linear_solve, plate_reference, rate, rect_grid, split_quads, write_json
+from . import OUT, buckling_factors, linear_solve, plate_reference, rate, rect_grid, split_quads, write_json
 
 NU = 0.3
 A = 1.0
@@ -199,6 +199,38 @@ def triangle_vs_mitc3(ns=(4, 8, 16, 32), ratios=(100.0, 1000.0), supports=("clam
     return rows
 
 
+def plate_buckling(n: int, kind: str = "quad", a_over_h: float = 100.0, k: int = 3) -> dict:
+    """Linearised buckling of the hard simply supported square plate under uniaxial compression N_x
+    (uniform, applied on the edge x = a, u_x = 0 on x = 0, u_y = 0 at one corner, the y-edges free to
+    expand in-plane).  Closed form (Bryan 1891; T&W-K Theory of Elastic Stability): N_cr = k pi^2 D / a^2
+    with k = (m + 1/m)^2 -> 4 (m = 1), 6.25 (m = 2), 11.11 (m = 3).  The pre-buckling membrane state is
+    uniform (exact for both elements), so the error is that of the bending discretisation plus the
+    element's geometric stiffness."""
+    h = A / a_over_h
+    E = 12.0 * (1.0 - NU**2) / h**3                  # D = 1
+    mesh = square_plate_mesh(n, kind)
+    model = Model(mesh, IsotropicShell(E=E, nu=NU, h=h))
+    X = mesh.nodes
+    tol = 1e-9 * A
+    fixed = plate_bc(mesh, "ss_hard")
+    fixed[:, :2] = False                               # in-plane: only what removes rigid motion
+    fixed[np.abs(X[:, 0]) < tol, 0] = True
+    fixed[int(np.argmin(np.sum(X[:, :2] ** 2, axis=1))), 1] = True
+    loads = np.zeros((mesh.n_nodes, 6))
+    right = np.flatnonzero(np.abs(X[:, 0] - A) < tol)
+    ys = np.sort(X[right, 1])
+    for i in right:                                    # N_x = 1 compressive, edge-length shares
+        j = np.searchsorted(ys, X[i, 1])
+        lo = ys[j - 1] if j > 0 else X[i, 1]
+        hi = ys[j + 1] if j + 1 < len(ys) else X[i, 1]
+        loads[i, 0] = -0.5 * (hi - lo)
+    lam, _ = buckling_factors(model, fixed, loads, k=k)
+    kf = lam * A**2 / np.pi**2                         # buckling coefficients (D = 1)
+    ref = np.array([4.0, 6.25, (3 + 1 / 3) ** 2])[:k]
+    return dict(n=n, kind=kind, a_over_h=a_over_h, k=kf.tolist(), k_ref=ref.tolist(),
+                rel_error=((kf - ref) / ref).tolist())
+
+
 def run(ns=(4, 8, 16, 32), kinds=("quad", "quad~", "tri", "trix"), supports=("clamped", "ss_hard", "ss_soft"),
         ratios=(100.0, 1000.0), verbose=True):
     refs = plate_reference()
@@ -267,8 +299,16 @@ def main(argv=None):
     ns = (4, 8, 16) if args.quick else (4, 8, 16, 32)
     rows = run(ns=ns)
     mitc3 = triangle_vs_mitc3(ns=ns)
+    buck = []
+    print("Buckling of the SS square plate under uniaxial compression, k = N_cr a^2/(pi^2 D), a/h = 100:")
+    for kind in ("quad", "tri"):
+        for n in (4, 8, 16):
+            b = plate_buckling(n, kind)
+            buck.append(b)
+            print(f"  {kind:5s} N={n:3d}  k = " + ", ".join(f"{v:.4f}" for v in b["k"]) + "  rel.err "
+                  + ", ".join(f"{e:+.2e}" for e in b["rel_error"]) + "  (ref 4, 6.25, 11.11)")
     p = write_json("plates", {"description": __doc__.splitlines()[0], "nu": NU, "a": A, "rows": rows,
-                              "triangle_vs_independent_mitc3": mitc3})
+                              "triangle_vs_independent_mitc3": mitc3, "buckling": buck})
     OUT.mkdir(exist_ok=True)
     plot(rows, OUT / "plates.png")
     print("wrote", p, "and", OUT / "plates.png")

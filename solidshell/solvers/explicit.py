@@ -69,7 +69,8 @@ run:        t_end [s] (required), snapshots (list of times [s] to keep as frames
             recheck_every (steps between critical-step re-checks, 10000; 0 = never).
 run_relax:  the same keys (alpha default 5.0, mass_scaling default 100) plus damping ("rayleigh" |
             "kinetic"), tol_kinetic (1e-6: E_kin / W_ext), tol_residual (1e-3: |P - F + C|_free /
-            |P|_free), check_every (steps, 100), t_max [s] (default 20) or max_steps.  With
+            |P|_free, or / |F| without loads), check_every (steps, 100), t_max [s] (default 20) or
+            max_steps.  With
             damping="kinetic", alpha is ignored (set to 0).
 """
 
@@ -501,7 +502,9 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
                 st.last_ekin = Ek
                 last = dict(Ek=Ek, Es=Es - Es0, Wext=Wext, Edamp=Edamp, Ec=Ecn - Ec0, t=time_of(n))
             if check or (not relax and n == end_step - 1):
-                st.last_rel_res = (_norm(R[free_idx]) / Pn) if Pn > 0 else _norm(R[free_idx])
+                # relative to the loads; without loads (prescribed displacements only) relative to
+                # the internal forces including the reactions
+                st.last_rel_res = _norm(R[free_idx]) / (Pn if Pn > 0 else max(_norm(F), 1e-300))
             # ---------------------------------------------------- frames
             if n in snap_steps and n > 0:
                 st.frame_t.append(time_of(n))
@@ -513,7 +516,7 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
             if check and n > 0:
                 Wext_c = _dot(P, D - D0)
                 Ek_c = 0.5 * vMv
-                rel_ke = Ek_c / max(abs(Wext_c), 1e-300)
+                rel_ke = Ek_c / max(abs(Wext_c), abs(last.get("Es", 0.0)), E_floor)
                 if rel_ke < tol_ke and st.last_rel_res < tol_res:
                     status = "steady"
                     st.last_ekin = Ek_c

@@ -1,20 +1,20 @@
 """solidshell: fabric drape with ANS solid-shell elements (Xie, Sze & Zhou, FEAD 106 (2015) 85-102).
 
 Public face (DESIGN.md): ShellMesh, Fabric, IsotropicShell, Model, solve_static, run_scene.
-Solver and scene entry points are imported on first use, so ``import solidshell`` stays light.
+Model (numba kernels), solvers and scene entry points are imported on first use, so ``import
+solidshell`` -- and ``solidshell scenes`` / ``solidshell mesh`` -- stay light.
 """
 
 from .errors import InputError, SolverError
 from .material import Fabric, IsotropicShell
 from .mesh import ShellMesh
-from .model import Model
 
 __version__ = "0.1.0"
 
 __all__ = ["ShellMesh", "Fabric", "IsotropicShell", "Model", "solve_static", "run_scene",
            "InputError", "SolverError", "__version__"]
 
-_LAZY = {"solve_static": "solidshell.solvers.static", "run_scene": "solidshell.runner"}
+_LAZY = {"Model": "solidshell.model", "solve_static": "solidshell.solvers.static", "run_scene": "solidshell.runner"}
 
 
 def __getattr__(name):

@@ -116,64 +116,39 @@ def support_mask(scene: Scene, mesh) -> np.ndarray:
     return fixed
 
 
-def _lumped_areas(mesh) -> np.ndarray:
-    """(N,) trapezoidal-rule area share of each node of a flat or curved mesh (corner Jacobians)."""
-    A = np.zeros(mesh.n_nodes)
-    if mesh.n_quads:
-        P = mesh.nodes[mesh.quads]
-        cn = np.cross(np.roll(P, -1, axis=1) - P, np.roll(P, 1, axis=1) - P)
-        np.add.at(A, mesh.quads.ravel(), (np.linalg.norm(cn, axis=2) / 4.0).ravel())
-    if mesh.n_tris:
-        P = mesh.nodes[mesh.tris]
-        a = 0.5 * np.linalg.norm(np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]), axis=1)
-        np.add.at(A, mesh.tris.ravel(), np.repeat(a[:, None] / 3.0, 3, axis=1).ravel())
-    return A
+def check_load_sets(scene: Scene, mesh) -> None:
+    """Fail early (before any solve) on a load that names a missing or empty node set."""
+    for kind in ("point", "line"):
+        for ld in scene.loads[kind]:
+            if "node_set" in ld:
+                mesh.node_set(ld["node_set"])
 
 
-def extra_loads(scene: Scene, mesh) -> np.ndarray:
-    """(N,6) point, line and surface loads of the scene [gf]."""
+def scene_loads(scene: Scene, model) -> np.ndarray:
+    """(N,6) dead loads of the scene [gf]: self-weight, point, line and surface loads, lumped with
+    the model's trapezoidal-rule nodal areas (solidshell.boundary)."""
+    from . import boundary
+
+    mesh = model.mesh
     P = np.zeros((mesh.n_nodes, 6))
-    for i, ld in enumerate(scene.loads["point"]):
-        f = np.asarray(ld["force"], float)
+    if scene.loads["gravity"]:
+        P += boundary.gravity_loads(model, direction=tuple(scene.loads["gravity_direction"]))
+    for ld in scene.loads["point"]:
         if "at" in ld:
             idx = np.array([int(np.argmin(np.linalg.norm(mesh.nodes - np.asarray(ld["at"]), axis=1)))])
         else:
             idx = mesh.node_set(ld["node_set"])
-        P[idx, :3] += f / len(idx)
-    if scene.loads["line"]:
-        be = mesh.boundary_edges()
-        for ld in scene.loads["line"]:
-            nodes = mesh.node_set(ld["node_set"])
-            inset = np.zeros(mesh.n_nodes, dtype=bool)
-            inset[nodes] = True
-            e = be[inset[be[:, 0]] & inset[be[:, 1]]]
-            if len(e) == 0:
-                raise InputError(f"line load on node set {ld['node_set']!r}: no boundary edge has both "
-                                 f"ends in the set")
-            L = np.linalg.norm(mesh.nodes[e[:, 1]] - mesh.nodes[e[:, 0]], axis=1)
-            f = np.asarray(ld["force"], float)
-            for k in (0, 1):
-                np.add.at(P[:, :3], e[:, k], 0.5 * L[:, None] * f[None, :])
-    if scene.loads["surface"]:
-        A = _lumped_areas(mesh)
-        for ld in scene.loads["surface"]:
-            P[:, :3] += A[:, None] * np.asarray(ld["force"], float)[None, :]
-    return P
-
-
-def gravity(model, scene: Scene) -> np.ndarray:
-    """(N,6) self-weight: boundary.gravity_loads when available, else weight/area x nodal areas."""
-    d = np.asarray(scene.loads["gravity_direction"], float)
-    d = d / np.linalg.norm(d)
-    try:
-        from .boundary import gravity_loads
-    except ImportError:
-        gravity_loads = None
-    if gravity_loads is not None:
-        return np.asarray(gravity_loads(model, direction=tuple(d)), float).reshape(-1, 6)
-    A = model.nodal_areas() if hasattr(model, "nodal_areas") else _lumped_areas(model.mesh)
-    P = np.zeros((len(A), 6))
-    P[:, :3] = model.material.weight_per_area * A[:, None] * d[None, :]
+        P += boundary.point_load(mesh.n_nodes, idx, np.asarray(ld["force"], float) / len(idx))
+    for ld in scene.loads["line"]:
+        try:
+            P += boundary.line_load(mesh, ld["node_set"], ld["force"])
+        except InputError as e:
+            raise InputError(f"line load on node set {ld['node_set']!r}: {e}") from None
+    for ld in scene.loads["surface"]:
+        f = np.asarray(ld["force"], float)
+        n = float(np.linalg.norm(f))
+        if n > 0.0:
+            P += boundary.surface_load(model, n, direction=f / n)
     return P
 
 
@@ -280,7 +255,7 @@ def _run(sc, kind, mesh_arg, out_dir, cb, settings, timings, t_start, overrides=
     mesh, mesh_name = build_scene_mesh(sc, mesh_arg)
     fixed = support_mask(sc, mesh)            # unknown / empty node sets fail here, before solving
     material = sc.material_object()
-    loads_extra = extra_loads(sc, mesh)
+    check_load_sets(sc, mesh)
     timings["mesh"] = time.perf_counter() - t
 
     summary = {
@@ -322,10 +297,7 @@ def _run(sc, kind, mesh_arg, out_dir, cb, settings, timings, t_start, overrides=
                               f"the mesh is written") from None
 
         model = Model(mesh, material, thickness_strain=sc.model["thickness_strain"], mu=sc.model["mu"])
-        loads = loads_extra.copy()
-        if sc.loads["gravity"]:
-            loads += gravity(model, sc)
-        problem = Problem(model, fixed, loads, contact=contact_bodies(sc), name=sc.name)
+        problem = Problem(model, fixed, scene_loads(sc, model), contact=contact_bodies(sc), name=sc.name)
         s = sc.solver_settings(kind)
         s.update(settings)
         summary["settings"] = s

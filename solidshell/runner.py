@@ -174,6 +174,13 @@ def contact_bodies(scene: Scene) -> list:
     return out
 
 
+def _peak_memory_mb() -> float:
+    """Peak resident memory of this process so far [MiB] (Linux reports ru_maxrss in KiB)."""
+    import resource
+
+    return round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0, 1)
+
+
 def _pedestal_area(scene: Scene) -> float | None:
     p = scene.pedestal()
     if p is None:
@@ -186,6 +193,10 @@ def _analyse(scene: Scene, mesh, U, model=None) -> dict:
     out = {}
     if model is not None and hasattr(model, "interpenetrated_nodes"):
         out["interpenetrated_nodes"] = int(np.count_nonzero(model.interpenetrated_nodes(U)))
+    if "tip" in mesh.node_sets and len(mesh.node_sets["tip"]):
+        # the strip's free end: mean deformed position of its nodes [cm] (Fig. 4 side view)
+        tip = mesh.node_sets["tip"]
+        out["tip_position"] = (mesh.nodes[tip] + U[tip, :3]).mean(0).tolist()
     ped = _pedestal_area(scene)
     if ped is None and not any(c["type"] == "sphere" for c in scene.contact):
         return out
@@ -305,6 +316,7 @@ def _run(sc, kind, mesh_arg, out_dir, cb, settings, timings, t_start, overrides=
         t = time.perf_counter()
         result = fn(problem, dict(s), _phase(cb, 0.08, 0.9))
         timings["solve"] = time.perf_counter() - t
+        summary["peak_memory_mb"] = _peak_memory_mb()
         U = np.asarray(result.U, float).reshape(mesh.n_nodes, 6)
         summary["converged"] = bool(result.converged)
         summary["message"] = str(result.message or "")

@@ -161,3 +161,26 @@ def test_strip_boundary_single_loop():
     loops = boundary_loops(m.boundary_edges())
     assert len(loops) == 1 and len(loops[0]) == 2 * (nx + 1)
     assert polygon_area(projected_boundary(m)) == pytest.approx(5.0)
+
+
+def test_paper_pedestal_meshes_undeformed():
+    """The flat hanging parts of the paper's pedestal meshes: DC = 1, centre found from the hole,
+    a square sheet shows its 4 corners as folds, a disc none."""
+    from solidshell.meshing import build_mesh
+
+    m = build_mesh("square_on_square", "8x4x4")            # 20x20 sheet on a 10x10 pedestal
+    s = drape_summary(m, None, pedestal_area=100.0)
+    assert s["sheet_area"] == pytest.approx(400.0)
+    assert s["projected_area"] == pytest.approx(400.0)
+    assert s["drape_coefficient"] == pytest.approx(1.0)
+    assert np.allclose(s["center"], 0.0, atol=1e-9)
+    assert s["fold_count"] == 4
+    assert np.allclose(sorted(s["fold_angles_deg"]), [45, 135, 225, 315], atol=1.0)
+    assert s["asymmetry_rot90"] < 1e-9
+    m = build_mesh("disc_on_disc", "4x40")
+    A_ped = np.pi * 6.35**2
+    s = drape_summary(m, None, pedestal_area=A_ped)
+    # both mesh circles are 40-gons (area factor sin(2pi/40)/(2pi/40) = 0.9959) while A_pedestal is
+    # the exact circle: DC = (0.9959 R^2 - r^2) / (0.9959 (R^2 - r^2)) = 0.9986 for R = 2r
+    assert s["drape_coefficient"] == pytest.approx(0.99863, abs=2e-5)
+    assert s["fold_count"] == 0

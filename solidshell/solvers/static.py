@@ -32,8 +32,11 @@ Methods (``method=``)
     step, did not help on the strip and is off by default).
 ``"arclength"``  Crisfield's cylindrical arc-length method (load factor as an extra unknown, the
     quadratic constraint |Delta D| = Delta l, root chosen by the smallest angle with the previous
-    increment), which follows the equilibrium path through limit points; the last step lands exactly
-    on the requested final load factor by a load-controlled Newton correction.
+    increment; predictor sign from the previous increment, sign(Delta D_prev . K^-1 P)), which
+    follows the equilibrium path through limit points; the last step lands exactly on the requested
+    final load factor by a load-controlled Newton correction.  No bifurcation handling: where a
+    second eigenvalue crosses zero the path may turn onto another branch
+    (``max_negative_eigenvalues_on_path`` > 1 in info flags this).
 
 Convergence (all methods): relative residual |P - F|_free / max(|P|, |reactions|) <= ``tol``
 (default 1e-8) and energy norm |dD . (P - F)| of the last update <= ``energy_tol`` (1e-12) times that
@@ -597,9 +600,11 @@ def _arc_length(sys, D, lam_target, o, stats, progress, path, dlam0, max_steps, 
     for step in range(max_steps):
         F, K = sys.force_tangent(D)
         try:
-            lu, _ = _factor(sys.Kff(K))
+            lu, neg = _factor(sys.Kff(K))
         except RuntimeError:
             return D, False, f"singular tangent at load factor {lam:.4g} (bifurcation point?)", rel
+        if neg is not None:
+            stats["max_negative_eigenvalues"] = max(stats.get("max_negative_eigenvalues", 0), neg)
         sys.n_solves += 1
         sys.n_factor += 1
         dt = lu.solve(Pf)
@@ -801,6 +806,10 @@ def solve_static(model, fixed, loads, load_factors=None, method="newton", prescr
     if method == "newton":
         info["shifted_iterations"] = int(stats["shifted_iterations"])
         info["max_tangent_shift"] = float(stats["max_shift"])
+    if method == "arclength":
+        # > 1 means the path crossed a bifurcation (a second eigenvalue through zero): there is no
+        # branch switching, and the path may turn onto another branch there
+        info["max_negative_eigenvalues_on_path"] = int(stats.get("max_negative_eigenvalues", 0))
     if method == "paper":
         info["c"] = o.c
         info["min_multiplier"] = float(stats["min_multiplier"])

@@ -29,7 +29,12 @@ Methods (``method=``)
     membrane rigidity of a fabric is 1e5-1e6 times its bending rigidity over L^2, so the quadratic
     convergence radius of Newton is tiny and the global phase is governed by the step control (the
     curvilinear ``curvilinear=True`` option, a second-order "geodesic acceleration" correction of the
-    step, did not help on the strip and is off by default).
+    step, did not help on the strip and is off by default).  Also tried on the 20x1 strip and
+    dropped: reusing the factorisation for later iterations (``reuse``; 82 -> 93..514
+    factorisations) and chord corrections after each step with the same factorisation (77
+    iterations but 91-125 factorisations instead of 82).  Measured iterations (20x1 strip / disc
+    10x40): newton 81 / 85, paper c=1e-2 113 / 98, paper c=2e-2 67 / 54 -- but on the disc the
+    latter stops on a saddle (indefinite tangent) --, arc-length 53 / 391.
 ``"arclength"``  Crisfield's cylindrical arc-length method (load factor as an extra unknown, the
     quadratic constraint |Delta D| = Delta l, root chosen by the smallest angle with the previous
     increment; predictor sign from the previous increment, sign(Delta D_prev . K^-1 P)), which

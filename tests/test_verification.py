@@ -138,3 +138,17 @@ def test_plate_buckling_quads():
     b = plates.plate_buckling(8, "quad", k=2)
     assert 0.01 < b["rel_error"][0] < 0.035
     assert 0.0 < b["rel_error"][1] < 0.12
+
+
+# ----------------------------------------------------------------------------- large rotation
+def test_strip_rolls_into_half_circle():
+    # prescribed tip director rotated by pi, tip position free -> an arc of radius L/pi (elastica
+    # under a pure end moment, reference/beams.py).  16x1 quads, 8 Newton increments: measured tip
+    # error 9.7e-4 L (2.0e-4 L with 32 elements: O(n^-2)) and tip moment 0.9933 E I pi/L.  A wrong
+    # nonlinear bending strain (e.g. the linearised one) misses the arc by O(L); 1.5e-3 L and 1 %
+    # admit the discretisation error only.
+    rows = locking.circle(16, "quad", phi_max=3.141592653589793, steps=8, report_at=(1.0,))
+    r = rows[-1]
+    assert r["converged"]
+    assert r["error_over_L"] < 1.5e-3
+    assert abs(r["moment_ratio"] - 1.0) < 0.01

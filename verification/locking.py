@@ -31,6 +31,7 @@ Strip [0,L] x [-b/2, b/2], L = 10, b = 1, one element across the width, n = 8 el
    transverse shear and thickness strains).
 
 4. Euler buckling of the strip (axial tip load): a check of the geometric stiffness.
+5. Large rotation: the strip rolled into a circle (up to a closed ring) by a prescribed tip director.
 
 Run: ``python -m verification.locking`` -> tables and verification/out/locking.json, locking.png.
 """
@@ -196,6 +197,52 @@ def column_buckling(n: int = 8, kind: str = "quad", ratio: float = 100.0) -> dic
                 second_over_first=float(lam[1] / lam[0]))
 
 
+def circle(n: int = 16, kind: str = "quad", phi_max: float = 2 * np.pi, steps: int = 32, ratio: float = 100.0,
+           report_at=(0.5, 1.0, 1.5, 2.0)) -> list[dict]:
+    """Large rotation: pure bending of the nu = 0 strip into a circular arc (reference/beams.py
+    end_moment_circle).  The root is clamped and the tip *director* is prescribed rotated by phi about
+    the width axis (U_n = (-sin phi, 0, cos phi - 1)), the tip position left free: the only reaction
+    at the tip is then a pure moment and the exact (elastica) shape is an arc of radius R = L/phi,
+    tip at (R sin phi, R (1 - cos phi)), moment E I phi / L; phi = 2 pi closes a full ring.  Solved by
+    Newton (solidshell.solve_static) in ``steps`` equal increments of phi, each starting from the
+    previous state (a linear interpolation of the prescribed director would pass through a zero
+    director at phi = pi).  Reports the tip-position error / L at the phi's in ``report_at`` (x pi)."""
+    from solidshell import solve_static
+
+    h = L / ratio
+    mesh = strip_mesh(n, 1, kind)
+    model = Model(mesh, IsotropicShell(E=E, nu=0.0, h=h))
+    root, tip = _ends(mesh)
+    fixed = np.zeros((mesh.n_nodes, 6), dtype=bool)
+    fixed[root] = True
+    fixed[tip, 3:] = True
+    U = np.zeros((mesh.n_nodes, 6))
+    rows, ok = [], True
+    for k in range(1, steps + 1):
+        phi = k * phi_max / steps
+        pre = np.zeros((mesh.n_nodes, 6))
+        pre[tip, 3] = -np.sin(phi)
+        pre[tip, 5] = np.cos(phi) - 1.0
+        res = solve_static(model, fixed, np.zeros((mesh.n_nodes, 6)), load_factors=[1.0], prescribed=pre, U0=U,
+                           check_stability=False)
+        ok = ok and bool(res.converged)
+        U = res.U
+        if any(abs(phi - f * np.pi) < 1e-9 for f in report_at):
+            R = L / phi
+            tx, tz = L + U[tip, 0].mean(), U[tip, 2].mean()
+            ex, ez = R * np.sin(phi), R * (1 - np.cos(phi))
+            F = model.internal_force(U)
+            # moment = generalised force on the tip director conjugate to a rotation d(phi):
+            # dU_n/dphi = (-cos phi, 0, -sin phi)
+            Mt = -np.cos(phi) * F[tip, 3].sum() - np.sin(phi) * F[tip, 5].sum()
+            EI = E * B * h**3 / 12
+            rows.append(dict(kind=kind, n=n, phi_over_pi=phi / np.pi, converged=ok, tip_x=float(tx), tip_z=float(tz),
+                             ref_x=float(ex), ref_z=float(ez), error_over_L=float(np.hypot(tx - ex, tz - ez) / L),
+                             moment_ratio=float(Mt / (EI * phi / L)),
+                             max_director_stretch=float(np.abs(np.linalg.norm(mesh.directors + U[:, 3:], axis=1) - 1).max())))
+    return rows
+
+
 def run(ratios=RATIOS, n=8, verbose=True):
     shear = []
     if verbose:
@@ -238,7 +285,18 @@ def run(ratios=RATIOS, n=8, verbose=True):
             col.append(row)
             if verbose:
                 print(f"  {kind:5s} n={nn:3d}  P_cr/ref - 1 = {row['rel_error']:+.3e}   2nd/1st {row['second_over_first']:.3f}")
-    return shear, bend, mh, col
+    circ = []
+    if verbose:
+        print("Large rotation: strip rolled into a circle by a prescribed tip director (L/h = 100):")
+    for kind in ("quad", "tri/"):
+        for nn in (8, 16, 32):
+            for row in circle(nn, kind):
+                circ.append(row)
+                if verbose:
+                    print(f"  {kind:5s} n={nn:3d} phi={row['phi_over_pi']:.1f}pi converged={row['converged']} "
+                          f"tip error/L {row['error_over_L']:.2e}  M/(EI phi/L) {row['moment_ratio']:.5f}  "
+                          f"max||x_n|-1| {row['max_director_stretch']:.1e}")
+    return shear, bend, mh, col, circ
 
 
 def plot(shear, path):
@@ -267,13 +325,13 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description="shear and thickness locking checks")
     ap.add_argument("-n", type=int, default=8, help="elements along the strip")
     args = ap.parse_args(argv)
-    shear, bend, mh, col = run(n=args.n)
+    shear, bend, mh, col, circ = run(n=args.n)
     p = write_json("locking", {"description": __doc__.splitlines()[0], "L": L, "b": B, "E": E,
                                "tip_load": shear, "end_moment": bend, "macneal_harder_beam": mh,
-                               "column_buckling": col})
+                               "column_buckling": col, "circle": circ})
     plot(shear, OUT / "locking.png")
     print("wrote", p, "and", OUT / "locking.png")
-    return shear, bend, mh, col
+    return shear, bend, mh, col, circ
 
 
 if __name__ == "__main__":

@@ -76,6 +76,14 @@ def locking_section(d) -> list[str]:
               "| mesh | n | P_cr error | 2nd/1st (9) |", "|---|---|---|---|"]
         for r in col:
             L.append(f"| {r['kind']} | {r['n']} | {_fmt(r['rel_error'])} | {r['second_over_first']:.3f} |")
+    circ = d.get("circle")
+    if circ:
+        L += ["", "Large rotation: strip rolled into a circle by a prescribed tip director (L/h = 100, ν = 0); "
+              "reference: arc of radius L/φ, tip moment EIφ/L:", "",
+              "| mesh | n | φ/π | converged | tip error / L | M/(EIφ/L) | max abs(x_n)−1 |", "|---|---|---|---|---|---|---|"]
+        for r in circ:
+            L.append(f"| {r['kind']} | {r['n']} | {r['phi_over_pi']:.1f} | {r['converged']} | {r['error_over_L']:.2e} | "
+                     f"{r['moment_ratio']:.5f} | {r['max_director_stretch']:.1e} |")
     return L + [""]
 
 

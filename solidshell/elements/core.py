@@ -196,7 +196,8 @@ def _element_tangent(e, xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r
                      quasi, mu, Ke, B, D, oo, on, nz, gs, gz, zs, at, dt, v4, xe):
     """Tangent k_t of Eq. (9) of element e into Ke (nd,nd), nd = 6 nn (dof 6i+c: U_o then U_n).
 
-    ``xe`` (nn,6) must hold the element's [x_o | x_n], as _element_force leaves it.
+    ``xe`` (nn,6) [x_o | x_n], and the tying values ``gs``, ``at``, ``dt`` must be as _element_force
+    leaves them for this element (force_tangent calls it first).
     Material part sum B^T C B over the strain rows (membrane+bending per point, then shear tying,
     then nodal thickness); geometric part sum sigma * d2(strain) as multiples of I3 between nodal
     vectors.  Row-major axpy loops (inner loop over contiguous columns) so that LLVM vectorises.
@@ -280,19 +281,8 @@ def _element_tangent(e, xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r
                 dj2 = dN[g, j, 1]
                 oo[i, j] += sig[0] * di1 * dj1 + sig[1] * di2 * dj2 + sig[2] * (di1 * dj2 + di2 * dj1)
                 on[i, j] += sig[3] * di1 * dj1 + sig[4] * di2 * dj2 + sig[5] * (di1 * dj2 + di2 * dj1)
-    # shear tying strains: rows of B reused for them
+    # shear tying strains (gs, at, dt as the force pass left them); rows of B reused for them
     for t in range(nt):
-        s = 0.0
-        for c in range(3):
-            av = 0.0
-            dv = 0.0
-            for i in range(nn):
-                av += alpha[t, i] * xe[i, c]
-                dv += beta[t, i] * xe[i, 3 + c]
-            at[t, c] = av
-            dt[t, c] = dv
-            s += av * dv
-        gs[t] = s - r_s[e, t]
         for i in range(nn):
             for c in range(3):
                 B[t, 6 * i + c] = alpha[t, i] * dt[t, c]

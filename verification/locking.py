@@ -31,7 +31,8 @@ Strip [0,L] x [-b/2, b/2], L = 10, b = 1, one element across the width, n = 8 el
    transverse shear and thickness strains).
 
 4. Euler buckling of the strip (axial tip load): a check of the geometric stiffness.
-5. Large rotation: the strip rolled into a circle (up to a closed ring) by a prescribed tip director.
+5. Quarter-circle strip (trapezoidal cross-sections) vs curved-beam theory for R/h = 10 ... 10^4.
+6. Large rotation: the strip rolled into a circle (up to a closed ring) by a prescribed tip director.
 
 Run: ``python -m verification.locking`` -> tables and verification/out/locking.json, locking.png.
 """
@@ -243,6 +244,46 @@ def circle(n: int = 16, kind: str = "quad", phi_max: float = 2 * np.pi, steps: i
     return rows
 
 
+def curved_cantilever(n: int = 16, kind: str = "quad", R_over_h: float = 100.0, load: str = "radial",
+                      R: float = 10.0, b: float = 1.0) -> dict:
+    """Trapezoidal / membrane locking: a quarter-circle strip (radius R, width b, nu = 0) curved in
+    the plane of its director (nodes (R cos t, y, R sin t), radial directors, so the element cross-
+    sections are trapezoids), clamped at t = 0, unit end load at t = pi/2 either radial (+z) or
+    tangential (-x).  Reference: Castigliano for the thin curved beam,
+      radial:     delta = pi P R^3/(4EI) + (pi/4) P R (1/EA + 1/(kappa G A)),
+      tangential: delta = (3 pi/4 - 2) P R^3/(EI) + (pi/4) P R (1/EA + 1/(kappa G A))
+    (extension and shear terms are ~1e-5 relative at R/h = 100; curvature corrections are O((h/R)^2),
+    0.3 % at R/h = 10).  A locking element's error grows with R/h; a sound one's does not."""
+    h = R / R_over_h
+    th = np.linspace(0.0, np.pi / 2, n + 1)
+    nodes = np.zeros((2 * (n + 1), 3))
+    D = np.zeros_like(nodes)
+    for j, y in enumerate((-b / 2, b / 2)):
+        sl = slice(j * (n + 1), (j + 1) * (n + 1))
+        nodes[sl] = np.column_stack([R * np.cos(th), np.full(n + 1, y), R * np.sin(th)])
+        D[sl] = np.column_stack([np.cos(th), np.zeros(n + 1), np.sin(th)])
+    i = np.arange(n)
+    q = np.column_stack([i, i + n + 1, i + n + 2, i + 1])      # counter-clockwise about the outward director
+    if kind == "quad":
+        mesh = ShellMesh(nodes, quads=q, directors=D)
+    else:
+        mesh = ShellMesh(nodes, tris=split_quads(q, {"tri/": "/", "tri\\": "\\"}[kind]), directors=D)
+    model = Model(mesh, IsotropicShell(E=E, nu=0.0, h=h))
+    k = np.arange(len(nodes)) % (n + 1)
+    root, tip = np.flatnonzero(k == 0), np.flatnonzero(k == n)
+    fixed = np.zeros((len(nodes), 6), dtype=bool)
+    fixed[root] = True
+    loads = np.zeros((len(nodes), 6))
+    comp, sign = (2, 1.0) if load == "radial" else (0, -1.0)
+    loads[tip, comp] = 0.5 * sign
+    U, _ = linear_solve(model, fixed, loads)
+    d = float(U[tip, comp].mean() * sign)
+    EI, EA, kGA = E * b * h**3 / 12, E * b * h, 5 / 6 * E / 2 * b * h
+    bend = np.pi / 4 if load == "radial" else 3 * np.pi / 4 - 2
+    ref = bend * R**3 / EI + np.pi / 4 * R * (1 / EA + 1 / kGA)
+    return dict(kind=kind, n=n, R_over_h=R_over_h, load=load, tip=d, reference=ref, rel_error=d / ref - 1)
+
+
 def run(ratios=RATIOS, n=8, verbose=True):
     shear = []
     if verbose:
@@ -285,6 +326,16 @@ def run(ratios=RATIOS, n=8, verbose=True):
             col.append(row)
             if verbose:
                 print(f"  {kind:5s} n={nn:3d}  P_cr/ref - 1 = {row['rel_error']:+.3e}   2nd/1st {row['second_over_first']:.3f}")
+    curv = []
+    if verbose:
+        print("Quarter-circle strip (trapezoidal/membrane locking), tip load, error vs curved-beam theory:")
+    for kind in ("quad", "tri/"):
+        for load in ("radial", "tangential"):
+            for nn in (8, 16, 32):
+                rr = [curved_cantilever(nn, kind, r, load) for r in (10.0, 100.0, 1000.0, 10000.0)]
+                curv += rr
+                if verbose:
+                    print(f"  {kind:5s} {load:10s} n={nn:3d} " + "  ".join(f"R/h={x['R_over_h']:.0f}: {x['rel_error']:+.3e}" for x in rr))
     circ = []
     if verbose:
         print("Large rotation: strip rolled into a circle by a prescribed tip director (L/h = 100):")
@@ -296,7 +347,7 @@ def run(ratios=RATIOS, n=8, verbose=True):
                     print(f"  {kind:5s} n={nn:3d} phi={row['phi_over_pi']:.1f}pi converged={row['converged']} "
                           f"tip error/L {row['error_over_L']:.2e}  M/(EI phi/L) {row['moment_ratio']:.5f}  "
                           f"max||x_n|-1| {row['max_director_stretch']:.1e}")
-    return shear, bend, mh, col, circ
+    return shear, bend, mh, col, circ, curv
 
 
 def plot(shear, path):
@@ -325,13 +376,13 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description="shear and thickness locking checks")
     ap.add_argument("-n", type=int, default=8, help="elements along the strip")
     args = ap.parse_args(argv)
-    shear, bend, mh, col, circ = run(n=args.n)
+    shear, bend, mh, col, circ, curv = run(n=args.n)
     p = write_json("locking", {"description": __doc__.splitlines()[0], "L": L, "b": B, "E": E,
                                "tip_load": shear, "end_moment": bend, "macneal_harder_beam": mh,
-                               "column_buckling": col, "circle": circ})
+                               "column_buckling": col, "circle": circ, "curved_cantilever": curv})
     plot(shear, OUT / "locking.png")
     print("wrote", p, "and", OUT / "locking.png")
-    return shear, bend, mh, col, circ
+    return shear, bend, mh, col, circ, curv
 
 
 if __name__ == "__main__":

@@ -76,6 +76,12 @@ def locking_section(d) -> list[str]:
               "| mesh | n | P_cr error | 2nd/1st (9) |", "|---|---|---|---|"]
         for r in col:
             L.append(f"| {r['kind']} | {r['n']} | {_fmt(r['rel_error'])} | {r['second_over_first']:.3f} |")
+    curv = d.get("curved_cantilever")
+    if curv:
+        L += ["", "Quarter-circle strip (trapezoidal cross-sections), tip load, error vs thin curved-beam theory:", "",
+              "| mesh | load | n | R/h | rel. error |", "|---|---|---|---|---|"]
+        for r in curv:
+            L.append(f"| {r['kind']} | {r['load']} | {r['n']} | {r['R_over_h']:.0f} | {_fmt(r['rel_error'])} |")
     circ = d.get("circle")
     if circ:
         L += ["", "Large rotation: strip rolled into a circle by a prescribed tip director (L/h = 100, ν = 0); "

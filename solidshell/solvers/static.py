@@ -842,9 +842,18 @@ def run(problem, settings: dict | None = None, progress=None) -> SolveResult:
     settings: method ("newton" | "paper" | "arclength"), c, tol, energy_tol, max_iter,
     load_steps (int n -> factors 1/n, 2/n, ..., 1) or load_factors (list), L_f, max_step, predictor,
     increment, min_increment, max_cutbacks, line_search, trust_radius, curvilinear, arc_length_initial, max_arc_steps, check_stability, eig_max_dofs,
-    contact_stiffness.  Other keys (meant for other solvers) are ignored.
+    contact_stiffness.  Settings of the other registered solvers (explicit, relax: e.g. ``t_end``)
+    are ignored, so one settings dict can serve several solvers; any other key is an InputError
+    naming it and the valid keys (a typo such as ``cc=0.01`` must not be silently ignored).
     """
     settings = dict(settings or {})
+    unknown = [k for k in settings if k not in _SETTINGS]
+    if unknown:
+        from .explicit import _RELAX_KEYS, _RUN_KEYS    # only on this path: keep static runs light
+        bad = sorted(str(k) for k in unknown if k not in (_RUN_KEYS | _RELAX_KEYS))
+        if bad:
+            raise InputError(f"unknown static setting(s): {', '.join(bad)}; "
+                             f"known: {', '.join(sorted(_SETTINGS))}")
     s = {k: v for k, v in settings.items() if k in _SETTINGS}
     method = s.pop("method", "newton")
     steps = s.pop("load_steps", None)

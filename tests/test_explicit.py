@@ -373,3 +373,17 @@ def test_relaxation_without_loads_from_a_prescribed_displacement():
     # a cantilever with its tip displaced by d: w(L/2) = d (3/4 - 1/8) / 2 = 0.3125 d (Euler-
     # Bernoulli; d/L = 0.07 so nonlinearity ~ (d/L)^2 ~ 0.5 %, 6 elements ~ 1 %): 3 % allowed
     assert r.U[mid, 2].mean() == pytest.approx(0.3125 * 0.2, rel=0.03)
+
+
+def test_snapshots_and_frames(strip):
+    r = explicit.run(strip, {"t_end": 0.01, "snapshots": [0.0, 0.004, 0.5], "alpha": 0.0})
+    t = [f[0] for f in r.frames]
+    assert t[0] == 0.0 and t[-1] == pytest.approx(0.01) and len(t) == 3
+    assert abs(t[1] - 0.004) <= r.info["dt"] / 2
+    assert r.info["snapshots_after_t_end_dropped"] == [0.5]   # e.g. a scene's times, shorter t_end
+    with pytest.raises(InputError):
+        explicit.run(strip, {"t_end": 0.01, "snapshots": [-1.0]})
+    with pytest.raises(InputError, match="unknown explicit setting"):
+        explicit.run(strip, {"t_end": 0.01, "tend": 1.0})
+    with pytest.raises(InputError, match="t_end"):
+        explicit.run(strip, {})

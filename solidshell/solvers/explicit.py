@@ -89,6 +89,7 @@ import os
 import time
 
 import numpy as np
+from numba import njit
 
 from ..contact import combined_critical_time_step, contact_forces, penalty_stiffness
 from ..errors import InputError, SolverError
@@ -115,6 +116,28 @@ def _dot(a, b) -> float:
 
 def _norm(a) -> float:
     return math.sqrt(float(np.add.reduce(a * a)))
+
+
+@njit(cache=True)
+def _central_step(Dn1, D, Dp, R, cF, cD, cDp, fixed_idx, presc, Mf, inv2dt):
+    """Eq. (23) for every dof, D_n+1 = cF R + cD D_n + cDp D_n-1 (the same operation order as the
+    numpy expression), the prescribed values, and in the same pass the finiteness of D_n+1 and
+    v_n.M.v_n with v_n = (D_n+1 - D_n-1) / (2 dt).  Fusing these saves ~8 passes over 6N doubles
+    per step (25 % of a 1600-quad step once the force kernel got fast)."""
+    n = D.size
+    for i in range(n):
+        Dn1[i] = cF[i] * R[i] + cD * D[i] + cDp * Dp[i]
+    for k in range(fixed_idx.size):
+        Dn1[fixed_idx[k]] = presc[k]
+    vMv = 0.0
+    finite = True
+    for i in range(n):
+        x = Dn1[i]
+        if x - x != 0.0:  # inf - inf and nan - nan are nan
+            finite = False
+        w = (x - Dp[i]) * inv2dt
+        vMv += Mf[i] * w * w
+    return vMv, finite
 
 
 # ============================================================================ settings helpers
@@ -445,7 +468,6 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
     max_err = _num(settings, "max_energy_error", 0.5, positive=True)
     Dn1 = np.empty_like(D)
     R = np.empty_like(D)
-    v = np.empty_like(D)
     status = "running"
     message = ""
     last = {}
@@ -471,20 +493,15 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
                 if pen > st.max_pen:
                     st.max_pen = pen
             # ---------------------------------------------------- Eq. (23)
-            np.multiply(cF, R, out=Dn1)
-            Dn1 += cD * D
-            Dn1 += cDp * Dp
-            Dn1[fixed_idx] = presc
-            if not np.isfinite(Dn1).all():
+            # one fused pass: D_n+1, the fixed dofs, the finiteness check and v_n.M.v_n
+            vMv, finite = _central_step(Dn1, D, Dp, R, cF, cD, cDp, fixed_idx, presc, Mf, 0.5 / dt)
+            if not finite:
                 status = "nonfinite"
                 message = (f"the solution became non-finite at step {n + 1} (t = {time_of(n + 1):.6g} s) with "
                            f"dt = {dt:.6g} s, critical step {dt_crit:.6g} s; returning the last good (finite, "
                            f"energy-balanced) state, t = {good_t:.6g} s")
                 break
             # ---------------------------------------------------- central velocity, damping work
-            np.subtract(Dn1, Dp, out=v)
-            v *= 0.5 / dt
-            vMv = _dot(Mf * v, v)
             dd = alpha * dt * vMv
             if n == 0 and restarted_from is None:
                 dd *= 0.5  # trapezoidal rule: the first and last samples weigh half

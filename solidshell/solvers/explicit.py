@@ -25,7 +25,7 @@ half-step velocity (D_n-1 := D_n - dt_new/dt_old (D_n - D_n-1)); an explicit run
 remaining steps to land on t_end.  The step is never lengthened.  The default step is ``safety``
 (0.9) × dt_crit; a user ``dt`` above dt_crit is refused with the numbers (InputError), or reduced
 to safety × dt_crit when ``allow_reduce=True``.  Measured (verification/dynamic_cantilever.py): the
-observed stability limit is 0.998-1.001 × the Lanczos dt_crit on three strips.
+observed stability limit is 0.9999-1.0003 × the Lanczos dt_crit on three strips.
 
 A run that goes non-finite stops at once; so does one whose sampled energy balance error exceeds
 ``max_energy_error`` (it is creating energy: an instability that has not overflowed yet).  Either

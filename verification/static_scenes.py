@@ -106,6 +106,73 @@ def run_case(scene, mesh, label, runs=RUNS, overrides=None, tag=None) -> dict:
     return row
 
 
+def run_perturbed(scene, mesh, folds, amp, method="newton", c=1e-2, runs=RUNS) -> dict:
+    """A static solve from a perturbed start U0: the mid-surface lifted/lowered by
+    amp * (rho / rho_max)^2 * cos(folds * theta) [cm] (rho = distance from the clamped nodes), to
+    look for a second stable state (multi-stability).  Built from the runner's pieces because the
+    registry entry takes no starting state; the row has the same keys as :func:`run_case`."""
+    import numpy as np
+    from solidshell import analysis
+    from solidshell import io as sio
+    from solidshell.model import Model
+    from solidshell.plotting import render
+    from solidshell.runner import (_pedestal_area, build_scene_mesh, contact_bodies, scene_loads,
+                                   support_mask)
+    from solidshell.scenes import load
+    from solidshell.solvers.static import solve_static
+
+    label = f"{method}{'-c' + format(c, 'g') if method == 'paper' else ''}-pert{folds}x{amp:g}"
+    key = case_key(scene, mesh, label)
+    out_dir = Path(runs) / key.replace(":", "__")
+    out_dir.mkdir(parents=True, exist_ok=True)
+    row = {"scene": scene, "mesh": mesh, "solver": label, "run_dir": str(out_dir),
+           "settings": {"method": method, "c": c, "perturbation": {"folds": folds, "amp_cm": amp}}}
+    t0 = time.perf_counter()
+    try:
+        sc = load(scene)
+        m, _ = build_scene_mesh(sc, mesh)
+        fixed = support_mask(sc, m)
+        model = Model(m, sc.material_object(), thickness_strain=sc.model["thickness_strain"], mu=sc.model["mu"])
+        P = scene_loads(sc, model)
+        X = m.nodes
+        clamped = fixed.any(axis=1)
+        from scipy.spatial import cKDTree
+        rho, _ = cKDTree(X[clamped]).query(X)
+        th = np.arctan2(X[:, 1], X[:, 0])
+        U0 = np.zeros((m.n_nodes, 6))
+        U0[:, 2] = amp * (rho / rho.max()) ** 2 * np.cos(folds * th)
+        U0[fixed] = 0.0
+        kw = dict(method=method, U0=U0, contact=contact_bodies(sc))
+        if method == "paper":
+            kw.update(c=c, max_iter=PAPER_MAX_ITER)
+        res = solve_static(model, fixed, P, **kw)
+        info = dict(res.info)
+        for k in KEYS:
+            if k in info:
+                row[k] = info[k]
+        row["converged"], row["message"] = res.converged, res.message
+        U = res.U
+        if np.all(np.isfinite(U)):
+            d = analysis.drape_summary(m, U, pedestal_area=_pedestal_area(sc) or 0.0)
+            d.pop("projected_boundary", None)
+            for k in KEYS:
+                if k in d:
+                    row[k] = d[k]
+            sub = (f"mesh {mesh}, {label}, DC = {row.get('drape_coefficient', float('nan')):.3f}, "
+                   f"{row.get('fold_count')} folds" + ("" if res.converged else ", NOT CONVERGED"))
+            for view in ("top", "iso"):
+                render(out_dir / f"{view}.png", m, U, view=view, title=sc.title, scene=sc, subtitle=sub)
+            sio.write_mesh_file(out_dir / "result.vtu", m, U)
+        sio.write_json(out_dir / "summary.json", sio.to_jsonable(row))
+        row["run_dir_written"] = True
+    except Exception as exc:  # noqa: BLE001
+        row["converged"] = False
+        row["message"] = f"EXCEPTION {type(exc).__name__}: {exc}"
+        row["traceback"] = traceback.format_exc()
+    row["total_time_s"] = time.perf_counter() - t0
+    return row
+
+
 def _fmt(v, spec=".3f"):
     if v is None:
         return "–"
@@ -195,6 +262,8 @@ def collect(extra_text="") -> list:
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--case", action="append", default=[], help="scene:mesh:label (repeatable)")
+    ap.add_argument("--perturbed", action="append", default=[],
+                    help="scene:mesh:folds:amp[:method[:c]] -- a solve from a perturbed start")
     ap.add_argument("--collect", action="store_true", help="only write the table from the cache")
     ap.add_argument("--force", action="store_true", help="re-run cached cases")
     ap.add_argument("--skip", default="square-on-disc", help="comma list of scenes to skip in the "
@@ -203,7 +272,20 @@ def main(argv=None):
     a = ap.parse_args(argv)
     CACHE.mkdir(parents=True, exist_ok=True)
     if not a.collect:
-        if a.case:
+        if a.perturbed:
+            for spec in a.perturbed:          # scene:mesh:folds:amp[:method[:c]]
+                f = spec.split(":")
+                sc, m, nf, amp = f[0], f[1], int(f[2]), float(f[3])
+                meth = f[4] if len(f) > 4 else "newton"
+                c = float(f[5]) if len(f) > 5 else 1e-2
+                print(f"running perturbed {spec} ...", flush=True)
+                row = run_perturbed(sc, m, nf, amp, method=meth, c=c, runs=a.runs)
+                cache_path(case_key(sc, m, row["solver"])).write_text(json.dumps(row, indent=1, default=str))
+                print(f"  converged={row.get('converged')} DC={row.get('drape_coefficient')} "
+                      f"folds={row.get('fold_count')} it={row.get('iterations')} "
+                      f"pd={row.get('positive_definite')} :: {row.get('message')}", flush=True)
+            cases = []
+        elif a.case:
             cases = [tuple(c.split(":", 2)) for c in a.case]
         else:
             skip = {s for s in a.skip.split(",") if s}

@@ -1,0 +1,209 @@
+"""The paper's dynamic scenes (Section 4) run by name, against the static solver where it applies.
+
+Each case is one ``run_scene`` call; its figures are cached in ``verification/out/dynamic_scenes/
+<case>.json`` so that cases can be run one at a time (they are long on a shared 2-core machine) and
+the report assembled from whatever has been measured:
+
+    python -m verification.dynamic_scenes --case sp48-kin-dir      # run one case (cached)
+    python -m verification.dynamic_scenes --report                 # tables from the cache
+    python -m verification.dynamic_scenes --list
+
+The report (``verification/out/dynamic_scenes.md`` / ``.json``) says, for each case, the settings
+used, whether it reached a steady state (relax) or t_end (explicit), steps, step size, simulated and
+wall time, drape coefficient, fold count, max interpenetrated nodes (n_p . d_p < 0, Sec. 4.3) and the
+energy balance error; cases never run are listed as such.  Wall times are from a shared machine:
+the load average at the start and end of each run is recorded next to it.
+
+Settings names used in the tables:
+
+* ``paper``    Rayleigh mass damping alpha = 5 1/s, all masses x100 (Section 4.2);
+* ``kin-uni``  kinetic (Cundall) damping, all masses x100 ("uniform" mass scaling);
+* ``kin-dir``  kinetic damping, only the director (U_n) masses x1e4 ("director" mass scaling).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import time
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+OUT = HERE / "out"
+CACHE = OUT / "dynamic_scenes"
+RUNS = Path(os.environ.get("DYNAMIC_SCENES_RUNS", "/tmp/dynamic_scenes_runs"))
+
+PAPER = dict(damping="rayleigh", alpha=5.0, mass_scaling=100, mass_scaling_mode="uniform")
+KIN_UNI = dict(damping="kinetic", mass_scaling=100, mass_scaling_mode="uniform")
+KIN_DIR = dict(damping="kinetic", mass_scaling=1e4, mass_scaling_mode="director")
+
+# name -> (scene, mesh, solver, solver settings, scene overrides, description)
+CASES = {
+    "sp48-kin-dir": ("square-pedestal", "48x16x4", "relax", dict(KIN_DIR), {}, "kin-dir"),
+    "sp48-kin-uni": ("square-pedestal", "48x16x4", "relax", dict(KIN_UNI), {}, "kin-uni"),
+    "sp48-paper": ("square-pedestal", "48x16x4", "relax", dict(PAPER, max_wall_time=1500.0), {}, "paper"),
+    "sp24-kin-dir": ("square-pedestal", "24x8x4", "relax", dict(KIN_DIR), {}, "kin-dir"),
+    "sp24-kin-uni": ("square-pedestal", "24x8x4", "relax", dict(KIN_UNI), {}, "kin-uni"),
+    "sphere60-green": ("sphere", "60x60", "relax", dict(KIN_DIR), {}, "kin-dir"),
+    "sphere60-quasi": ("sphere", "60x60", "relax", dict(KIN_DIR), {"model.thickness_strain": "quasi"}, "kin-dir"),
+    "sphere100-green": ("sphere", "100x100", "relax", dict(KIN_DIR, max_wall_time=1200.0), {}, "kin-dir"),
+    "hang-20": ("hang-20", "40x40", "explicit", dict(), {}, "paper (alpha 5, no mass scaling)"),
+    "hang-20-dir": ("hang-20", "40x40", "explicit", dict(mass_scaling=10, mass_scaling_mode="director"), {},
+                    "alpha 5, director masses x10"),
+    "hang-100": ("hang-100", "50x50", "explicit", dict(), {}, "paper (alpha 5, no mass scaling)"),
+    "hang-100-dir": ("hang-100", "50x50", "explicit", dict(mass_scaling=10, mass_scaling_mode="director"), {},
+                     "alpha 5, director masses x10"),
+    "disc-a5-kin-dir": ("square-on-disc", None, "relax", dict(KIN_DIR, max_wall_time=1200.0), {}, "kin-dir"),
+    "disc-a5-paper": ("square-on-disc", None, "relax", dict(PAPER, max_wall_time=900.0), {}, "paper"),
+    "disc-a1-paper": ("square-on-disc", None, "relax", dict(PAPER, alpha=1.0, max_wall_time=900.0), {},
+                      "alpha 1, masses x100"),
+}
+
+SUMMARY_KEYS = ("converged", "message", "steps", "dt", "critical_time_step", "t_final", "wall_time_s",
+                "energy_balance_error", "drape_coefficient", "fold_count", "max_interpenetrated_nodes",
+                "max_active_nodes", "max_penetration", "resets", "mass_scaling", "mass_scaling_mode",
+                "element_steps_per_second", "threads", "frames", "min_z", "max_displacement", "files",
+                "series_parameter", "final_relative_residual", "final_kinetic_energy", "critical_time_step_min",
+                "time_step_reductions", "time_step_rechecks", "kinetic_resets", "status", "steady_state_reached",
+                "max_contact_penetration", "max_contact_nodes", "damping", "alpha", "external_work",
+                "damping_dissipation", "kinetic_energy", "strain_energy")
+
+
+def _load() -> str:
+    try:
+        return " ".join(f"{x:.2f}" for x in os.getloadavg())
+    except OSError:
+        return "?"
+
+
+def run_case(name: str) -> dict:
+    from solidshell.runner import run_scene
+
+    scene, mesh, solver, settings, overrides, label = CASES[name]
+    out_dir = RUNS / name
+    load0 = _load()
+    t0 = time.perf_counter()
+    try:
+        out = run_scene(scene, mesh=mesh, solver=solver, out_dir=out_dir, progress=False,
+                        overrides=overrides or None, **settings)
+        err = None
+        s = out.summary
+    except Exception as e:  # a refused or failed run is a result too
+        err = f"{type(e).__name__}: {e}"
+        s = {}
+    wall = time.perf_counter() - t0
+    row = dict(case=name, scene=scene, mesh=mesh or "(scene default)", solver=solver, settings_label=label,
+               settings={k: v for k, v in settings.items()}, overrides=overrides, run_dir=str(out_dir),
+               total_wall_s=wall, load_start=load0, load_end=_load(), error=err,
+               date=time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime()))
+    for k in SUMMARY_KEYS:
+        if k in s:
+            row[k] = s[k]
+    row["mesh"] = s.get("mesh", row["mesh"])
+    row["n_nodes"] = (s.get("counts") or {}).get("nodes")
+    row["n_elements"] = (s.get("counts") or {}).get("elements")
+    CACHE.mkdir(parents=True, exist_ok=True)
+    with open(CACHE / f"{name}.json", "w") as fh:
+        json.dump(row, fh, indent=1, default=str)
+    print(json.dumps({k: v for k, v in row.items() if k != "files"}, default=str), flush=True)
+    return row
+
+
+def _static_reference() -> dict:
+    """(scene, mesh) -> (DC, folds) from the static scenes' report (newton), if present."""
+    ref = {}
+    p = OUT / "static_scenes.json"
+    if p.exists():
+        try:
+            for r in json.load(open(p)):
+                if r.get("converged") and r.get("solver") == "newton":
+                    ref[(r["scene"], r["mesh"])] = (r.get("drape_coefficient"), r.get("fold_count"),
+                                                    r.get("wall_time_s"))
+        except (OSError, ValueError, KeyError, TypeError):
+            pass
+    return ref
+
+
+def _f(x, fmt="{:.4g}"):
+    if x is None:
+        return "–"
+    if isinstance(x, bool):
+        return "yes" if x else "no"
+    if isinstance(x, (int, float)):
+        return fmt.format(x)
+    return str(x)
+
+
+def report() -> list:
+    rows = []
+    for name in CASES:
+        p = CACHE / f"{name}.json"
+        if p.exists():
+            r = json.load(open(p))
+            sp = Path(r.get("run_dir", "")) / "summary.json"
+            if sp.exists():  # fill figures the cached row did not keep (older versions of this script)
+                try:
+                    s = json.load(open(sp))
+                    for k in SUMMARY_KEYS:
+                        if k in s and k not in r:
+                            r[k] = s[k]
+                except (OSError, ValueError):
+                    pass
+            rows.append(r)
+    ref = _static_reference()
+    lines = ["# Dynamic scenes (Section 4)", "",
+             "Generated by `python -m verification.dynamic_scenes --report` from the per-case cache "
+             "`verification/out/dynamic_scenes/`.  Wall times are on a shared 2-core machine; the "
+             "1/5/15-min load averages at start and end of each run are given.  Settings: `paper` = "
+             "Rayleigh alpha 5 1/s, all masses x100; `kin-uni` = kinetic damping, all masses x100; "
+             "`kin-dir` = kinetic damping, director masses x1e4.", ""]
+    lines += ["| case | scene | mesh | settings | steady / done | steps | dt [s] | t_sim [s] | wall [s] | DC | "
+              "static DC | DC diff | folds (static) | max interp. nodes | energy err | load start → end | note |",
+              "|" + "---|" * 17]
+    for r in rows:
+        st = ref.get((r["scene"], r["mesh"]))
+        dc = r.get("drape_coefficient")
+        diff = (f"{100 * (dc - st[0]) / st[0]:+.2f} %" if (st and isinstance(dc, (int, float)) and st[0]) else "–")
+        r["static_drape_coefficient"] = st[0] if st else None
+        r["static_fold_count"] = st[1] if st else None
+        folds = _f(r.get("fold_count"), "{}") + (f" ({st[1]})" if st else "")
+        note = r.get("error") or ("" if r.get("converged") else (r.get("message") or ""))
+        lines.append("| " + " | ".join([
+            r["case"], r["scene"], str(r["mesh"]), r["settings_label"], _f(r.get("converged")), _f(r.get("steps"), "{}"),
+            _f(r.get("dt"), "{:.3e}"), _f(r.get("t_final"), "{:.3f}"), _f(r.get("wall_time_s", r.get("total_wall_s")), "{:.1f}"),
+            _f(dc), _f(st[0] if st else None), diff, folds, _f(r.get("max_interpenetrated_nodes"), "{}"),
+            _f(r.get("energy_balance_error"), "{:.2e}"), f"{r['load_start'].split()[0]} → {r['load_end'].split()[0]}",
+            str(note).replace("|", "/")[:160]]) + " |")
+    missing = [n for n in CASES if not (CACHE / f"{n}.json").exists()]
+    if missing:
+        lines += ["", "Not run (no result in the cache): " + ", ".join(missing) + "."]
+    lines.append("")
+    text = "\n".join(lines)
+    OUT.mkdir(parents=True, exist_ok=True)
+    (OUT / "dynamic_scenes.md").write_text(text)
+    with open(OUT / "dynamic_scenes.json", "w") as fh:
+        json.dump(rows, fh, indent=1, default=str)
+    print(text)
+    return rows
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--case", action="append", default=[], choices=list(CASES))
+    ap.add_argument("--report", action="store_true")
+    ap.add_argument("--list", action="store_true")
+    a = ap.parse_args(argv)
+    if a.list:
+        for n, c in CASES.items():
+            print(n, c[0], c[1], c[2], c[5])
+        return
+    for n in a.case:
+        run_case(n)
+    if a.report or not a.case:
+        report()
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,52 @@
+"""Fast checks of the dynamic-scene verification tools (verification/dynamic_scenes.py,
+verification/dynamic_stress.py): the report assembles from cached cases, a step above the
+critical one is refused, and a forced unstable step is detected rather than returned as good."""
+
+import json
+
+import pytest
+
+from solidshell.errors import InputError
+from solidshell.runner import run_scene
+from verification import dynamic_scenes
+
+
+def test_report_from_cache(tmp_path, monkeypatch):
+    cache = tmp_path / "cache"
+    cache.mkdir()
+    monkeypatch.setattr(dynamic_scenes, "CACHE", cache)
+    monkeypatch.setattr(dynamic_scenes, "OUT", tmp_path)
+    row = dict(case="sp48-kin-dir", scene="square-pedestal", mesh="48x16x4", solver="relax", settings_label="kin-dir",
+               settings={}, overrides={}, run_dir=str(tmp_path / "none"), total_wall_s=1.0, load_start="1 1 1",
+               load_end="1 1 1", error=None, converged=True, steps=10, dt=1e-5, t_final=1e-4, wall_time_s=1.0,
+               drape_coefficient=0.5, fold_count=4, max_interpenetrated_nodes=0, energy_balance_error=1e-6)
+    (cache / "sp48-kin-dir.json").write_text(json.dumps(row))
+    rows = dynamic_scenes.report()
+    assert len(rows) == 1
+    text = (tmp_path / "dynamic_scenes.md").read_text()
+    assert "| sp48-kin-dir | square-pedestal | 48x16x4 | kin-dir | yes | 10 |" in text
+    assert "Not run" in text and "sphere60-green" in text
+
+
+def _crit(**kw):
+    o = run_scene("strip-warp", mesh="10x1", solver="explicit", progress=False, t_end=1e-7, **kw)
+    return o.summary["critical_time_step"]
+
+
+def test_step_above_critical_refused():
+    dtc = _crit()
+    with pytest.raises(InputError, match="critical"):
+        run_scene("strip-warp", mesh="10x1", solver="explicit", progress=False, t_end=50 * dtc, dt=1.1 * dtc,
+                  critical_time_step=dtc)
+
+
+def test_forced_unstable_step_detected_and_stable_step_fine():
+    dtc = _crit()
+    bad = run_scene("strip-warp", mesh="10x1", solver="explicit", progress=False, t_end=2000 * 1.2 * dtc,
+                    dt=1.2 * dtc, critical_time_step=dtc, allow_unstable=True)
+    assert bad.summary["converged"] is False
+    assert bad.summary["message"]
+    good = run_scene("strip-warp", mesh="10x1", solver="explicit", progress=False, t_end=2000 * 0.9 * dtc,
+                     dt=0.9 * dtc, critical_time_step=dtc)
+    assert good.summary["converged"] is True
+    assert good.summary["energy_balance_error"] < 1e-2

@@ -220,13 +220,16 @@ def collect(extra_text="") -> list:
         p = cache_path(case_key(sc, m, lab))
         if p.exists():
             rows.append(json.loads(p.read_text()))
+        elif list(CACHE.glob(p.stem + "__maxiter*.json")):
+            for q in sorted(CACHE.glob(p.stem + "__maxiter*.json")):   # the capped variant instead
+                rows.append(json.loads(q.read_text()))
         else:
             rows.append({"scene": sc, "mesh": m, "solver": lab, "converged": None,
                          "message": "not run (no result in the cache)"})
     # any further cached cases (perturbed starts etc.)
     known = {cache_path(case_key(*c)).name for c in all_cases()}
     for p in sorted(CACHE.glob("*.json")):
-        if p.name not in known:
+        if p.name not in known and not any(p.name.startswith(k[:-5] + "__maxiter") for k in known):
             rows.append(json.loads(p.read_text()))
     OUT.mkdir(exist_ok=True)
     (OUT / "static_scenes.json").write_text(json.dumps(rows, indent=1, default=str))

@@ -73,3 +73,17 @@ def line_load(mesh, nodes, force_per_length) -> np.ndarray:
     P = np.zeros((mesh.n_nodes, 6))
     P[:, :3] = w[:, None] * np.asarray(force_per_length, dtype=float)
     return P
+
+
+def director_rotation(mesh, nodes, axis, angle: float) -> np.ndarray:
+    """(N,6) displacement that turns the directors of ``nodes`` by ``angle`` [rad] about ``axis``
+    (right-hand rule), U_n = R X_n - X_n, all else zero: a prescribed end rotation for displacement
+    control.  For a rotation path pass ``lambda lam: director_rotation(mesh, nodes, axis, lam*phi)``
+    as ``prescribed`` (a linear scaling of one array would shrink the director)."""
+    from scipy.spatial.transform import Rotation
+
+    idx = mesh.node_set(nodes) if isinstance(nodes, str) else np.asarray(nodes, dtype=np.int64)
+    R = Rotation.from_rotvec(float(angle) * _direction(axis)).as_matrix()
+    U = np.zeros((mesh.n_nodes, 6))
+    U[idx, 3:] = mesh.directors[idx] @ R.T - mesh.directors[idx]
+    return U

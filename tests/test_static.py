@@ -8,7 +8,7 @@ import os
 import numpy as np
 import pytest
 
-from solidshell.boundary import clamp, gravity_loads
+from solidshell.boundary import clamp, director_rotation, gravity_loads
 from solidshell.material import Fabric, IsotropicShell
 from solidshell.meshing import build_mesh
 from solidshell.model import Model
@@ -83,14 +83,9 @@ def test_end_moment_rolls_strip_into_circle():
     tip = mesh.node_set("tip")
     fixed = clamp(mesh, "clamped")
     fixed[tip, 3:] = True
-    Xn = mesh.directors
 
-    def prescribed(lam):
-        phi = 2.0 * np.pi * lam
-        R = np.array([[np.cos(phi), 0, -np.sin(phi)], [0, 1, 0], [np.sin(phi), 0, np.cos(phi)]])
-        U = np.zeros((mesh.n_nodes, 6))
-        U[tip, 3:] = Xn[tip] @ R.T - Xn[tip]
-        return U
+    def prescribed(lam):   # end directors turned by 2 pi lam about -y
+        return director_rotation(mesh, tip, (0.0, -1.0, 0.0), 2.0 * np.pi * lam)
 
     steps = 32      # 11.25 degrees of end rotation per step
     r = solve_static(model, fixed, np.zeros((mesh.n_nodes, 6)),

@@ -58,21 +58,16 @@ def end_shear(n, alpha, method="newton"):
 
 
 def end_moment(n, steps=32):
-    from solidshell.boundary import clamp
+    from solidshell.boundary import clamp, director_rotation
     from solidshell.solvers.static import solve_static
 
     mesh, mat, model = _setup(n)
     tip = mesh.node_set("tip")
     fixed = clamp(mesh, "clamped")
     fixed[tip, 3:] = True
-    Xn = mesh.directors
 
-    def prescribed(lam):
-        phi = 2.0 * np.pi * lam
-        R = np.array([[np.cos(phi), 0, -np.sin(phi)], [0, 1, 0], [np.sin(phi), 0, np.cos(phi)]])
-        U = np.zeros((mesh.n_nodes, 6))
-        U[tip, 3:] = Xn[tip] @ R.T - Xn[tip]
-        return U
+    def prescribed(lam):   # end directors turned by 2 pi lam about -y
+        return director_rotation(mesh, tip, (0.0, -1.0, 0.0), 2.0 * np.pi * lam)
 
     r = solve_static(model, fixed, np.zeros((mesh.n_nodes, 6)),
                      load_factors=np.arange(1, steps + 1) / steps, prescribed=prescribed)

@@ -166,6 +166,13 @@ def _element_force(e, xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r_z
     return energy
 
 
+@njit(cache=True)
+def _force_workspace(nn, nt):
+    """Per-thread scratch of _element_force: gs (nt,), gz, zs (nn,), at, dt (nt,3), xe (nn,6)."""
+    m = max(nt, 1)
+    return np.empty(m), np.empty(nn), np.empty(nn), np.empty((m, 3)), np.empty((m, 3)), np.empty((nn, 6))
+
+
 @njit(cache=True, parallel=True, fastmath=_FM)
 def energy_force(xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r_z, quasi, mu, f_out, w_out, nth):
     """Element energies into w_out (M,) and element forces into f_out (M, nn, 6), all elements.
@@ -180,12 +187,7 @@ def energy_force(xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r_z, qua
     nt = alpha.shape[0]
     chunk = (M + nth - 1) // nth
     for th in prange(nth):
-        gs = np.empty(max(nt, 1))
-        gz = np.empty(nn)
-        zs = np.empty(nn)
-        at = np.empty((max(nt, 1), 3))
-        dt = np.empty((max(nt, 1), 3))
-        xe = np.empty((nn, 6))
+        gs, gz, zs, at, dt, xe = _force_workspace(nn, nt)
         for e in range(th * chunk, min(M, (th + 1) * chunk)):
             w_out[e] = _element_force(e, xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r_z,
                                       quasi, mu, f_out[e], gs, gz, zs, at, dt, xe)
@@ -359,12 +361,7 @@ def force_tangent(xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r_z, qu
         oo = np.empty((nn, nn))
         on = np.empty((nn, nn))
         nz = np.empty((nn, 3, 3))
-        gs = np.empty(max(nt, 1))
-        gz = np.empty(nn)
-        zs = np.empty(nn)
-        at = np.empty((max(nt, 1), 3))
-        dt = np.empty((max(nt, 1), 3))
-        xe = np.empty((nn, 6))
+        gs, gz, zs, at, dt, xe = _force_workspace(nn, nt)
         for e in range(th * chunk, min(M, (th + 1) * chunk)):
             w_out[e] = _element_force(e, xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r_z,
                                       quasi, mu, f_out[e], gs, gz, zs, at, dt, xe)

@@ -79,17 +79,22 @@ class Model:
         return xo, xn
 
     # ------------------------------------------------------------- energy & force
-    def energy_and_force(self, U):
-        """(strain energy [force*length], internal force (N,6) [force]) at U (N,6): Eqs. (7), (9)."""
+    def _element_forces(self, U):
+        """Yield (block, element forces (M,nn,6), element energies (M,)) for each element block."""
         xo, xn = self._current(U)
-        F = np.zeros(self.n_dofs)
-        W = 0.0
         for b in self.blocks:
             M = len(b.conn)
             fe = np.empty((M, b.nn, 6))
             we = np.empty(M)
             core.energy_force(*b.args(xo, xn, self.quasi, self.mu), fe, we, get_num_threads())
-            scatter_add_vec(b.dofs, fe.reshape(M, -1), F)
+            yield b, fe, we
+
+    def energy_and_force(self, U):
+        """(strain energy [force*length], internal force (N,6) [force]) at U (N,6): Eqs. (7), (9)."""
+        F = np.zeros(self.n_dofs)
+        W = 0.0
+        for b, fe, we in self._element_forces(U):
+            scatter_add_vec(b.dofs, fe.reshape(len(fe), -1), F)
             W += we.sum()
         return float(W), F.reshape(-1, 6)
 
@@ -103,15 +108,7 @@ class Model:
 
     def element_energies(self, U) -> np.ndarray:
         """Per-element strain energies, quads first then triangles."""
-        xo, xn = self._current(U)
-        out = []
-        for b in self.blocks:
-            M = len(b.conn)
-            fe = np.empty((M, b.nn, 6))
-            we = np.empty(M)
-            core.energy_force(*b.args(xo, xn, self.quasi, self.mu), fe, we, get_num_threads())
-            out.append(we)
-        return np.concatenate(out)
+        return np.concatenate([we for _, _, we in self._element_forces(U)])
 
     # ------------------------------------------------------------- tangent
     @property

@@ -53,7 +53,7 @@ CASES = {
     "sphere30-green": ("sphere", "30x30", "relax", dict(KIN_DIR, max_wall_time=600.0), {}, "kin-dir"),
     "sphere30-quasi": ("sphere", "30x30", "relax", dict(KIN_DIR, max_wall_time=600.0), {"model.thickness_strain": "quasi"},
                        "kin-dir"),
-    "hang-20": ("hang-20", "40x40", "explicit", dict(max_wall_time=900.0), {}, "paper (alpha 5, no mass scaling)"),
+    "hang-20": ("hang-20", "40x40", "explicit", dict(max_wall_time=600.0), {}, "paper (alpha 5, no mass scaling)"),
     "hang-20-dir": ("hang-20", "40x40", "explicit", dict(mass_scaling=10, mass_scaling_mode="director"), {},
                     "alpha 5, director masses x10"),
     "hang-100": ("hang-100", "50x50", "explicit", dict(max_wall_time=1200.0), {}, "paper (alpha 5, no mass scaling)"),
@@ -72,6 +72,15 @@ NOTES = [
     "roughly 25 s of simulated time; the 20x20 mesh reached steady state at t = 5.1 s in 30 s wall).  The 60x60 "
     "sphere cases were then rerun for a fixed simulated window t_max = 3 s (the fall and first contact, where "
     "interpenetration happens) so that Green and Eq. (24) are compared over the same window.",
+    "sphere 30x30, Green, kin-dir, t_max 60 s: the cloth SLID OFF the sphere and fell freely (min z = -1.6e6 cm "
+    "at t = 60 s, final E_kin = W_ext, contact energy 0; energy balance still 4e-5).  The contact is frictionless "
+    "and nothing holds the sheet's in-plane position, so a cloth draped over a sphere is an unstable equilibrium "
+    "(like a rope over a frictionless cylinder): round-off asymmetry grows until it slides off.  A 20x20 probe "
+    "(not cached) reached the steady-state test at t = 5.1 s before the slide grew (30 s wall, 29 max "
+    "interpenetrated nodes, DC 0.200, 4 folds).  This is a property of the scene, not of the integrator: the "
+    "'steady state' of the sphere scene is only the plateau before the slide.  A fix for the scene (not made "
+    "here: meshing/scenes are not this script's files): hold the in-plane translations of the centre node (it "
+    "sits on the sphere's top, so the symmetric drape is unchanged) or add friction.",
 ]
 
 SUMMARY_KEYS = ("converged", "message", "steps", "dt", "critical_time_step", "t_final", "wall_time_s",

@@ -49,6 +49,9 @@ CASES = {
     "sphere60-green": ("sphere", "60x60", "relax", dict(KIN_DIR, t_max=3.0, max_wall_time=480.0), {}, "kin-dir, t_max 3 s"),
     "sphere60-quasi": ("sphere", "60x60", "relax", dict(KIN_DIR, t_max=3.0, max_wall_time=480.0), {"model.thickness_strain": "quasi"},
                        "kin-dir, t_max 3 s"),
+    "sphere60-quasi-dir100": ("sphere", "60x60", "relax",
+                              dict(KIN_DIR, mass_scaling=100, t_max=3.0, max_wall_time=480.0),
+                              {"model.thickness_strain": "quasi"}, "kinetic, director masses x100, t_max 3 s"),
     "sphere100-green": ("sphere", "100x100", "relax", dict(KIN_DIR, max_wall_time=480.0), {}, "kin-dir"),
     "sphere30-green": ("sphere", "30x30", "relax", dict(KIN_DIR, max_wall_time=600.0), {}, "kin-dir"),
     "sphere30-quasi": ("sphere", "30x30", "relax", dict(KIN_DIR, max_wall_time=600.0), {"model.thickness_strain": "quasi"},
@@ -81,6 +84,14 @@ NOTES = [
     "'steady state' of the sphere scene is only the plateau before the slide.  A fix for the scene (not made "
     "here: meshing/scenes are not this script's files): hold the in-plane translations of the centre node (it "
     "sits on the sphere's top, so the symmetric drape is unchanged) or add friction.",
+    "sphere 60x60 with Eq. (24) (model.thickness_strain = quasi), kin-dir: STOPPED by the solver's energy check at "
+    "t = 2.287 s (energy balance error 1.61 > 0.5, 'the run is creating energy'), although the step (5.65e-5 s) "
+    "is 0.9 x the critical step, which the re-check at step 40000 (t = 2.26 s) had found unchanged; the blow-up "
+    "grew within 500 steps.  The Green run on the same mesh, settings and window did not do this (energy error "
+    "2.2e-5 over 3 s).  Its max interpenetration count (11 nodes) is over 0-2.28 s only, the Green one (87) over "
+    "0-3 s, so the two are not over the same window.  Looks wrong: either a loss of stability of the Eq. (24) "
+    "thickness energy under the large director-mass scaling (x1e4), or a bug in the quasi strain's force; the "
+    "sphere60-quasi-dir100 case (director masses x100) checks the first.",
 ]
 
 SUMMARY_KEYS = ("converged", "message", "steps", "dt", "critical_time_step", "t_final", "wall_time_s",

@@ -52,14 +52,17 @@ CASES = {
     "sphere60-quasi-dir100": ("sphere", "60x60", "relax",
                               dict(KIN_DIR, mass_scaling=100, t_max=3.0, max_wall_time=480.0),
                               {"model.thickness_strain": "quasi"}, "kinetic, director masses x100, t_max 3 s"),
-    "sphere100-green": ("sphere", "100x100", "relax", dict(KIN_DIR, max_wall_time=480.0), {}, "kin-dir"),
+    "sphere60-quasi-noecheck": ("sphere", "60x60", "relax",
+                                dict(KIN_DIR, t_max=3.0, max_wall_time=480.0, max_energy_error=1e6),
+                                {"model.thickness_strain": "quasi"}, "kin-dir, t_max 3 s, energy check off"),
+    "sphere100-green": ("sphere", "100x100", "relax", dict(KIN_DIR, max_wall_time=300.0), {}, "kin-dir"),
     "sphere30-green": ("sphere", "30x30", "relax", dict(KIN_DIR, max_wall_time=600.0), {}, "kin-dir"),
     "sphere30-quasi": ("sphere", "30x30", "relax", dict(KIN_DIR, max_wall_time=600.0), {"model.thickness_strain": "quasi"},
                        "kin-dir"),
     "hang-20": ("hang-20", "40x40", "explicit", dict(max_wall_time=600.0), {}, "paper (alpha 5, no mass scaling)"),
     "hang-20-dir": ("hang-20", "40x40", "explicit", dict(mass_scaling=10, mass_scaling_mode="director"), {},
                     "alpha 5, director masses x10"),
-    "hang-100": ("hang-100", "50x50", "explicit", dict(max_wall_time=1200.0), {}, "paper (alpha 5, no mass scaling)"),
+    "hang-100": ("hang-100", "50x50", "explicit", dict(max_wall_time=720.0), {}, "paper (alpha 5, no mass scaling)"),
     "hang-100-dir": ("hang-100", "50x50", "explicit", dict(mass_scaling=10, mass_scaling_mode="director"), {},
                      "alpha 5, director masses x10"),
     "disc-a5-kin-dir": ("square-on-disc", None, "relax", dict(KIN_DIR, max_wall_time=1200.0), {}, "kin-dir"),
@@ -91,7 +94,17 @@ NOTES = [
     "2.2e-5 over 3 s).  Its max interpenetration count (11 nodes) is over 0-2.28 s only, the Green one (87) over "
     "0-3 s, so the two are not over the same window.  Looks wrong: either a loss of stability of the Eq. (24) "
     "thickness energy under the large director-mass scaling (x1e4), or a bug in the quasi strain's force; the "
-    "sphere60-quasi-dir100 case (director masses x100) checks the first.",
+    "sphere60-quasi-dir100 case (director masses x100) checks the first.  A likelier cause: Eq. (24) as printed "
+    "is discontinuous -- when n_p.d_p crosses -mu the nodal strain jumps from |x_n| - 1 ~ 0 to -|x_n| - 1 ~ -2, "
+    "so the stored thickness energy jumps by ~2 C_z per node with no work done; the explicit solver's energy "
+    "guard (max_energy_error 0.5) reads that jump as energy creation.  The sphere60-quasi-noecheck case reruns it "
+    "with the guard off (max_energy_error 1e6) to tell the two apart.",
+    "hang-20 snapshots (png/hang-20_iso_t*.png), looked at: t = 0 flat; t = 0.1 s the free part has dropped ~4 "
+    "cm while the edge between the two fixed corners stays straight at z = 0 (the corners keep their 20 cm "
+    "spacing, so that edge can only sag by stretching); t = 0.4 s the sheet swings through, rotated about the "
+    "held edge; t = 2.1 s it hangs vertically, almost at rest (E_kin 9e-4 vs W_ext 76.5 gf cm), 20 cm below the "
+    "held edge, with no visible wrinkles -- consistent with the paper's description of Fig. 9 (settled by ~2 s; "
+    "the smaller sheet has fewer wrinkles than the 100 cm one).",
 ]
 
 SUMMARY_KEYS = ("converged", "message", "steps", "dt", "critical_time_step", "t_final", "wall_time_s",

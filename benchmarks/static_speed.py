@@ -166,6 +166,14 @@ def write_md(res):
         L.append(f"| {d['scene']} | {d['mesh']} | < {d['target_s']:g} s | {d['median_solver_s']:.2f} | "
                  f"{d['median_total_s']:.2f} | {runs} | {its} | {'yes' if d['meets_target'] else 'NO'} | "
                  f"{lb} / {la} |")
+    for prev in res.get("previous_sessions", []):
+        L += ["", f"Earlier session ({prev.get('note', '')}):", "",
+              "| scene | mesh | median solver [s] | runs total [s] | load before / after |", "|---|---|---|---|---|"]
+        for c, d in prev["cases"].items():
+            L.append(f"| {d['scene']} | {d['mesh']} | {d['median_solver_s']:.2f} | "
+                     + ", ".join(f"{r['total_s']:.2f}" for r in d["runs"]) + " | "
+                     f"{d['uptime_before'].split('load average:')[-1].strip()} / "
+                     f"{d['runs'][-1]['uptime_after'].split('load average:')[-1].strip()} |")
     if "disc" not in res.get("cases", {}):
         # not repeated here (about 20 min per run on the loaded machine): the single run of
         # verification/static_scenes.py, if there is one

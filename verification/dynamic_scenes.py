@@ -105,6 +105,11 @@ NOTES = [
     "held edge; t = 2.1 s it hangs vertically, almost at rest (E_kin 9e-4 vs W_ext 76.5 gf cm), 20 cm below the "
     "held edge, with no visible wrinkles -- consistent with the paper's description of Fig. 9 (settled by ~2 s; "
     "the smaller sheet has fewer wrinkles than the 100 cm one).",
+    "hang-100 snapshots (director masses x10; png/hang-100-dir_iso_t*.png), looked at: at t = 0.4 s the 100 cm "
+    "sheet is still falling (free edge ~45 cm down) while the 20 cm one had already swung through at 0.4 s -- "
+    "the larger sheet drapes slower, as the paper says; by t = 1.4 s it hangs vertically and t = 3.0 s looks "
+    "the same (settled).  The held edge sags slightly between the corners.  The paper's 'more wrinkles' on the "
+    "larger sheet are not clearly visible in these renders (a smooth vertical sheet); not checked further.",
 ]
 
 SUMMARY_KEYS = ("converged", "message", "steps", "dt", "critical_time_step", "t_final", "wall_time_s",

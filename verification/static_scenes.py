@@ -9,6 +9,8 @@ collected later); run directories with pictures go to ``--runs`` (default /tmp/s
     python -m verification.static_scenes                    # run every missing case, write the table
     python -m verification.static_scenes --case square-on-disc:30x240:newton   # one case only
     python -m verification.static_scenes --collect          # only (re)write the table from the cache
+    python -m verification.static_scenes --perturbed circle-pedestal:20x80:4:3.0   # perturbed start
+    python -m verification.static_scenes --pedestal-contact # square-on-disc with a pedestal body
 
 A case key is ``scene:mesh:label`` with label ``newton``, ``paper-c<c>`` or ``arclength``
 (optionally ``...:maxiter<N>``).  The paper scheme is capped at ``PAPER_MAX_ITER`` iterations: past
@@ -267,6 +269,8 @@ def main(argv=None):
     ap.add_argument("--case", action="append", default=[], help="scene:mesh:label (repeatable)")
     ap.add_argument("--perturbed", action="append", default=[],
                     help="scene:mesh:folds:amp[:method[:c]] -- a solve from a perturbed start")
+    ap.add_argument("--pedestal-contact", action="store_true",
+                    help="square-on-disc 30x240 newton with a disc pedestal contact body added")
     ap.add_argument("--collect", action="store_true", help="only write the table from the cache")
     ap.add_argument("--force", action="store_true", help="re-run cached cases")
     ap.add_argument("--skip", default="square-on-disc", help="comma list of scenes to skip in the "
@@ -287,6 +291,18 @@ def main(argv=None):
                 print(f"  converged={row.get('converged')} DC={row.get('drape_coefficient')} "
                       f"folds={row.get('fold_count')} it={row.get('iterations')} "
                       f"pd={row.get('positive_definite')} :: {row.get('message')}", flush=True)
+            cases = []
+        elif a.pedestal_contact:
+            # square-on-disc with a pedestal contact body (the scene has none: the hanging sheet
+            # may swing into the pedestal's footprint)
+            ov = {"contact": [{"type": "pedestal", "shape": "disc", "diameter": 20.0,
+                               "centre": [0.0, 0.0, 0.0], "height": 10.0, "offset": 0.03}]}
+            print("running square-on-disc 30x240 newton with a pedestal contact body ...", flush=True)
+            row = run_case("square-on-disc", "30x240", "newton", runs=a.runs, overrides=ov,
+                           tag="pedestal-contact")
+            row["solver"] = "newton + pedestal contact body"
+            cache_path(case_key("square-on-disc", "30x240", "newton-pedestal-contact")).write_text(
+                json.dumps(row, indent=1, default=str))
             cases = []
         elif a.case:
             cases = [tuple(c.split(":", 2)) for c in a.case]

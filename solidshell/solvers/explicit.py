@@ -94,6 +94,7 @@ from numba import njit
 from ..contact import combined_critical_time_step, contact_forces, penalty_stiffness
 from ..errors import InputError, SolverError
 from ..problem import Problem, SolveResult, no_progress
+from .blas import single_threaded_blas
 from .timestep import critical_time_step, estimate_omega_max
 
 _CHECKPOINT_VERSION = 1
@@ -724,12 +725,14 @@ def _with_threads(problem, settings, progress, relax):
     return res
 
 
+@single_threaded_blas
 def run(problem: Problem, settings: dict | None = None, progress=no_progress) -> SolveResult:
     """Dynamic drape (Section 4.1): integrate Eq. (23) from t = 0 to ``settings["t_end"]``.
     converged = True when t_end was reached with a finite state.  See the module docstring."""
     return _with_threads(problem, settings, progress, relax=False)
 
 
+@single_threaded_blas
 def run_relax(problem: Problem, settings: dict | None = None, progress=no_progress) -> SolveResult:
     """Dynamic relaxation (Section 4.2): damped explicit dynamics with scaled masses (default α = 5 1/s,
     masses ×100) that stops itself once E_kin / W_ext < tol_kinetic and the relative residual force

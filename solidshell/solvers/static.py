@@ -73,6 +73,7 @@ from scipy.sparse.linalg import eigsh, splu
 
 from ..errors import InputError
 from ..problem import SolveResult, no_progress
+from .blas import single_threaded_blas
 
 __all__ = ["StaticResult", "solve_static", "run", "METHODS"]
 
@@ -714,6 +715,7 @@ def _stability(sys, D, eig_max_dofs):
     return pd, lmin
 
 
+@single_threaded_blas
 def solve_static(model, fixed, loads, load_factors=None, method="newton", prescribed=None, *,
                  tol=1e-8, energy_tol=1e-12, max_iter=None, c=1e-2, L_f=None, max_step=None,
                  U0=None, predictor=True, increment=1.0, min_increment=1e-6, max_cutbacks=8,

@@ -128,6 +128,11 @@ NOTES = [
     "of simulated time (the 60x60 comparison window) needs ~11-12 min wall; a steady state is not reachable in "
     "the sphere scene as it stands (the cloth slides off the frictionless sphere; see above), so '100x100 "
     "completes in under 10 minutes' is NOT met / not meaningful here.",
+    "square-on-disc 30x240 (kin-dir, capped at 240 s wall): not steady at the cap (t = 2.07 s, 55.9k steps), but "
+    "already at DC 0.0582 with 8 folds, vs the static Newton solution's 0.0583 and 8 folds (static_scenes.json; "
+    "the paper's 10 folds with alpha = 5 and 8 with alpha = 1 are for its Rayleigh-damped relaxation, which was "
+    "not run: with masses x100 the step is the thickness-mode one, ~7.7e-5 s, and the pedestal 24x8x4 needed 31 s "
+    "of simulated time, i.e. ~400k steps x 7200 quads ~ 30 min or more here).",
 ]
 
 SUMMARY_KEYS = ("converged", "message", "steps", "dt", "critical_time_step", "t_final", "wall_time_s",

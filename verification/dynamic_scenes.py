@@ -94,7 +94,7 @@ NOTES = [
     "2.2e-5 over 3 s).  Its max interpenetration count (11 nodes) is over 0-2.28 s only, the Green one (87) over "
     "0-3 s, so the two are not over the same window.  Looks wrong: either a loss of stability of the Eq. (24) "
     "thickness energy under the large director-mass scaling (x1e4), or a bug in the quasi strain's force; the "
-    "sphere60-quasi-dir100 case (director masses x100) checks the first.  A likelier cause: Eq. (24) as printed "
+    "sphere60-quasi-dir100 case (director masses x100) would check the first (defined, NOT run for lack of time).  A likelier cause: Eq. (24) as printed "
     "is discontinuous -- when n_p.d_p crosses -mu the nodal strain jumps from |x_n| - 1 ~ 0 to -|x_n| - 1 ~ -2, "
     "so the stored thickness energy jumps by ~2 C_z per node with no work done; the explicit solver's energy "
     "guard (max_energy_error 0.5) reads that jump as energy creation.  The sphere60-quasi-noecheck case reruns it "

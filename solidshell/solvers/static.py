@@ -160,16 +160,16 @@ class _System:
         f = np.zeros((self.n, 6))
         e = 0.0
         rows, cols, vals = [], [], []
+        k = self.k_contact
         for b in self.contact:
-            gap, nrm = b.penetration(x)
-            p = np.maximum(-gap, 0.0)
-            act = np.flatnonzero(p > 0.0)
-            if act.size == 0:
-                continue
-            k = self.k_contact
-            e += 0.5 * k * float(np.dot(p[act], p[act]))
-            f[act, :3] -= (k * p[act])[:, None] * nrm[act]          # dE/dx = -k p n
+            fb, eb = b.forces(x, k)              # penalty force k p n on the sheet, energy k p^2/2
+            e += eb
+            f[:, :3] -= fb                       # the gradient of the penalty energy is -k p n
             if want_tangent:
+                gap, nrm = b.penetration(x)
+                act = np.flatnonzero(gap < 0.0)
+                if act.size == 0:
+                    continue
                 nn = k * nrm[act][:, :, None] * nrm[act][:, None, :]    # (A,3,3)
                 base = 6 * act
                 r = (base[:, None, None] + np.arange(3)[None, :, None]).repeat(3, axis=2)

@@ -25,30 +25,23 @@ import time
 from pathlib import Path
 
 import numba
-import numpy as np
 
-from solidshell import Fabric, ShellMesh
+from solidshell import Fabric
+from solidshell.boundary import clamp, gravity_loads
+from solidshell.meshing import build_mesh
 from solidshell.model import Model
 from solidshell.problem import Problem
 from solidshell.solvers import explicit
-from solidshell.units import G0
 
 OUT = Path(__file__).resolve().parent / "out"
 
 
 def hung_sheet(n: int, size: float = 20.0) -> Problem:
-    x = np.linspace(0.0, size, n + 1)
-    X, Y = np.meshgrid(x, x, indexing="xy")
-    nodes = np.column_stack([X.ravel(), Y.ravel(), np.zeros(X.size)])
-    idx = np.arange((n + 1) ** 2).reshape(n + 1, n + 1)
-    q = np.column_stack([idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, 1:].ravel(), idx[1:, :-1].ravel()])
-    mesh = ShellMesh(nodes, quads=q)
+    """The Section 4.1 sheet: size x size cm wool, n x n quads, the two corners at y = +size/2 held
+    (all six dofs), self-weight -- built from the library's scene pieces."""
+    mesh = build_mesh("square", f"{n}x{n}", size=size)
     model = Model(mesh, Fabric.wool())
-    fixed = np.zeros((mesh.n_nodes, 6), bool)
-    fixed[[idx[-1, 0], idx[-1, -1]]] = True
-    loads = np.zeros((mesh.n_nodes, 6))
-    loads[:, 2] = -model.lumped_mass()[:, 0] * G0
-    return Problem(model, fixed, loads, name=f"hung {n}x{n}")
+    return Problem(model, clamp(mesh, "hung"), gravity_loads(model), name=f"hung {n}x{n}")
 
 
 def uptime() -> str:

@@ -21,26 +21,22 @@ import time
 
 import numpy as np
 
-from solidshell import Fabric, ShellMesh
+from solidshell import Fabric
+from solidshell.boundary import clamp, gravity_loads
+from solidshell.meshing import build_mesh
 from solidshell.model import Model
 from solidshell.problem import Problem
 from solidshell.solvers import explicit
-from solidshell.units import G0
 
-from . import rect_grid, write_json
+from . import write_json
 
 
 def hung_sheet(n: int, size: float = 20.0) -> Problem:
-    nodes, quads = rect_grid(n, n, size, size)
-    mesh = ShellMesh(nodes, quads=quads)
+    """The Section 4.1 sheet: size x size cm wool, n x n quads, the two corners at y = +size/2 held
+    (all six dofs), self-weight -- built from the library's scene pieces."""
+    mesh = build_mesh("square", f"{n}x{n}", size=size)
     model = Model(mesh, Fabric.wool())
-    fixed = np.zeros((mesh.n_nodes, 6), bool)
-    top = np.isclose(nodes[:, 1], size)
-    corners = np.flatnonzero(top & (np.isclose(nodes[:, 0], 0.0) | np.isclose(nodes[:, 0], size)))
-    fixed[corners] = True
-    loads = np.zeros((mesh.n_nodes, 6))
-    loads[:, 2] = -model.lumped_mass()[:, 0] * G0
-    return Problem(model, fixed, loads, name=f"hung {n}x{n}")
+    return Problem(model, clamp(mesh, "hung"), gravity_loads(model), name=f"hung {n}x{n}")
 
 
 def main(argv=None):

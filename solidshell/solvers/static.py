@@ -69,11 +69,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.sparse.linalg import eigsh, splu
+from scipy.sparse.linalg import LinearOperator, eigsh
 
 from ..errors import InputError
 from ..problem import SolveResult, no_progress
 from .blas import single_threaded_blas
+from .linear import Cholesky, ldl_inertia
 
 __all__ = ["StaticResult", "solve_static", "run", "METHODS"]
 
@@ -133,6 +134,7 @@ class _System:
         self.n_tangent = 0
         self.n_solves = 0
         self.n_factor = 0
+        self.chol = Cholesky()       # symbolic analysis shared by every tangent of this solve
         self._has_ef = hasattr(model, "energy_and_force")
 
     # -- vectors
@@ -222,46 +224,20 @@ class _System:
 
 
 # ============================================================================ linear algebra
-_SINGULAR_PIVOT = 1e-14
-"""A pivot smaller than this fraction of the largest marks the tangent as numerically singular (a
-free rigid-body mode or mechanism); legitimate fabric tangents stay above ~1e-10."""
-
-
 def _factor(A):
-    """SuperLU of a symmetric A with diagonal pivoting in symmetric mode.
-
-    Returns (lu, n_negative) where n_negative is the number of negative eigenvalues of A (Sylvester:
-    with a symmetric permutation and diagonal pivots the U diagonal is the D of an LDL^T), or None
-    when the pivoting was not symmetric.  Raises RuntimeError when A is singular.
-    """
-    lu = splu(A, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-              options=dict(SymmetricMode=True))
-    d = lu.U.diagonal()
-    ad = np.abs(d)
-    if not np.all(np.isfinite(d)) or ad.min(initial=np.inf) <= _SINGULAR_PIVOT * ad.max(initial=0.0):
-        raise RuntimeError("singular tangent (a pivot below %.0e of the largest)" % _SINGULAR_PIVOT)
-    neg = int(np.count_nonzero(d < 0.0)) if np.array_equal(lu.perm_r, lu.perm_c) else None
-    return lu, neg
+    """(lu, n_negative) of the symmetric A: SuperLU LDL^T-type with inertia (see linear.py)."""
+    return ldl_inertia(A)
 
 
-def _shifted_factor(A, scale, sigma0, sigma_max=1e12):
-    """Factor A + sigma diag(scale) with the smallest sigma >= sigma0 (tenfold steps from 1e-8)
-    that is positive definite.  Returns (lu, sigma, n_factorisations, n_negative_at_sigma0)."""
+def _shifted_factor(chol, A, scale, sigma0, sigma_max=1e12):
+    """Cholesky of A + sigma diag(scale) with the smallest sigma >= sigma0 (tenfold steps from
+    1e-8) that is positive definite.  Returns (chol, sigma, n_factorisations)."""
     sigma = sigma0
     nf = 0
-    neg0 = None
     while True:
-        M = A if sigma == 0.0 else (A + sp.diags(sigma * scale)).tocsc()
         nf += 1
-        try:
-            lu, neg = _factor(M)
-            if nf == 1:
-                neg0 = neg
-            if neg == 0:
-                return lu, sigma, nf, neg0
-        except RuntimeError:
-            if nf == 1:
-                neg0 = -1
+        if chol.factor(A, None if sigma == 0.0 else sigma * scale):
+            return chol, sigma, nf
         sigma = 1e-8 if sigma == 0.0 else 10.0 * sigma
         if sigma > sigma_max:
             raise RuntimeError("no positive-definite shift of the tangent found")
@@ -329,7 +305,8 @@ def _newton_level(sys, D, lam, o, stats):
             scale = np.abs(A.diagonal())
             scale[scale == 0.0] = max(float(scale.max(initial=0.0)), 1.0)
             try:
-                lu, sigma, nf, neg0 = _shifted_factor(A, scale, 0.0 if sigma < 1e-7 else sigma / 10.0)
+                lu, sigma, nf = _shifted_factor(sys.chol, A, scale,
+                                                0.0 if sigma < 1e-7 else sigma / 10.0)
             except RuntimeError as exc:
                 return D, False, f"tangent could not be factorised ({exc})", rel
             sys.n_factor += nf
@@ -462,7 +439,9 @@ def _paper_level(sys, D, lam, o, stats):
             since_best += 1
         stats["iterations"] += 1
         try:
-            dD = _factor(sys.Kff(K))[0].solve(r)
+            A = sys.Kff(K)
+            # Cholesky where K_t is positive definite (most iterations), SuperLU LDL^T elsewhere
+            dD = sys.chol.solve(r) if sys.chol.factor(A) else _factor(A)[0].solve(r)
         except RuntimeError:
             return D, False, (f"singular tangent K_t at iteration {it} (relative residual {rel:.2e}); "
                               "the paper's scheme cannot proceed"), rel
@@ -496,7 +475,7 @@ def _predictor(sys, D, lam0, lam1):
     A = sys.Kff(K)
     scale = np.abs(A.diagonal())
     scale[scale == 0.0] = 1.0
-    lu, _, nf, _ = _shifted_factor(A, scale, 0.0)
+    lu, _, nf = _shifted_factor(sys.chol, A, scale, 0.0)
     sys.n_factor += nf
     sys.n_solves += 1
     Dp = sys.apply_prescribed(D, lam1)
@@ -692,25 +671,36 @@ def _free_length(mesh, fixed_mask):
 
 
 def _stability(sys, D, eig_max_dofs):
-    """(positive_definite or None, min eigenvalue or None) of K_t on the free dofs at D."""
+    """(positive_definite or None, min eigenvalue or None) of K_t on the free dofs at D.
+
+    Positive definite = the Cholesky factorisation succeeds; otherwise the inertia of SuperLU's
+    LDL^T says so (None when its pivoting was not symmetric).  The smallest eigenvalue comes from
+    ARPACK in shift-invert mode about -s (s = 1e-10 of the mean diagonal), with the inverse applied
+    by the Cholesky factor of A + s I when it exists."""
     _, K = sys.force_tangent(D)
     A = sys.Kff(K)
-    pd = None
-    try:
-        _, neg = _factor(A)
-        pd = None if neg is None else bool(neg == 0)
-    except RuntimeError:
-        pd = False
-    lmin = None
-    if A.shape[0] <= eig_max_dofs and A.shape[0] > 2:
+    n = A.shape[0]
+    s = 1e-10 * float(np.abs(A.diagonal()).mean())
+    chol = Cholesky()
+    pd = chol.factor(A)
+    if not pd:
         try:
-            s = 1e-10 * float(np.abs(A.diagonal()).mean())
+            _, neg = _factor(A)
+            pd = None if neg is None else bool(neg == 0)
+        except RuntimeError:
+            pd = False
+    lmin = None
+    if 2 < n <= eig_max_dofs:
+        try:
+            opinv = None
+            if pd and chol.factor(A, np.full(n, s)):
+                opinv = LinearOperator((n, n), matvec=chol.solve, dtype=float)
             vals = eigsh(A, k=1, sigma=-s, which="LM", return_eigenvectors=False, tol=1e-8,
-                         maxiter=2000)
+                         maxiter=2000, OPinv=opinv)
             lmin = float(vals[0])
         except Exception:  # noqa: BLE001 - a diagnostic, never fatal
             lmin = None
-    elif A.shape[0] <= 2:
+    elif n <= 2:
         lmin = float(np.linalg.eigvalsh(A.toarray()).min())
     return pd, lmin
 

@@ -26,6 +26,21 @@ body, and continuous across the surface.  The force is exactly minus the gradien
 signed distance is differentiable (everywhere outside; inside a box/pedestal except on the medial
 planes where the nearest face changes, where the force has a kink but the energy stays continuous).
 
+Coulomb friction (optional, per body: ``friction`` = mu >= 0, default 0)
+--------------------------------------------------------------------------
+As in the penalty contacts of LS-DYNA and Abaqus/Explicit: every node in contact with a body of
+friction mu carries a tangential elastic "stick" spring of stiffness k_t to an anchor point a_i,
+set where the node first touches.  With the tangential part s = (I - n n^T)(x - a) of the spring's
+stretch, the trial force -k_t s is return-mapped to the Coulomb cone |f_t| <= mu |f_n|
+(|f_n| = k p): inside it the node sticks; outside it the force is scaled onto the cone and the
+anchor slides with the node, a := x + f_t / k_t (then the stored stick stretch is exactly |f_t|/k_t).
+A node leaving the body forgets its anchor.  The friction force is path dependent: it is not
+minus the gradient of an energy; the solver accumulates its work instead (stick energy
+1/2 |f_t|^2 / k_t plus dissipation by slip) -- :func:`frictional_contact`.  Its stiffness k_t
+(default = the normal penalty k) enters the critical step like k: the contact Hessian of a node
+has eigenvalues k (normal) and k_t (tangential), so the bound below uses max(k, k_t).
+Bodies with mu = 0 never reach this code (no anchors, no extra work).
+
 Penalty stiffness rule
 ----------------------
 :func:`penalty_stiffness` gives every node the stiffness k_i = factor * m_i * omega_max^2, with m_i
@@ -60,6 +75,17 @@ def _vec3(v, name: str) -> np.ndarray:
     return a
 
 
+def friction_coefficient(v, name: str = "friction") -> float:
+    """A Coulomb friction coefficient: a finite number >= 0 (0: frictionless)."""
+    try:
+        x = float(v)
+    except (TypeError, ValueError):
+        raise InputError(f"{name} (Coulomb friction coefficient) must be a number >= 0, got {v!r}") from None
+    if not math.isfinite(x) or x < 0.0:
+        raise InputError(f"{name} (Coulomb friction coefficient) must be finite and >= 0, got {v!r}")
+    return x
+
+
 def _pos(v, name: str, allow_zero=False) -> float:
     try:
         x = float(v)
@@ -74,6 +100,7 @@ class RigidBody:
     """Base class: subclasses implement :meth:`signed_distance` -> (g (N,), n (N,3))."""
 
     offset: float = 0.0
+    friction: float = 0.0  # Coulomb coefficient mu (0: frictionless, the default)
 
     def signed_distance(self, x: np.ndarray):  # pragma: no cover - interface
         raise NotImplementedError
@@ -104,10 +131,11 @@ class RigidBody:
 class Sphere(RigidBody):
     """Rigid solid sphere of ``radius`` about ``center`` (the paper's Ø10 cm sphere, Section 4.2)."""
 
-    def __init__(self, center, radius, offset=0.0):
+    def __init__(self, center, radius, offset=0.0, friction=0.0):
         self.center = _vec3(center, "sphere center")
         self.radius = _pos(radius, "sphere radius")
         self.offset = _pos(offset, "contact offset", allow_zero=True)
+        self.friction = friction_coefficient(friction)
 
     def signed_distance(self, x):
         d = x - self.center
@@ -119,14 +147,15 @@ class Sphere(RigidBody):
         return r - self.radius, n
 
     def __repr__(self):
-        return f"Sphere(center={self.center.tolist()}, radius={self.radius}, offset={self.offset})"
+        return (f"Sphere(center={self.center.tolist()}, radius={self.radius}, offset={self.offset}, "
+                f"friction={self.friction})")
 
 
 class Plane(RigidBody):
     """Rigid half-space: the side of the plane through ``point`` opposite to ``normal`` is solid
     (a floor with normal (0,0,1))."""
 
-    def __init__(self, point, normal=(0.0, 0.0, 1.0), offset=0.0):
+    def __init__(self, point, normal=(0.0, 0.0, 1.0), offset=0.0, friction=0.0):
         self.point = _vec3(point, "plane point")
         nn = _vec3(normal, "plane normal")
         L = np.linalg.norm(nn)
@@ -134,12 +163,14 @@ class Plane(RigidBody):
             raise InputError("plane normal must be non-zero")
         self.normal = nn / L
         self.offset = _pos(offset, "contact offset", allow_zero=True)
+        self.friction = friction_coefficient(friction)
 
     def signed_distance(self, x):
         return ((x - self.point) * self.normal).sum(axis=1), np.broadcast_to(self.normal, x.shape).copy()
 
     def __repr__(self):
-        return f"Plane(point={self.point.tolist()}, normal={self.normal.tolist()}, offset={self.offset})"
+        return (f"Plane(point={self.point.tolist()}, normal={self.normal.tolist()}, offset={self.offset}, "
+                f"friction={self.friction})")
 
 
 def _box_sdf(a: np.ndarray, half: np.ndarray):
@@ -181,7 +212,7 @@ class Pedestal(RigidBody):
     """
 
     def __init__(self, top_center, radius=None, half_widths=None, height=None, edge_radius=0.0,
-                 offset=0.0):
+                 offset=0.0, friction=0.0):
         self.top_center = _vec3(top_center, "pedestal top_center")
         if (radius is None) == (half_widths is None):
             raise InputError("give a pedestal either radius (cylinder) or half_widths (box), not both")
@@ -201,6 +232,7 @@ class Pedestal(RigidBody):
         if self.edge_radius >= min(size, 0.5 * self.height):
             raise InputError("pedestal edge_radius must be smaller than its radius/half width and half height")
         self.offset = _pos(offset, "contact offset", allow_zero=True)
+        self.friction = friction_coefficient(friction)
 
     def signed_distance(self, x):
         r = self.edge_radius
@@ -224,7 +256,7 @@ class Pedestal(RigidBody):
     def __repr__(self):
         dims = f"radius={self.radius}" if self.kind == "cylinder" else f"half_widths={self.half_widths.tolist()}"
         return (f"Pedestal({self.kind}, top_center={self.top_center.tolist()}, {dims}, height={self.height}, "
-                f"edge_radius={self.edge_radius}, offset={self.offset})")
+                f"edge_radius={self.edge_radius}, offset={self.offset}, friction={self.friction})")
 
 
 # ---------------------------------------------------------------------- all bodies at once
@@ -241,6 +273,49 @@ def contact_forces(bodies, x, k):
         e += eb
         n_active += int(np.count_nonzero(np.any(fb != 0.0, axis=1)))
     return f, e, n_active
+
+
+def frictional_contact(body, x, k, k_t, anchor):
+    """Penalty normal force plus Coulomb friction of one body (mu = body.friction > 0).
+
+    x : (N,3) points;  k, k_t : scalar or (N,) normal and tangential penalty stiffnesses;
+    anchor : (N,3) anchor points of the stick springs, NaN where a node was not in contact at the
+    previous evaluation.  Nothing is modified in place (a restart must see the saved anchors).
+
+    Returns (f (N,3) total force, E_n penalty energy, idx (m,) indices of the nodes in contact,
+    f_t (m,3) their friction forces, E_t stick-spring energy 1/2 sum |f_t|^2 / k_t, new anchor
+    (N,3), n_slip number of nodes slipping).  Only the nodes in contact are worked on.
+    """
+    x = np.asarray(x, dtype=float).reshape(-1, 3)
+    gap, n = body.penetration(x)
+    p = np.maximum(-gap, 0.0)
+    kp = np.asarray(k, dtype=float) * p
+    f = kp[:, None] * n
+    e_n = 0.5 * float(np.add.reduce(kp * p))
+    idx = np.flatnonzero(p > 0.0)
+    new = np.full_like(anchor, np.nan)
+    if idx.size == 0:
+        return f, e_n, idx, np.zeros((0, 3)), 0.0, new, 0
+    xa = x[idx]
+    na = n[idx]
+    a = anchor[idx]
+    fresh = np.isnan(a[:, 0])
+    if np.any(fresh):  # first touch: the anchor is where the node is (no tangential force yet)
+        a = a.copy()
+        a[fresh] = xa[fresh]
+    d = xa - a
+    s = d - np.einsum("ij,ij->i", d, na)[:, None] * na       # tangential stretch
+    kt = np.broadcast_to(np.asarray(k_t, dtype=float), p.shape)[idx]
+    ft = -kt[:, None] * s                                     # trial (stick) force
+    fmax = body.friction * kp[idx]                            # Coulomb cone mu |f_n|
+    mag = np.sqrt(np.einsum("ij,ij->i", ft, ft))
+    slip = mag > fmax
+    if np.any(slip):
+        ft[slip] *= (fmax[slip] / mag[slip])[:, None]         # return map onto the cone
+    new[idx] = xa + ft / kt[:, None]                          # anchor: stick stretch = |f_t| / k_t
+    f[idx] += ft
+    e_t = 0.5 * float(np.add.reduce(np.einsum("ij,ij->i", ft, ft) / kt))
+    return f, e_n, idx, ft, e_t, new, int(np.count_nonzero(slip))
 
 
 # ---------------------------------------------------------------------- stiffness and time step

@@ -161,12 +161,13 @@ def contact_bodies(scene: Scene) -> list:
     out = []
     for c in scene.contact:
         off = c.get("offset", 0.0)
+        mu = c.get("friction", 0.0)
         if c["type"] == "sphere":
-            out.append(C.Sphere(c["centre"], c["radius"], offset=off))
+            out.append(C.Sphere(c["centre"], c["radius"], offset=off, friction=mu))
         elif c["type"] == "plane":
-            out.append(C.Plane(c["point"], c["normal"], offset=off))
+            out.append(C.Plane(c["point"], c["normal"], offset=off, friction=mu))
         else:
-            kw = dict(height=c.get("height"), edge_radius=c.get("edge_radius", 0.0), offset=off)
+            kw = dict(height=c.get("height"), edge_radius=c.get("edge_radius", 0.0), offset=off, friction=mu)
             if c["shape"] == "disc":
                 out.append(C.Pedestal(c["centre"], radius=c["diameter"] / 2, **kw))
             else:

@@ -59,7 +59,10 @@ Scene file format
                                           #           (diameter); centre = centre of its top face;
                                           #           height (default 10), edge_radius (default 0)
                                           # all:      offset = distance kept between the body and
-                                          #           the mid-surface (h/2 for the lower face)
+                                          #           the mid-surface (h/2 for the lower face);
+                                          #           friction = Coulomb coefficient mu >= 0
+                                          #           (default 0: frictionless; explicit/relax
+                                          #           solvers only, stick spring + return map)
     # The paper's pedestal scenes clamp the sheet on the pedestal edge and need no pedestal body
     # (a picture still shows the pedestal); add one to keep folds out of the pedestal.
 
@@ -119,7 +122,7 @@ CONTACT_KEYS = {
     "pedestal": {"shape": "str", "centre": "vec3", "size": "pos", "diameter": "pos", "height": "pos",
                  "edge_radius": "nonneg"},
 }
-CONTACT_COMMON = {"type": "str", "offset": "nonneg"}
+CONTACT_COMMON = {"type": "str", "offset": "nonneg", "friction": "nonneg"}
 
 _DENSITY_RE = re.compile(r"^\s*\d+(\s*[xX×]\s*\d+)*\s*$")
 

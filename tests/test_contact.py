@@ -130,3 +130,47 @@ def test_contact_forces_sum_and_stiffness_rules():
         Pedestal((0, 0, 0), radius=1.0, half_widths=(1, 1))
     with pytest.raises(InputError):
         Sphere((0, 0, 0), -1.0)
+
+
+# ------------------------------------------------------------------------------ Coulomb friction
+def test_friction_coefficient_validated():
+    assert Plane((0, 0, 0)).friction == 0.0  # default: frictionless
+    assert Sphere((0, 0, 0), 1.0, friction=0.3).friction == 0.3
+    for bad in (-0.1, float("nan"), float("inf"), "rough", None):
+        with pytest.raises(InputError, match="friction"):
+            Plane((0, 0, 0), friction=bad)
+    with pytest.raises(InputError, match="friction"):
+        Pedestal((0, 0, 0), radius=1.0, friction=-1.0)
+
+
+def test_friction_return_map_stick_and_slip():
+    """Floor, k = 100, mu = 0.5, every node 0.01 deep (|f_n| = 1, cone 0.5).  Stick: anchor 0.002
+    away -> f_t = -k_t s = 0.2, anchor kept (in the plane of the node).  Slip: 0.02 away -> trial 2
+    is scaled to 0.5 and the anchor follows, |f_t| / k_t = 0.005 behind the node.  First touch
+    (NaN anchor): no tangential force.  The input anchors are not modified."""
+    from solidshell.contact import frictional_contact
+
+    floor = Plane((0, 0, 0), friction=0.5)
+    x = np.array([[0.0, 0.0, -0.01], [1.0, 0.0, -0.01], [2.0, 0.0, -0.01], [3.0, 0.0, 0.5]])
+    anchor = np.array([[-0.002, 0.0, 0.0], [1.0, -0.02, 0.3], [np.nan] * 3, [3.0, 0.0, 0.0]])
+    keep = anchor.copy()
+    f, e_n, idx, ft, e_t, new, n_slip = frictional_contact(floor, x, 100.0, 100.0, anchor)
+    np.testing.assert_array_equal(anchor, keep)
+    assert idx.tolist() == [0, 1, 2] and n_slip == 1
+    np.testing.assert_allclose(f, [[-0.2, 0, 1.0], [0, -0.5, 1.0], [0, 0, 1.0], [0, 0, 0]], atol=1e-12)
+    np.testing.assert_allclose(ft, f[:3] - [[0, 0, 1.0]] * 3, atol=1e-12)
+    np.testing.assert_allclose(new[0], [-0.002, 0.0, -0.01], atol=1e-12)   # stick: anchor stays (tangentially)
+    np.testing.assert_allclose(new[1], [1.0, -0.005, -0.01], atol=1e-12)   # slip: anchor follows
+    np.testing.assert_allclose(new[2], x[2], atol=1e-12)                   # first touch
+    assert np.all(np.isnan(new[3]))                                        # out of contact: forgotten
+    assert e_n == pytest.approx(3 * 0.5 * 100 * 0.01**2)
+    assert e_t == pytest.approx(0.5 * (0.2**2 + 0.5**2) / 100.0)
+    # the cone holds for any stretch and normal force (random check)
+    rng = np.random.default_rng(3)
+    x = rng.uniform(-1, 1, (500, 3)) * [1, 1, 0.02]
+    anchor = x + rng.normal(size=(500, 3)) * 0.05
+    f, _, idx, ft, _, new, _ = frictional_contact(floor, x, 100.0, 300.0, anchor)
+    fn = f[idx, 2]
+    assert np.all(np.linalg.norm(ft, axis=1) <= 0.5 * fn * (1 + 1e-12))
+    assert np.all(np.abs(ft[:, 2]) < 1e-12)   # tangential
+    np.testing.assert_allclose(-300.0 * (x[idx] - new[idx]), ft, atol=1e-12)

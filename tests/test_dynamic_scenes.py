@@ -50,3 +50,21 @@ def test_forced_unstable_step_detected_and_stable_step_fine():
                      dt=0.9 * dtc, critical_time_step=dtc)
     assert good.summary["converged"] is True
     assert good.summary["energy_balance_error"] < 1e-2
+
+
+def test_sphere_scene_friction_key():
+    """[[contact]] friction: the sphere scene sets mu = 0.3 (frictionless sphere: the cloth slides
+    off); a negative or non-finite coefficient is refused with the key named; the runner passes it
+    to the body; 0 is the default."""
+    from solidshell.runner import contact_bodies
+    from solidshell.scenes import load as load_scene
+
+    sc = load_scene("sphere")
+    assert sc.contact[0]["friction"] == 0.3
+    assert contact_bodies(sc)[0].friction == 0.3
+    assert contact_bodies(sc.with_overrides({"contact.0.friction": 0.0}))[0].friction == 0.0
+    for bad in (-0.2, float("nan"), float("inf"), "high"):
+        with pytest.raises(InputError, match="friction"):
+            sc.with_overrides({"contact.0.friction": bad})
+    ped = load_scene("square-pedestal")
+    assert all(c.get("friction", 0.0) == 0.0 for c in ped.contact)

@@ -46,6 +46,25 @@ energies use the (scaled) masses actually integrated.  The central-velocity E_ki
 frequency w by ~(w dt)^2/3 of its energy, so the error is ~1e-6..1e-4 for smooth drapes and a few %
 right after a penalty impact (w_c dt ~ 0.5).  With kinetic damping E_damp is the kinetic energy removed at the resets.
 
+Coulomb friction (a contact body with ``friction`` mu > 0; contact.frictional_contact): the stick
+springs' anchors are part of the state (checkpointed, so a restart stays bit for bit), their
+stiffness k_t = ``friction_stiffness`` x k (default 1) enters the critical step as max(k, k_t), and
+the work W_f of the friction forces, accumulated every step by the scheme's own central rule
+f_t,n.(x_n+1 - x_n-1)/2 on the nodes in contact, enters the balance as -W_f (reported:
+friction_work = -W_f, of it friction_stick_energy still stored, friction_dissipation the rest).
+Without a frictional body none of this runs.
+
+Eq. (24) (model thickness_strain = "quasi"): its stored energy jumps where a corner's n_p.d_p
+crosses -mu (the nodal strain goes from |x_n| - 1 to -|x_n| - 1: ~2 C_z per corner, with no work
+done), which a plain balance reads as energy creation.  So in a quasi run the work of the internal
+forces is also accumulated every step (trapezoidal rule, W_int = sum 1/2 (F_m-1 + F_m).(D_m -
+D_m-1)), the Eq. (24) branch flags (n_p.d_p <= -mu per element corner) are compared at every
+sample, and over a sample interval in which any flag changed the difference (E_strain change -
+W_int) is booked as a jump (thickness_strain_energy_jump, with thickness_strain_switch_samples and
+thickness_strain_corner_switches counted and reported) instead of entering the balance.  Intervals
+without a switch are checked exactly as before, so an unstable step is still caught; a run whose
+corners switch in every interval is only checked through the work identity there (see the counts).
+
 Mass scaling (Section 4.2): ``mass_scaling`` s with ``mass_scaling_mode`` "uniform" (all masses ×s,
 the paper's choice; the weight P is unchanged) or "director" (only the U_n masses ×s: the thickness
 mode limits the step, so this lengthens it by up to sqrt(s) while leaving translational inertia
@@ -71,7 +90,8 @@ run:        t_end [s] (required), snapshots (list of times [s] to keep as frames
             (numba threads for the force kernel; default 1 below SMALL_MESH_ELEMENTS elements),
             max_energy_error (0.5: a sampled energy balance error above it means the run creates
             energy -- an instability -- and stops it, returning the last good state),
-            recheck_every (steps between critical-step re-checks, 10000; 0 = never).
+            recheck_every (steps between critical-step re-checks, 10000; 0 = never),
+            friction_stiffness (1.0: tangential stick stiffness k_t / normal penalty k, with friction).
 run_relax:  the same keys (alpha default 5.0, mass_scaling default 100) plus damping ("rayleigh" |
             "kinetic"), tol_kinetic (1e-6: E_kin / W_ext), tol_residual (1e-3: |P - F + C|_free /
             |P|_free, or / |F| without loads), check_every (steps, 100), t_max [s] (default 60) or
@@ -91,7 +111,7 @@ import time
 import numpy as np
 from numba import njit
 
-from ..contact import combined_critical_time_step, contact_forces, penalty_stiffness
+from ..contact import combined_critical_time_step, contact_forces, frictional_contact, penalty_stiffness
 from ..errors import InputError, SolverError
 from ..problem import Problem, SolveResult, no_progress
 from .blas import single_threaded_blas
@@ -102,7 +122,8 @@ _CHECKPOINT_VERSION = 1
 _RUN_KEYS = {"t_end", "snapshots", "dt", "safety", "allow_reduce", "allow_unstable", "alpha",
              "mass_scaling", "mass_scaling_mode", "sample_every", "U0", "V0", "critical_time_step",
              "critical_step_method", "critical_step_tol", "contact_penalty_factor", "checkpoint",
-             "checkpoint_every", "restart", "max_wall_time", "frame_every", "progress_every", "threads", "max_energy_error", "recheck_every"}
+             "checkpoint_every", "restart", "max_wall_time", "frame_every", "progress_every", "threads", "max_energy_error", "recheck_every",
+             "friction_stiffness"}
 _RELAX_KEYS = _RUN_KEYS - {"t_end", "snapshots"} | {"damping", "tol_kinetic", "tol_residual",
                                                      "check_every", "t_max", "max_steps"}
 
@@ -183,7 +204,18 @@ class _State:
 
     FIELDS = ("D", "Dp", "step", "damp_sum", "ekin_max", "balance_err", "max_interp", "contact_work",
               "max_contact", "max_pen", "ek_prev_half", "resets", "last_ekin", "last_rel_res", "frame_t", "frame_U",
-              "dt_cur", "n_base", "t_base", "mode", "rechecks", "reductions", "dtc_min")
+              "dt_cur", "n_base", "t_base", "mode", "rechecks", "reductions", "dtc_min",
+              # Coulomb friction (empty / zero without a frictional body)
+              "anchors", "fric_work", "max_slip",
+              # Eq. (24) energy jumps (zero / empty unless thickness_strain = "quasi")
+              "w_int", "w_int_prev", "es_prev", "qflags", "q_jump", "q_samples", "q_corners",
+              "q_F", "q_D", "t_max_interp")
+    # fields a checkpoint written before they existed may lack (a frictionless, Green-strain run)
+    DEFAULTS = dict(anchors=lambda n: np.zeros((0, n, 3)), fric_work=lambda n: 0.0, max_slip=lambda n: 0,
+                    w_int=lambda n: 0.0, w_int_prev=lambda n: 0.0, es_prev=lambda n: 0.0,
+                    qflags=lambda n: np.zeros(0, bool), q_jump=lambda n: 0.0, q_samples=lambda n: 0,
+                    q_corners=lambda n: 0, q_F=lambda n: np.zeros(0), q_D=lambda n: np.zeros(0),
+                    t_max_interp=lambda n: 0.0)
 
     def __init__(self, **kw):
         self.__dict__.update(kw)
@@ -213,14 +245,20 @@ def _load_checkpoint(path, fixed_info: dict) -> _State:
         if int(z["version"]) != _CHECKPOINT_VERSION:
             raise InputError(f"restart file {path} has version {int(z['version'])}, expected {_CHECKPOINT_VERSION}")
         for k, v in fixed_info.items():
+            if "fix_" + k not in z.files:
+                raise InputError(f"restart file {path} does not match this run: it has no {k} (written by a run "
+                                 f"without it)")
             saved = z["fix_" + k]
             if not np.array_equal(saved, np.asarray(v)):
                 raise InputError(f"restart file {path} does not match this run: {k} was {saved.tolist() if saved.size < 8 else '...'}, "
                                  f"now {np.asarray(v).tolist() if np.asarray(v).size < 8 else '...'}")
-        kw = {k: z[k].copy() for k in _State.FIELDS}
-    for k in ("step", "max_interp", "max_contact", "resets", "n_base", "rechecks", "reductions"):
+        n_nodes = int(fixed_info["n_nodes"])
+        kw = {k: (z[k].copy() if k in z.files else _State.DEFAULTS[k](n_nodes)) for k in _State.FIELDS}
+    for k in ("step", "max_interp", "max_contact", "resets", "n_base", "rechecks", "reductions", "max_slip",
+              "q_samples", "q_corners"):
         kw[k] = int(kw[k])
-    for k in ("dt_cur", "t_base", "dtc_min", "damp_sum", "max_pen", "ekin_max", "balance_err", "contact_work", "ek_prev_half", "last_ekin", "last_rel_res"):
+    for k in ("dt_cur", "t_base", "dtc_min", "damp_sum", "max_pen", "ekin_max", "balance_err", "contact_work", "ek_prev_half", "last_ekin", "last_rel_res",
+              "fric_work", "w_int", "w_int_prev", "es_prev", "q_jump", "t_max_interp"):
         kw[k] = float(kw[k])
     kw["frame_t"] = [float(t) for t in kw["frame_t"]]
     kw["frame_U"] = [u for u in kw["frame_U"]]
@@ -253,6 +291,7 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
     allow_reduce = bool(settings.get("allow_reduce", False))
     allow_unstable = bool(settings.get("allow_unstable", False))
     pen_factor = _num(settings, "contact_penalty_factor", 0.1, positive=True)
+    kt_ratio = _num(settings, "friction_stiffness", 1.0, positive=True)
     max_wall = _num(settings, "max_wall_time", None, positive=True)
 
     M = scaled_mass(model, ms, ms_mode)
@@ -266,6 +305,10 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
     presc = problem.prescribed.ravel()[fixed_idx].copy()
     X0 = model.mesh.nodes if hasattr(model, "mesh") else np.zeros((N, 3))
     bodies = list(problem.contact or [])
+    fric_of = [float(getattr(b, "friction", 0.0)) for b in bodies]
+    n_fric = sum(1 for mu in fric_of if mu > 0.0)   # 0: the frictionless path, exactly as before
+    quasi = bool(getattr(model, "quasi", False)) and hasattr(model, "interpenetration")
+    q_mu = float(getattr(model, "mu", 0.5))
 
     U0 = np.zeros(shape) if settings.get("U0") is None else np.asarray(settings["U0"], float).reshape(shape).copy()
     V0 = np.zeros(shape) if settings.get("V0") is None else np.asarray(settings["V0"], float).reshape(shape).copy()
@@ -308,9 +351,14 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
         method = "given"
     k_pen = None
     omega = omega_el
+    k_t = None
     if bodies:
         k_pen = penalty_stiffness(M[:, 0], omega_el, pen_factor)
-        omega = 2.0 / combined_critical_time_step(omega_el, k_pen, M[:, 0])
+        # the contact Hessian of a node has eigenvalues k (normal) and k_t (tangential, friction)
+        k_max = k_pen * max(1.0, kt_ratio) if n_fric else k_pen
+        omega = 2.0 / combined_critical_time_step(omega_el, k_max, M[:, 0])
+        if n_fric:
+            k_t = kt_ratio * k_pen
     dt_crit = critical_time_step(omega, alpha)
     t_est = time.perf_counter() - t_est
 
@@ -416,14 +464,60 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
         pen = float(np.max(np.linalg.norm(fc, axis=1) / k_pen)) if nact else 0.0
         return C, ec, nact, pen
 
+    def contact_friction(D, anchors):
+        """As contact(), with Coulomb friction on the bodies with mu > 0 (contact.frictional_contact):
+        also [(idx, f_t)] per frictional body, the stick energy, the new anchors and the slip count.
+        ``anchors`` is not modified (a restart must see the saved ones)."""
+        x = X0 + D.reshape(shape)[:, :3]
+        fc = np.zeros_like(x)
+        ec = et = pen = 0.0
+        nact = nslip = 0
+        fr = []
+        new = np.empty_like(anchors)
+        j = 0
+        for b, mu in zip(bodies, fric_of):
+            if mu > 0.0:
+                fb, eb, idx, ft, etb, new[j], ns = frictional_contact(b, x, k_pen, k_t, anchors[j])
+                j += 1
+                fr.append((idx, ft))
+                et += etb
+                nslip += ns
+                if idx.size:
+                    fn = fb[idx] - ft
+                    pen = max(pen, float(np.max(np.sqrt(np.einsum("ij,ij->i", fn, fn)) / k_pen[idx])))
+                    nact += idx.size
+            else:
+                fb, eb = b.forces(x, k_pen)
+                act = np.any(fb != 0.0, axis=1)
+                if np.any(act):
+                    nact += int(np.count_nonzero(act))
+                    pen = max(pen, float(np.max(np.linalg.norm(fb[act], axis=1) / k_pen[act])))
+            fc += fb
+            ec += eb
+        C = np.zeros(6 * N)
+        C.reshape(shape)[:, :3] = fc
+        return C, ec, nact, pen, fr, et, new, nslip
+
     def interp_count(D):
         if hasattr(model, "interpenetrated_nodes"):
             return int(np.count_nonzero(model.interpenetrated_nodes(D.reshape(shape))))
         return 0
 
+    def interp_and_branches(D):
+        """(interpenetrated node count n_p.d_p < 0, Eq. (24) branch flags n_p.d_p <= -mu per element
+        corner) from one evaluation of model.interpenetration."""
+        nds = model.interpenetration(D.reshape(shape))
+        flag = np.zeros(N, dtype=bool)
+        for b, nd in zip(model.blocks, nds):
+            flag[b.conn[nd < 0.0]] = True
+        return int(np.count_nonzero(flag)), np.concatenate([nd.ravel() <= -q_mu for nd in nds])
+
     # ------------------------------------------------------------------ initial state
     F0, Es0 = force_and_energy(D0, True)
-    if bodies:
+    anchors0 = np.full((n_fric, N, 3), np.nan)
+    if n_fric:
+        C0, Ec0, _, _, _, _, _, _ = contact_friction(D0, anchors0)
+    elif bodies:
         C0, Ec0, _, _ = contact(D0)
     else:
         C0, Ec0 = np.zeros(6 * N), 0.0
@@ -437,6 +531,8 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
                   0.5 * float(Mf[free_idx].sum()) * (1e-9 * L_char * omega_el) ** 2, 1e-300)
     fixed_info = dict(n_nodes=N, dt=dt, alpha=alpha, mass_scaling=ms, mode=ms_mode, damping=damping,
                       n_fixed=fixed_idx.size, D0=D0, omega=omega, omega_el=omega_el, method=method)
+    if n_fric:  # (only then: frictionless checkpoints stay as they were)
+        fixed_info.update(friction=np.asarray(fric_of), friction_stiffness=kt_ratio)
 
     if restart:
         st = _load_checkpoint(restart, fixed_info)
@@ -446,8 +542,15 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
         A0[fixed_idx] = 0.0
         Dm = D0 - dt * V0f + 0.5 * dt * dt * A0
         Dm[fixed_idx] = presc
+        if quasi:
+            mi0, qf0 = interp_and_branches(D0)
+        else:
+            mi0, qf0 = interp_count(D0), np.zeros(0, bool)
         st = _State(D=D0.copy(), Dp=Dm, step=0, damp_sum=0.0, ekin_max=Ek0, balance_err=0.0,
-                    max_interp=interp_count(D0), contact_work=0.0, max_contact=0, max_pen=0.0, ek_prev_half=0.0,
+                    anchors=anchors0, fric_work=0.0, max_slip=0, w_int=0.0, w_int_prev=0.0, es_prev=Es0,
+                    qflags=qf0, q_jump=0.0, q_samples=0, q_corners=0, t_max_interp=0.0,
+                    q_F=(F0.copy() if quasi else np.zeros(0)), q_D=(D0.copy() if quasi else np.zeros(0)),
+                    max_interp=mi0, contact_work=0.0, max_contact=0, max_pen=0.0, ek_prev_half=0.0,
                     resets=0, last_ekin=Ek0, last_rel_res=(_norm((P - F0 + C0)[free_idx]) / Pn
                                                          if Pn > 0 else 0.0),
                     frame_t=[], frame_U=[], dt_cur=dt, n_base=0, t_base=0.0,
@@ -488,7 +591,19 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
                 status, message = "failed", f"internal force failed at step {n} (t = {time_of(n):.6g} s): {exc}"
                 break
             np.subtract(P, F, out=R)
-            if bodies:
+            if quasi and n > 0:
+                # work of the internal forces along the path actually taken, trapezoidal rule per
+                # step: sum 1/2 (F_m-1 + F_m).(D_m - D_m-1) up to D_n (the same end points as
+                # E(D_n) - E(D_0), so that it differs from them only where the energy jumps)
+                st.w_int += 0.5 * float(np.add.reduce((F + st.q_F) * (D - st.q_D)))
+                st.q_F[:] = F
+                st.q_D[:] = D
+            if n_fric:
+                C, Ec, nact, pen, fr, Et, new_anchors, nslip = contact_friction(D, st.anchors)
+                R += C
+                if pen > st.max_pen:
+                    st.max_pen = pen
+            elif bodies:
                 C, Ec, nact, pen = contact(D)
                 R += C
                 if pen > st.max_pen:
@@ -516,7 +631,23 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
                 Wext = _dot(P, D - D0)
                 Edamp = st.damp_sum - (0.5 * alpha * dt * vMv if n > 0 else 0.0)
                 Ecn = Ec if bodies else 0.0
-                bal = (Ek - Ek0) + (Es - Es0) - Wext + Edamp + (Ecn - Ec0)
+                if quasi:
+                    # Eq. (24) is discontinuous where a corner's n_p.d_p crosses -mu: the stored
+                    # thickness energy jumps with no work done.  Over a sample interval in which a
+                    # branch flag changed, the jump is the change of the strain energy minus the
+                    # work of the internal forces (trapezoidal rule, accumulated every step);
+                    # it is booked as a jump (counted, reported) and kept out of the balance.  In
+                    # intervals without a switch the energy is smooth and is checked as usual.
+                    n_int, qf = interp_and_branches(D)
+                    nsw = int(np.count_nonzero(qf != st.qflags))
+                    if nsw:
+                        st.q_jump += (Es - st.es_prev) - (st.w_int - st.w_int_prev)
+                        st.q_samples += 1
+                        st.q_corners += nsw
+                        st.qflags = qf
+                    st.es_prev, st.w_int_prev = Es, st.w_int
+                Efric = -st.fric_work if n_fric else 0.0   # work done against friction (>= 0 in slip)
+                bal = (Ek - Ek0) + (Es - Es0 - st.q_jump) - Wext + Edamp + (Ecn - Ec0) + Efric
                 scale = max(abs(Wext), st.ekin_max, E_init, abs(Es - Es0), E_floor)
                 err = abs(bal) / scale
                 st.balance_err = max(st.balance_err, err)
@@ -528,11 +659,16 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
                     break
                 good_t = time_of(n)
                 good_D[:] = D
-                st.max_interp = max(st.max_interp, interp_count(D))
+                ni = n_int if quasi else interp_count(D)
+                if ni > st.max_interp:
+                    st.max_interp, st.t_max_interp = ni, time_of(n)
                 if bodies:
                     st.max_contact = max(st.max_contact, nact)
+                if n_fric:
+                    st.max_slip = max(st.max_slip, nslip)
                 st.last_ekin = Ek
-                last = dict(Ek=Ek, Es=Es - Es0, Wext=Wext, Edamp=Edamp, Ec=Ecn - Ec0, t=time_of(n))
+                last = dict(Ek=Ek, Es=Es - Es0, Wext=Wext, Edamp=Edamp, Ec=Ecn - Ec0, t=time_of(n),
+                            Efric=Efric, Et=(Et if n_fric else 0.0), interp=ni)
             if check or (not relax and n == end_step - 1):
                 # relative to the loads; without loads (prescribed displacements only) relative to
                 # the internal forces including the reactions
@@ -574,6 +710,14 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
                     ek_half = 0.5 * _dot(Mf * dh, dh) / dt**2
                     st.resets += 1
                 st.ek_prev_half = ek_half
+            # ---------------------------------------------------- path-dependent work of step n
+            if n_fric:
+                # friction work, by the same central rule as the scheme: f_t,n.(x_n+1 - x_n-1)/2
+                D6, Dp6 = Dn1.reshape(shape), Dp.reshape(shape)
+                for idx, ft in fr:
+                    if idx.size:
+                        st.fric_work += 0.5 * float(np.add.reduce((ft * (D6[idx, :3] - Dp6[idx, :3])).ravel()))
+                st.anchors = new_anchors
             # ---------------------------------------------------- advance
             Dp, D, Dn1 = D, Dn1, Dp
             n += 1
@@ -591,7 +735,7 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
                     st.mode = est.mode
                     w = est.omega_max
                     if bodies:
-                        w = 2.0 / combined_critical_time_step(w, k_pen, M[:, 0])
+                        w = 2.0 / combined_critical_time_step(w, k_max, M[:, 0])
                     dtc_now = critical_time_step(w, alpha)
                     st.dtc_min = min(st.dtc_min, dtc_now)
                     if dt > recheck_margin * dtc_now:
@@ -684,8 +828,25 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
         "max_contact_nodes": int(st.max_contact),
         "max_contact_penetration": float(st.max_pen),  # deepest, over every step (p = |f|/k)
         "kinetic_resets": int(st.resets),
+        "max_interpenetration_time": float(st.t_max_interp),
+        "interpenetrated_nodes_last_sample": int(last.get("interp", 0)),
         "status": status,
     }
+    if n_fric:
+        info.update({
+            "friction": [float(m) for m in fric_of],
+            "friction_stiffness_ratio": float(kt_ratio),
+            "friction_work": float(-st.fric_work),              # energy taken out by friction
+            "friction_stick_energy": float(last.get("Et", 0.0)),  # of it, still stored in the stick springs
+            "friction_dissipation": float(-st.fric_work - last.get("Et", 0.0)),
+            "max_slipping_nodes": int(st.max_slip),
+        })
+    if quasi:
+        info.update({
+            "thickness_strain_energy_jump": float(st.q_jump),
+            "thickness_strain_switch_samples": int(st.q_samples),
+            "thickness_strain_corner_switches": int(st.q_corners),
+        })
     info.update(info_dt)
     if restarted_from is not None:
         info["restarted_from_step"] = int(restarted_from)

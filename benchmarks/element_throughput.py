@@ -46,12 +46,15 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--elements", type=int, default=10000)
     ap.add_argument("--repeats", type=int, default=7)
+    ap.add_argument("--membrane", default="full,ans",
+                    help="quadrilateral membrane variants to measure (solidshell/elements/quad4.py)")
     args = ap.parse_args(argv)
     print(f"numba threads: {get_num_threads()}")
-    for tri in (False, True):
+    cases = [(False, m) for m in args.membrane.split(",")] + [(True, "full")]
+    for tri, membrane in cases:
         n = int(round(np.sqrt(args.elements / (2 if tri else 1))))
         mesh = sheet(n, tri)
-        model = Model(mesh, IsotropicShell(E=1e5, nu=0.3, h=0.01))
+        model = Model(mesh, IsotropicShell(E=1e5, nu=0.3, h=0.01), membrane=membrane)
         U = 0.05 * np.random.default_rng(0).standard_normal((mesh.n_nodes, 6))
         b = model.blocks[0]
         M = len(b.conn)
@@ -62,14 +65,14 @@ def main(argv=None):
         nth = get_num_threads()
         t0 = time.perf_counter()
         core.energy_force(*b.args(xo, xn, False, 0.5), fe, we, nth)
-        core.force_tangent(*b.args(xo, xn, False, 0.5), fe, we, Ke, nth)
+        core.force_tangent(*b.args(xo, xn, False, 0.5), b.gp_membrane, fe, we, Ke, nth)
         model.force_and_tangent(U)
         first = time.perf_counter() - t0
         tf = median_time(lambda: core.energy_force(*b.args(xo, xn, False, 0.5), fe, we, nth), args.repeats)
-        tk = median_time(lambda: core.force_tangent(*b.args(xo, xn, False, 0.5), fe, we, Ke, nth), args.repeats)
+        tk = median_time(lambda: core.force_tangent(*b.args(xo, xn, False, 0.5), b.gp_membrane, fe, we, Ke, nth), args.repeats)
         tF = median_time(lambda: model.internal_force(U), args.repeats)
         tA = median_time(lambda: model.force_and_tangent(U), args.repeats)
-        name = "tri3 " if tri else "quad4"
+        name = "tri3 " if tri else f"quad4 membrane={membrane}"
         print(f"{name} M={M:6d}  first call (compile/cache load) {first:6.2f} s")
         print(f"  force kernel          {M / tf / 1e6:8.3f} M elem/s   ({tf * 1e3:7.2f} ms)")
         print(f"  force+tangent kernel  {M / tk / 1e3:8.1f} k elem/s   ({tk * 1e3:7.2f} ms)")

@@ -21,24 +21,26 @@ _THICKNESS_STRAINS = ("green", "quasi")
 class _Block:
     """One element type of the mesh with its folded constants (see elements/core.py)."""
 
-    def __init__(self, module, conn, Xo, Xn, section):
+    def __init__(self, module, conn, Xo, Xn, section, membrane):
         self.module = module
         self.conn = np.ascontiguousarray(conn, dtype=np.int64)
         self.nn = conn.shape[1]
         self.dofs = element_dofs(self.conn)
         c = module.precompute(Xo[conn], Xn[conn], section.C_m, section.C_b, section.C_t,
-                              float(section.E_z), float(section.warp_angle_rad))
+                              float(section.E_z), float(section.warp_angle_rad), membrane=membrane)
         # Eq. (24) measures |x_n| - 1 against |X_n| (not |X_n|^2/2 as the Green strain does)
         c["r_zq"] = np.sqrt(2.0 * c["r_z"])
         self.c = c
         self.dN = np.ascontiguousarray(module.DN_GP)
-        self.alpha = np.ascontiguousarray(module.ALPHA)
-        self.beta = np.ascontiguousarray(module.BETA)
+        self.alpha = np.ascontiguousarray(c["alpha"], dtype=float)
+        self.beta = np.ascontiguousarray(c["beta"], dtype=float)
+        self.tie = np.ascontiguousarray(c["tie"], dtype=float)
+        self.gp_membrane = bool(np.any(c["Cmb"][:, :, 0]))
 
     def args(self, xo, xn, quasi, mu):
         c = self.c
-        return (xo, xn, self.conn, self.dN, self.alpha, self.beta, c["Cmb"], c["Cs"], c["Cz"],
-                c["r_mb"], c["r_s"], c["r_zq"] if quasi else c["r_z"], quasi, mu)
+        return (xo, xn, self.conn, self.dN, self.alpha, self.beta, self.tie, c["Cmb"], c["Cs"],
+                c["Cz"], c["r_mb"], c["r_s"], c["r_zq"] if quasi else c["r_z"], quasi, mu)
 
 
 class Model:
@@ -49,19 +51,26 @@ class Model:
     ----------
     thickness_strain : "green" (Eq. 3, default) or "quasi" (the quasi-engineering strain, Eq. 24)
     mu : the threshold of Eq. (24), 0 < mu < 1 (only with thickness_strain="quasi")
+    membrane : quadrilateral membrane strains, "full" (compatible, 2x2 Gauss: the paper's element)
+        or "ans" (assumed strains from edge and centre tying values, free of membrane locking;
+        see solidshell/elements/quad4.py)
     """
 
-    def __init__(self, mesh: ShellMesh, material, thickness_strain: str = "green", mu: float = 0.5):
+    def __init__(self, mesh: ShellMesh, material, thickness_strain: str = "green", mu: float = 0.5,
+                 membrane: str = "full"):
         if thickness_strain not in _THICKNESS_STRAINS:
             raise InputError(f"thickness_strain must be one of {_THICKNESS_STRAINS}, got {thickness_strain!r}")
+        if membrane not in quad4.MEMBRANES:
+            raise InputError(f"membrane must be one of {quad4.MEMBRANES}, got {membrane!r}")
         if not (0.0 < float(mu) < 1.0):
             raise InputError(f"mu of Eq. (24) must lie in (0, 1), got {mu!r}")
         self.mesh = mesh
         self.material = material
         self.quasi = thickness_strain == "quasi"
         self.mu = float(mu)
+        self.membrane = membrane
         Xo, Xn = mesh.nodes, mesh.directors
-        self.blocks = [_Block(mod, conn, Xo, Xn, material)
+        self.blocks = [_Block(mod, conn, Xo, Xn, material, membrane)
                        for mod, conn in ((quad4, mesh.quads), (tri3, mesh.tris)) if len(conn)]
         self._pattern = None
         self._mass = None
@@ -128,7 +137,8 @@ class Model:
             fe = np.empty((M, b.nn, 6))
             we = np.empty(M)
             Ke = np.empty((M, nd, nd))
-            core.force_tangent(*b.args(xo, xn, self.quasi, self.mu), fe, we, Ke, get_num_threads())
+            core.force_tangent(*b.args(xo, xn, self.quasi, self.mu), b.gp_membrane, fe, we, Ke,
+                               get_num_threads())
             scatter_add_vec(b.dofs, fe.reshape(M, -1), F)
             Ks.append(Ke)
         return F.reshape(-1, 6), self.pattern.assemble(Ks)

@@ -308,7 +308,8 @@ def _run(sc, kind, mesh_arg, out_dir, cb, settings, timings, t_start, overrides=
             raise SolverError(f"solver {kind!r} is not available in this installation ({e}); "
                               f"the mesh is written") from None
 
-        model = Model(mesh, material, thickness_strain=sc.model["thickness_strain"], mu=sc.model["mu"])
+        model = Model(mesh, material, thickness_strain=sc.model["thickness_strain"], mu=sc.model["mu"],
+                      membrane=sc.model.get("membrane", "full"))
         problem = Problem(model, fixed, scene_loads(sc, model), contact=contact_bodies(sc), name=sc.name)
         s = sc.solver_settings(kind)
         s.update(settings)

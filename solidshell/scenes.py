@@ -37,6 +37,7 @@ Scene file format
     [model]                               # optional
     thickness_strain = "green"            # "green" | "quasi" (Eq. 24)
     mu = 0.5                              # the mu of Eq. (24), 0 < mu < 1
+    membrane = "full"                     # quads: "full" (2x2 Gauss, the paper) | "ans" (quad4.py)
 
     [supports]                            # node sets of the mesh (a name or a list of names)
     clamped = "clamped"                   # all six dofs fixed (U_o = U_n = 0)
@@ -367,9 +368,12 @@ class Scene:
 
         # model ---------------------------------------------------------------------
         md = _table(ctx, "model", data.get("model", {}))
-        _unknown(ctx, "model", md, {"thickness_strain", "mu"})
+        _unknown(ctx, "model", md, {"thickness_strain", "mu", "membrane"})
         model = {"thickness_strain": _str(ctx, "model.thickness_strain", md.get("thickness_strain", "green")),
-                 "mu": _num(ctx, "model.mu", md.get("mu", 0.5))}
+                 "mu": _num(ctx, "model.mu", md.get("mu", 0.5)),
+                 "membrane": _str(ctx, "model.membrane", md.get("membrane", "full"))}
+        if model["membrane"] not in ("full", "ans"):
+            raise ctx.err("model.membrane", f"must be 'full' or 'ans', got {model['membrane']!r}")
         if model["thickness_strain"] not in ("green", "quasi"):
             raise ctx.err("model.thickness_strain", f"must be 'green' or 'quasi', got {model['thickness_strain']!r}")
         if not 0.0 < model["mu"] < 1.0:

@@ -90,10 +90,10 @@ def exact_field(case: str, R=np.eye(3)):
     return U, e
 
 
-def run_one(kind: str, case: str, h: float | None = None) -> dict:
+def run_one(kind: str, case: str, h: float | None = None, membrane: str = "full") -> dict:
     mesh, R = patch_mesh(kind)
     mat = MAT if h is None else IsotropicShell(E=MAT.E, nu=MAT.nu, h=h)
-    model = Model(mesh, mat)
+    model = Model(mesh, mat, membrane=membrane)
     Ue, e = exact_field(case, R)
     fixed = np.zeros((8, 6), dtype=bool)
     fixed[OUTER] = True

@@ -40,9 +40,9 @@ def roof(n: int, tri: bool = False) -> ShellMesh:
     return ShellMesh(nodes, quads=q, directors=directors)
 
 
-def midside_deflection(n: int, tri: bool = False) -> float:
+def midside_deflection(n: int, tri: bool = False, membrane: str = "full") -> float:
     mesh = roof(n, tri)
-    model = Model(mesh, IsotropicShell(E=E, nu=0.0, h=H))
+    model = Model(mesh, IsotropicShell(E=E, nu=0.0, h=H), membrane=membrane)
     fixed = np.zeros((mesh.n_nodes, 6), dtype=bool)
     ends = np.abs(np.abs(mesh.nodes[:, 0]) - L / 2) < 1e-9
     fixed[np.ix_(ends, [1, 2, 4, 5])] = True                   # diaphragm: y, z of U_o and U_n

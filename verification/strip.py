@@ -24,7 +24,7 @@ ROOT = os.path.dirname(HERE)
 REF = os.path.join(ROOT, "reference", "elastica_strip.json")
 
 
-def strip_problem(n: int, cut: str):
+def strip_problem(n: int, cut: str, membrane: str = "full"):
     """Mesh, model, fixed mask and gravity loads of the n x 1 strip (warp- or weft-cut)."""
     from solidshell.boundary import clamp, gravity_loads
     from solidshell.material import Fabric
@@ -32,15 +32,15 @@ def strip_problem(n: int, cut: str):
     from solidshell.model import Model
 
     mesh = build_mesh("strip", f"{n}x1", length=5.0, width=1.0)
-    model = Model(mesh, Fabric.wool(warp_angle=0.0 if cut == "warp" else 90.0))
+    model = Model(mesh, Fabric.wool(warp_angle=0.0 if cut == "warp" else 90.0), membrane=membrane)
     return mesh, model, clamp(mesh, "clamped"), gravity_loads(model)
 
 
-def solve_strip(n: int, cut: str, method: str = "newton", **kw):
+def solve_strip(n: int, cut: str, method: str = "newton", membrane: str = "full", **kw):
     """Solve the strip; returns dict(tip_x, tip_z, centreline (x, z) sorted by x, result)."""
     from solidshell.solvers.static import solve_static
 
-    mesh, model, fixed, loads = strip_problem(n, cut)
+    mesh, model, fixed, loads = strip_problem(n, cut, membrane)
     t0 = time.perf_counter()
     res = solve_static(model, fixed, loads, method=method, **kw)
     wall = time.perf_counter() - t0

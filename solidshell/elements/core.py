@@ -5,7 +5,10 @@ configuration x_o = X_o + U_o and x_n = X_n + U_n (Eq. 2 with the truncations of
 
 - at each membrane/bending point g, with a_k = sum_i dN_ik x_oi and b_k = sum_i dN_ik x_ni
   (k = xi, eta or s, t):  e = (a1.a1/2, a2.a2/2, a1.a2),   k = (a1.b1, a2.b2, a1.b2 + a2.b1);
-- at each ANS shear tying point t (Eq. 4, Eq. 12): gamma_t = (sum_i alpha_ti x_oi).(sum_i beta_ti x_ni);
+- at each ANS tying point t: gamma_t = c_t (sum_i alpha_ti y_i).(sum_i beta_ti z_i) with (y, z) =
+  (x_o, x_n) for the transverse shears (Eq. 4, Eq. 12; c_t = 1) and (x_o, x_o) for the assumed
+  membrane strains of the quadrilateral (c_t = 1/2 for a stretch, 1 for a shear; quad4.py): the
+  table ``tie`` (nt,3) holds (offset of y, offset of z, c_t), offsets 0 = x_o, 3 = x_n;
 - at each node i (Eq. 5, Eq. 15): eps_zz,i = x_ni.x_ni / 2 (Green) or the quasi-engineering strain of
   Eq. (24);
 
@@ -57,7 +60,7 @@ def _sign_quasi(xo, xn, conn_e, nn, i, mu):
 
 
 @njit(cache=True, fastmath=_FM, error_model="numpy")
-def _element_force(e, xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r_z,
+def _element_force(e, xo, xn, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_mb, r_s, r_z,
                    quasi, mu, fe, gs, gz, zs, at, dt, xe):
     """Energy of element e; its force into fe (nn,6).  Workspaces: gs (nt,), gz, zs (nn,),
     at, dt (nt,3) (tying-point tangent and director), xe (nn,6) (the element's x_o | x_n)."""
@@ -120,30 +123,35 @@ def _element_force(e, xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r_z
             fe[i, 3] += d1 * q1x + d2 * q2x
             fe[i, 4] += d1 * q1y + d2 * q2y
             fe[i, 5] += d1 * q1z + d2 * q2z
-    # ---- ANS transverse shear at the tying points (Eq. 4 / Eq. 12-14)
+    # ---- ANS tying strains: transverse shear (Eq. 4 / Eq. 12-14), assumed membrane (quad4.py)
     for t in range(nt):
+        oa = int(tie[t, 0])
+        ob = int(tie[t, 1])
         s = 0.0
         for c in range(3):
             av = 0.0
             dv = 0.0
             for i in range(nn):
-                av += alpha[t, i] * xe[i, c]
-                dv += beta[t, i] * xe[i, 3 + c]
+                av += alpha[t, i] * xe[i, oa + c]
+                dv += beta[t, i] * xe[i, ob + c]
             at[t, c] = av
             dt[t, c] = dv
             s += av * dv
-        gs[t] = s - r_s[e, t]
+        gs[t] = tie[t, 2] * s - r_s[e, t]
     for t in range(nt):
+        oa = int(tie[t, 0])
+        ob = int(tie[t, 1])
         q = 0.0
         for u in range(nt):
             q += Cs[e, t, u] * gs[u]
         energy += 0.5 * q * gs[t]
+        qt = q * tie[t, 2]
         for i in range(nn):
-            qa = q * alpha[t, i]
-            qb = q * beta[t, i]
+            qa = qt * alpha[t, i]
+            qb = qt * beta[t, i]
             for c in range(3):
-                fe[i, c] += qa * dt[t, c]
-                fe[i, 3 + c] += qb * at[t, c]
+                fe[i, oa + c] += qa * dt[t, c]
+                fe[i, ob + c] += qb * at[t, c]
     # ---- ANS thickness strain at the nodes (Eq. 5 / Eq. 15), Green or Eq. (24)
     for i in range(nn):
         xx = xe[i, 3] * xe[i, 3] + xe[i, 4] * xe[i, 4] + xe[i, 5] * xe[i, 5]
@@ -174,11 +182,13 @@ def _force_workspace(nn, nt):
 
 
 @njit(cache=True, parallel=True, fastmath=_FM)
-def energy_force(xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r_z, quasi, mu, f_out, w_out, nth):
+def energy_force(xo, xn, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_mb, r_s, r_z, quasi, mu, f_out,
+                 w_out, nth):
     """Element energies into w_out (M,) and element forces into f_out (M, nn, 6), all elements.
 
     xo, xn : (N,3) current nodal mid-surface positions and directors (X + U)
-    conn   : (M,nn) connectivity;  dN (ngp,nn,2), alpha/beta (nt,nn): the element type's constants
+    conn   : (M,nn) connectivity;  dN (ngp,nn,2), alpha/beta (nt,nn), tie (nt,3): the element
+             type's constants (tie: see the module docstring)
     Cmb (M,ngp,2,3,3), Cs (M,nt,nt), Cz (M,nn,nn): folded rigidities;  r_*: raw strains at X
     nth    : number of work chunks (numba threads); each chunk allocates its workspace once
     """
@@ -189,17 +199,19 @@ def energy_force(xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r_z, qua
     for th in prange(nth):
         gs, gz, zs, at, dt, xe = _force_workspace(nn, nt)
         for e in range(th * chunk, min(M, (th + 1) * chunk)):
-            w_out[e] = _element_force(e, xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r_z,
-                                      quasi, mu, f_out[e], gs, gz, zs, at, dt, xe)
+            w_out[e] = _element_force(e, xo, xn, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_mb, r_s,
+                                      r_z, quasi, mu, f_out[e], gs, gz, zs, at, dt, xe)
 
 
 @njit(cache=True, fastmath=_FM, error_model="numpy")
-def _element_tangent(e, xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r_z,
-                     quasi, mu, Ke, B, D, oo, on, nz, gs, gz, zs, at, dt, v4, xe):
+def _element_tangent(e, xo, xn, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_mb, r_s, r_z,
+                     quasi, mu, gp_membrane, Ke, B, D, oo, on, nz, gs, gz, zs, at, dt, v4, xe):
     """Tangent k_t of Eq. (9) of element e into Ke (nd,nd), nd = 6 nn (dof 6i+c: U_o then U_n).
 
     ``xe`` (nn,6) [x_o | x_n], and the tying values ``gs``, ``at``, ``dt`` must be as _element_force
-    leaves them for this element (force_tangent calls it first).
+    leaves them for this element (force_tangent calls it first).  ``gp_membrane`` False: the
+    membrane rigidity at the integration points is zero (assumed membrane strains at tying points
+    instead), so those B rows are skipped.
     Material part sum B^T C B over the strain rows (membrane+bending per point, then shear tying,
     then nodal thickness); geometric part sum sigma * d2(strain) as multiples of I3 between nodal
     vectors.  Row-major axpy loops (inner loop over contiguous columns) so that LLVM vectorises.
@@ -269,8 +281,8 @@ def _element_tangent(e, xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r
                 D[r, b] = c0 * B[0, b] + c1 * B[1, b] + c2 * B[2, b]
                 D[3 + r, b] = k0 * B[3, b] + k1 * B[4, b] + k2 * B[5, b]
         for a in range(nd):
-            # membrane rows vanish on director dofs: skip them there
-            r0 = 3 if (a % 6) >= 3 else 0
+            # membrane rows vanish on director dofs (and everywhere without gp_membrane)
+            r0 = 3 if (a % 6) >= 3 or not gp_membrane else 0
             for r in range(r0, 6):
                 bra = B[r, a]
                 for b in range(nd):
@@ -283,19 +295,30 @@ def _element_tangent(e, xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r
                 dj2 = dN[g, j, 1]
                 oo[i, j] += sig[0] * di1 * dj1 + sig[1] * di2 * dj2 + sig[2] * (di1 * dj2 + di2 * dj1)
                 on[i, j] += sig[3] * di1 * dj1 + sig[4] * di2 * dj2 + sig[5] * (di1 * dj2 + di2 * dj1)
-    # shear tying strains (gs, at, dt as the force pass left them); rows of B reused for them
+    # tying strains (gs, at, dt as the force pass left them); rows of B reused for them
     for t in range(nt):
+        oa = int(tie[t, 0])
+        ob = int(tie[t, 1])
+        ct = tie[t, 2]
+        for b in range(nd):
+            B[t, b] = 0.0
         for i in range(nn):
             for c in range(3):
-                B[t, 6 * i + c] = alpha[t, i] * dt[t, c]
-                B[t, 6 * i + 3 + c] = beta[t, i] * at[t, c]
+                B[t, 6 * i + oa + c] += ct * alpha[t, i] * dt[t, c]
+                B[t, 6 * i + ob + c] += ct * beta[t, i] * at[t, c]
     for t in range(nt):
         q = 0.0
         for u in range(nt):
             q += Cs[e, t, u] * gs[u]
-        for i in range(nn):
-            for j in range(nn):
-                on[i, j] += q * alpha[t, i] * beta[t, j]
+        qt = q * tie[t, 2]
+        if tie[t, 1] > tie[t, 0]:           # x_o . x_n product: a U_o-U_n block
+            for i in range(nn):
+                for j in range(nn):
+                    on[i, j] += qt * alpha[t, i] * beta[t, j]
+        else:                               # x_o . x_o product: a symmetric U_o-U_o block
+            for i in range(nn):
+                for j in range(nn):
+                    oo[i, j] += qt * (alpha[t, i] * beta[t, j] + beta[t, i] * alpha[t, j])
         for b in range(nd):
             v = 0.0
             for u in range(nt):
@@ -346,9 +369,10 @@ def _element_tangent(e, xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r
 
 
 @njit(cache=True, parallel=True, fastmath=_FM)
-def force_tangent(xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r_z, quasi, mu,
-                  f_out, w_out, K_out, nth):
-    """Energies, forces (M,nn,6) and tangents (M,nd,nd) of all elements."""
+def force_tangent(xo, xn, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_mb, r_s, r_z, quasi, mu,
+                  gp_membrane, f_out, w_out, K_out, nth):
+    """Energies, forces (M,nn,6) and tangents (M,nd,nd) of all elements.  ``gp_membrane``: some
+    membrane rigidity sits at the integration points (False when all of it is in the tying terms)."""
     M = conn.shape[0]
     nn = conn.shape[1]
     nt = alpha.shape[0]
@@ -363,7 +387,8 @@ def force_tangent(xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r_z, qu
         nz = np.empty((nn, 3, 3))
         gs, gz, zs, at, dt, xe = _force_workspace(nn, nt)
         for e in range(th * chunk, min(M, (th + 1) * chunk)):
-            w_out[e] = _element_force(e, xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r_z,
-                                      quasi, mu, f_out[e], gs, gz, zs, at, dt, xe)
-            _element_tangent(e, xo, xn, conn, dN, alpha, beta, Cmb, Cs, Cz, r_mb, r_s, r_z,
-                             quasi, mu, K_out[e], B, D, oo, on, nz, gs, gz, zs, at, dt, v4, xe)
+            w_out[e] = _element_force(e, xo, xn, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_mb, r_s,
+                                      r_z, quasi, mu, f_out[e], gs, gz, zs, at, dt, xe)
+            _element_tangent(e, xo, xn, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_mb, r_s, r_z,
+                             quasi, mu, gp_membrane, K_out[e], B, D, oo, on, nz, gs, gz, zs, at, dt,
+                             v4, xe)

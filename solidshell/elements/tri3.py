@@ -23,6 +23,7 @@ GAUSS_W = np.full(3, 1.0 / 6.0)
 # tying points: mid-edge 3-1 with d_r = x1 - x3;  1-2 with d_s = x2 - x1;  2-3 with d_t = x3 - x2
 ALPHA = np.array([[1.0, 0.0, -1.0], [-1.0, 1.0, 0.0], [0.0, -1.0, 1.0]])
 BETA = np.array([[0.5, 0.0, 0.5], [0.5, 0.5, 0.0], [0.0, 0.5, 0.5]])
+TIE = np.array([[0.0, 3.0, 1.0]] * 3)                  # shear: (x_o, x_n) products, c_t = 1 (core.py)
 # at node 1 the edges r, s meet; at node 2: s, t; at node 3: t, r  (Eq. 13)
 _PAIRS = ((0, 1), (1, 2), (2, 0))
 
@@ -41,8 +42,11 @@ def raw_strains(xo, xn):
     return mb, s, z
 
 
-def precompute(Xo, Xn, C_m, C_b, C_t, E_z, warp_angle):
-    """Fold Eqs. (6)-(8), (13)-(14) into per-element constants for triangles, initial (M,3,3) Xo, Xn."""
+def precompute(Xo, Xn, C_m, C_b, C_t, E_z, warp_angle, membrane="full"):
+    """Fold Eqs. (6)-(8), (13)-(14) into per-element constants for triangles, initial (M,3,3) Xo, Xn.
+
+    ``membrane`` is accepted for symmetry with quad4 and ignored: the linear triangle's membrane
+    strain is constant and depends only on its edge lengths, so it has no membrane locking to cure."""
     M = len(Xo)
     A1 = Xo[:, 1] - Xo[:, 0]
     A2 = Xo[:, 2] - Xo[:, 0]
@@ -69,7 +73,7 @@ def precompute(Xo, Xn, C_m, C_b, C_t, E_z, warp_angle):
     Cz = E_z * np.einsum("gi,gj,mg->mij", GAUSS_RST, GAUSS_RST, Jw)
     r_mb, r_s, r_z = raw_strains(Xo, Xn)
     return dict(Cmb=np.ascontiguousarray(Cmb), Cs=Cs, Cz=Cz, r_mb=r_mb, r_s=r_s, r_z=r_z,
-                T=T[:, None], J=J)
+                T=T[:, None], J=J, alpha=ALPHA, beta=BETA, tie=TIE)
 
 
 def nodal_areas(Xo, Xn):

@@ -68,3 +68,25 @@ def test_sphere_scene_friction_key():
             sc.with_overrides({"contact.0.friction": bad})
     ped = load_scene("square-pedestal")
     assert all(c.get("friction", 0.0) == 0.0 for c in ped.contact)
+
+
+def test_sphere_study_report_from_cache(tmp_path, monkeypatch):
+    from verification import dynamic_sphere
+
+    cache = tmp_path / "cache"
+    cache.mkdir()
+    monkeypatch.setattr(dynamic_sphere, "CACHE", cache)
+    monkeypatch.setattr(dynamic_sphere, "OUT", tmp_path)
+    row = dict(case="s30-green-uni", mesh="30x30", label="x", settings={}, overrides={}, thickness_strain="green",
+               run_dir="none", load_start="1 1 1", load_end="2 2 2", error=None, steady_state_reached=True,
+               status="steady", message="steady", steps=10, dt=1e-5, critical_time_step=1.1e-5, t_final=1e-4,
+               wall_time_s=3.0, element_steps_per_second=1e6, fold_count=4, drape_coefficient=0.2,
+               max_interpenetrated_nodes=3, max_interpenetration_time=0.5, interpenetrated_nodes=0,
+               energy_balance_error=1e-5, external_work=10.0, friction_work=1.0, friction=[0.3],
+               mass_scaling=100, mass_scaling_mode="uniform")
+    (cache / "s30-green-uni.json").write_text(json.dumps(row))
+    rows = dynamic_sphere.report()
+    assert len(rows) == 1
+    text = (tmp_path / "dynamic_sphere.md").read_text()
+    assert "| s30-green-uni | 30x30 | green | uniform x100 | 0.3 | yes |" in text
+    assert "0.100" in text and "1 1 1 -> 2 2 2" in text and "Not run" in text

@@ -38,6 +38,10 @@ RUNS = Path(os.environ.get("DYNAMIC_SCENES_RUNS", "/tmp/dynamic_scenes_runs"))
 PAPER = dict(damping="rayleigh", alpha=5.0, mass_scaling=100, mass_scaling_mode="uniform")
 KIN_UNI = dict(damping="kinetic", mass_scaling=100, mass_scaling_mode="uniform")
 KIN_DIR = dict(damping="kinetic", mass_scaling=1e4, mass_scaling_mode="director")
+# The sphere cases below were measured on the paper's frictionless sphere; the scene now has Coulomb
+# friction 0.3 (issue #5), so they say friction = 0 to stay what they were.  The frictional sphere
+# study is verification/dynamic_sphere.py.
+MU0 = {"contact.0.friction": 0.0}
 
 # name -> (scene, mesh, solver, solver settings, scene overrides, description)
 CASES = {
@@ -46,18 +50,18 @@ CASES = {
     "sp48-paper": ("square-pedestal", "48x16x4", "relax", dict(PAPER, max_wall_time=1500.0), {}, "paper"),
     "sp24-kin-dir": ("square-pedestal", "24x8x4", "relax", dict(KIN_DIR), {}, "kin-dir"),
     "sp24-kin-uni": ("square-pedestal", "24x8x4", "relax", dict(KIN_UNI), {}, "kin-uni"),
-    "sphere60-green": ("sphere", "60x60", "relax", dict(KIN_DIR, t_max=3.0, max_wall_time=480.0), {}, "kin-dir, t_max 3 s"),
-    "sphere60-quasi": ("sphere", "60x60", "relax", dict(KIN_DIR, t_max=3.0, max_wall_time=480.0), {"model.thickness_strain": "quasi"},
+    "sphere60-green": ("sphere", "60x60", "relax", dict(KIN_DIR, t_max=3.0, max_wall_time=480.0), dict(MU0), "kin-dir, t_max 3 s"),
+    "sphere60-quasi": ("sphere", "60x60", "relax", dict(KIN_DIR, t_max=3.0, max_wall_time=480.0), {"model.thickness_strain": "quasi", **MU0},
                        "kin-dir, t_max 3 s"),
     "sphere60-quasi-dir100": ("sphere", "60x60", "relax",
                               dict(KIN_DIR, mass_scaling=100, t_max=3.0, max_wall_time=480.0),
-                              {"model.thickness_strain": "quasi"}, "kinetic, director masses x100, t_max 3 s"),
+                              {"model.thickness_strain": "quasi", **MU0}, "kinetic, director masses x100, t_max 3 s"),
     "sphere60-quasi-noecheck": ("sphere", "60x60", "relax",
                                 dict(KIN_DIR, t_max=3.0, max_wall_time=480.0, max_energy_error=1e6),
-                                {"model.thickness_strain": "quasi"}, "kin-dir, t_max 3 s, energy check off"),
-    "sphere100-green": ("sphere", "100x100", "relax", dict(KIN_DIR, max_wall_time=300.0), {}, "kin-dir"),
-    "sphere30-green": ("sphere", "30x30", "relax", dict(KIN_DIR, max_wall_time=600.0), {}, "kin-dir"),
-    "sphere30-quasi": ("sphere", "30x30", "relax", dict(KIN_DIR, max_wall_time=600.0), {"model.thickness_strain": "quasi"},
+                                {"model.thickness_strain": "quasi", **MU0}, "kin-dir, t_max 3 s, energy check off"),
+    "sphere100-green": ("sphere", "100x100", "relax", dict(KIN_DIR, max_wall_time=300.0), dict(MU0), "kin-dir"),
+    "sphere30-green": ("sphere", "30x30", "relax", dict(KIN_DIR, max_wall_time=600.0), dict(MU0), "kin-dir"),
+    "sphere30-quasi": ("sphere", "30x30", "relax", dict(KIN_DIR, max_wall_time=600.0), {"model.thickness_strain": "quasi", **MU0},
                        "kin-dir"),
     "hang-20": ("hang-20", "40x40", "explicit", dict(max_wall_time=600.0), {}, "paper (alpha 5, no mass scaling)"),
     "hang-20-dir": ("hang-20", "40x40", "explicit", dict(mass_scaling=10, mass_scaling_mode="director"), {},

@@ -164,16 +164,17 @@ class _Builder:
     def point(self, x: float, y: float) -> int:
         return self.occ.addPoint(float(x), float(y), 0.0)
 
-    def line(self, a: int, b: int, n: int, *groups: str) -> int:
-        """Straight edge a->b with n elements."""
-        return self._curve(self.occ.addLine(a, b), n, groups)
+    def line(self, a: int, b: int, n: int, *groups: str, dist: tuple[str, float] = ("Progression", 1.0)) -> int:
+        """Straight edge a->b with n elements; ``dist``: gmsh's transfinite distribution
+        ("Progression", r: sizes grow by r from a to b; "Bump", c: c < 1 clusters nodes at both ends)."""
+        return self._curve(self.occ.addLine(a, b), n, groups, dist)
 
     def arc(self, a: int, centre: int, b: int, n: int, *groups: str) -> int:
         """Circular arc a->b (< 180 deg) about centre with n elements, uniform in angle."""
         return self._curve(self.occ.addCircleArc(a, centre, b), n, groups)
 
-    def _curve(self, tag, n, groups):
-        self.curves.append((tag, n))
+    def _curve(self, tag, n, groups, dist=("Progression", 1.0)):
+        self.curves.append((tag, n, dist))
         for g in groups:
             self.groups.setdefault((1, g), []).append(tag)
         return tag
@@ -188,8 +189,8 @@ class _Builder:
     def mesh(self) -> ShellMesh:
         self.occ.synchronize()
         m = self.gmsh.model
-        for tag, n in self.curves:
-            m.mesh.setTransfiniteCurve(tag, n + 1)
+        for tag, n, (kind, coef) in self.curves:
+            m.mesh.setTransfiniteCurve(tag, n + 1, kind, coef)
         for s in self.surfaces:
             m.mesh.setTransfiniteSurface(s)
             m.mesh.setRecombine(2, s)
@@ -228,11 +229,18 @@ def strip(counts: tuple[int, int], length: float = 5.0, width: float = 1.0) -> S
 
 
 def square_on_square(counts: tuple[int, int, int], sheet: float = 20.0,
-                     pedestal: float = 10.0) -> ShellMesh:
+                     pedestal: float = 10.0, grading: float = 1.0) -> ShellMesh:
     """Hanging part of a sheet x sheet cm square centred on a pedestal x pedestal cm square
     pedestal (Sections 3.2, 3.5, 6.1, 6.2): four trapezoidal panels between the pedestal edge and
     the sheet edge, meeting on the diagonals.  counts = (A along the pedestal edge, B outward, 4):
-    4AB quads, 4A(B+1) nodes.  Sets ``clamped`` (pedestal edge), ``outer`` (sheet boundary)."""
+    4AB quads, 4A(B+1) nodes.  Sets ``clamped`` (pedestal edge), ``outer`` (sheet boundary).
+    ``grading`` >= 1 refines towards the pedestal corners, where the clamped square's re-entrant
+    corners make the membrane stresses singular: along the diagonals the element size grows
+    geometrically by ``grading`` from the pedestal to the sheet corner, and along the pedestal and
+    sheet edges nodes cluster at both ends (gmsh "Bump" 1/grading).  1 (default) is the paper's
+    uniform mesh; the DC mesh study (verification/static_convergence.py) uses 8."""
+    if not (math.isfinite(float(grading)) and float(grading) >= 1.0):
+        raise InputError(f"grading must be a number >= 1, got {grading!r}")
     s, p = _positive(sheet=sheet, pedestal=pedestal)
     if p >= s:
         raise InputError(f"pedestal ({p} cm) must be smaller than the sheet ({s} cm)")
@@ -244,11 +252,14 @@ def square_on_square(counts: tuple[int, int, int], sheet: float = 20.0,
         b = _Builder(gmsh)
         inner = [b.point(i * p / 2, j * p / 2) for i, j in corners]
         outer = [b.point(i * s / 2, j * s / 2) for i, j in corners]
-        diag = [b.line(inner[k], outer[k], nb) for k in range(4)]
+        g = float(grading)
+        diag = [b.line(inner[k], outer[k], nb, dist=("Progression", g ** (1.0 / max(nb - 1, 1))))
+                for k in range(4)]
+        bump = ("Bump", 1.0 / g) if g != 1.0 else ("Progression", 1.0)
         for k in range(4):
             k1 = (k + 1) % 4
-            e_in = b.line(inner[k], inner[k1], a, "clamped")
-            e_out = b.line(outer[k], outer[k1], a, "outer")
+            e_in = b.line(inner[k], inner[k1], a, "clamped", dist=bump)
+            e_out = b.line(outer[k], outer[k1], a, "outer", dist=bump)
             b.panel(e_in, diag[k1], e_out, diag[k])
         return b.mesh()
 

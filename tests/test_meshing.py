@@ -144,6 +144,26 @@ def test_square_on_square_panels_are_trapezoids_meeting_on_diagonals():
     assert np.any((np.abs(y) < TOL) & (np.abs(x - 10.0) < TOL))
 
 
+@pytest.mark.parametrize("grading", [4.0, 8.0])
+def test_square_on_square_grading(grading):
+    # the graded mesh has the uniform one's counts, covers the same hanging area exactly (straight
+    # sides), keeps the mirror symmetries and grows its elements from the pedestal corners by the
+    # requested factor along the diagonals
+    m = build_mesh("square_on_square", "24x8x4", grading=grading)
+    u = build_mesh("square_on_square", "24x8x4")
+    assert (len(m.quads), m.n_nodes) == (len(u.quads), u.n_nodes)
+    assert m.area() == pytest.approx(400.0 - 100.0, rel=1e-12)
+    x = m.nodes
+    key = lambda p: np.round(p, 9).tolist()
+    assert sorted(map(key, x * [-1, 1, 1])) == sorted(map(key, x))
+    diag = x[np.abs(x[:, 0] - x[:, 1]) < 1e-9]
+    r = np.sort(diag[diag[:, 0] > 0, 0])
+    h = np.diff(r)
+    assert h[-1] / h[0] == pytest.approx(grading, rel=1e-6)
+    with pytest.raises(InputError, match="grading"):
+        build_mesh("square_on_square", "24x8x4", grading=0.5)
+
+
 @pytest.mark.parametrize("recipe,density,inner,outer_r", [("disc_on_disc", "10x40", 6.35, 12.7),
                                                          ("square_on_disc", "30x240", 10.0, None)])
 def test_circular_pedestal_sets(recipe, density, inner, outer_r):

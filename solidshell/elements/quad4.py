@@ -8,26 +8,38 @@ thickness strain from the four nodes (Eq. 5).
 Membrane strains (``membrane=``):
 
 ``"full"``  the compatible Green membrane strains at the 2x2 Gauss points (the paper's element).
-    When a flat bilinear element is bent into a fold, its interior points stretch although its
-    edges and diagonals keep their lengths, and with a fabric's tensile rigidity ~1e4 times its
-    bending rigidity (per cm^2) that parasitic membrane energy stiffens coarse meshes markedly
-    ("membrane locking"): square-pedestal DC 0.679 / 0.596 / 0.562 on 24x8x4 / 48x16x4 / 96x32x4.
+    The bilinear membrane has a parasitic in-plane shear (gamma_xy linear in xi, eta) that locks
+    in-plane bending (MacNeal-Harder in-plane beam: 0.093 of the reference), and when a flat element
+    is twisted by a fold running across it, its Gauss points see a mean stretch -|h|^2/3 that its
+    edges do not (h: the hourglass vector sum_i xi_i eta_i x_i / 4).  With a fabric's tensile
+    rigidity ~1e4 times its bending rigidity per cm^2 both stiffen coarse meshes: square-pedestal DC
+    0.679 / 0.596 / 0.562 on 24x8x4 / 48x16x4 / 96x32x4 (5.9 % change between the finest two).
 ``"ans"``  an assumed membrane strain field, in a Cartesian frame at the element centre (x along
     a_xi):  eps_xx = e1 + b4 (eta - eta_c),  eps_yy = e2 + b5 (xi - xi_c),  gamma_xy = e3  (the field
-    of Pian & Sumihara's membrane element).  (e1, e2, e3) is the J_o-weighted mean of the compatible
-    strains at the four Gauss points and (eta_c, xi_c) the J_o-weighted centroid, so the field has
-    the compatible mean: a constant stress does the same work on it as on the compatible strains and
-    the membrane patch test holds on any quadrilateral, in its energy and its equilibrium form.  b4,
-    b5 -- the in-plane bending strains -- come from five tying strains: the stretches of the two
-    xi-edges and the two eta-edges at their mid-points and the shear a_xi . a_eta at the centre,
-    which a Cartesian field (e, b4, b5) must reproduce (a 5x5 solve per element, done once).  The
-    bilinear element's parasitic in-plane shear (gamma_xy linear in xi and eta) is gone: in-plane
-    bending of a rectangle is exact for nu = 0 (MacNeal-Harder in-plane beam 0.093 -> 0.904 of the
-    reference at nu = 0.3; the rest is eps_yy not following -nu eps_xx).  By MacNeal's theorem an
-    element that passes the patch test must lock for some distortion: the trapezoidal MacNeal-Harder
-    beam gives 0.044 (full: 0.026).  The field has five independent parameters, so there is no
-    spurious zero-energy mode.  All of this is beyond the paper, whose quadrilateral integrates the
-    compatible membrane strains by the 2x2 rule; ``"full"`` stays the default.
+    of Pian & Sumihara's membrane element).
+    - (e1, e2, e3): the J_o-weighted mean of the compatible strains at the four Gauss points, plus
+      c/3 on the natural stretches (xi-xi and eta-eta) with c = |h - alpha a_xi - beta a_eta|^2
+      (alpha, beta: the reference hourglass vector in the centre tangents).  c/3 cancels the
+      twist's parasitic mean stretch (exactly on parallelograms: a rectangle folded along a
+      diagonal keeps its edge lengths and then stores no normal membrane strain, see
+      tests/test_elements.py), and c vanishes with its first derivative for every affine motion of
+      a flat element, so (with the J_o-weighted centroid (xi_c, eta_c)) the field has the
+      compatible mean for small strains: a constant stress does the same work on it as on the
+      compatible strains and the membrane patch test holds on any flat quadrilateral, in its energy
+      and its equilibrium form.
+    - b4, b5 (in-plane bending) from five tying strains: the stretches of the two xi-edges and the
+      two eta-edges at their mid-points and the shear a_xi . a_eta at the centre, which a Cartesian
+      field (e, b4, b5) must reproduce (a 5x5 solve per element, done once).
+    In-plane bending of a rectangle is then exact for nu = 0 (MacNeal-Harder in-plane beam 0.904 at
+    nu = 0.3; the rest is eps_yy not following -nu eps_xx).  By MacNeal's theorem an element that
+    passes the patch test must lock for some distortion: the trapezoidal beam gives 0.044 (full:
+    0.026).  Five independent parameters: no spurious zero-energy mode.  Measured: Scordelis-Lo roof
+    -5.4/-2.7/-1.1 % (full) -> +5.0/+0.6/-0.25 % (ans) on 8^2/16^2/32^2; square-pedestal DC
+    0.629/0.569/0.553 on the uniform meshes and 0.573/0.552/0.548 (0.57 % change) on meshes graded
+    towards the pedestal corners (``grading = 8`` of meshing.square_on_square).  Cost: 22 more
+    tying products (Cs is 26x26 instead of 4x4): the force kernel is 2-3 times slower.  All of
+    this is beyond the paper, whose quadrilateral integrates the compatible membrane strains by
+    the 2x2 rule; ``"full"`` stays the default.
 """
 
 from __future__ import annotations
@@ -73,9 +85,19 @@ _MTY = [((0.0, -1.0), 0, 0, 0.5, 0), ((0.0, 1.0), 0, 0, 0.5, 0),
         ((-1.0, 0.0), 1, 1, 0.5, 1), ((1.0, 0.0), 1, 1, 0.5, 1), ((0.0, 0.0), 0, 1, 1.0, 2)]
 # the compatible membrane strains at the Gauss points as tying terms: a1.a1/2, a2.a2/2, a1.a2
 _GPM = [(g, k, l, c) for g in range(4) for k, l, c in ((0, 0, 0.5), (1, 1, 0.5), (0, 1, 1.0))]
-M_ALPHA = np.array([DN_GP[g, :, k] for g, k, _, _ in _GPM] + [shape(*p)[1][:, k] for p, k, _, _, _ in _MTY])
-M_BETA = np.array([DN_GP[g, :, l] for g, _, l, _ in _GPM] + [shape(*p)[1][:, l] for p, _, l, _, _ in _MTY])
-M_TIE = np.array([[0.0, 0.0, c] for *_, c in _GPM] + [[0.0, 0.0, c] for _, _, _, c, _ in _MTY])
+# the twist terms: products of the hourglass vector h = sum_i xi_i eta_i x_i / 4 and the centre
+# tangents a_xi, a_eta (with the centre shear, tying strain 16, they make |h - alpha a_xi - beta a_eta|^2)
+_HG = XI[:, 0] * XI[:, 1] / 4.0
+_DC = shape(0.0, 0.0)[1]
+_TW = [(_HG, _HG, 1.0), (_HG, _DC[:, 0], 1.0), (_HG, _DC[:, 1], 1.0),
+       (_DC[:, 0], _DC[:, 0], 0.5), (_DC[:, 1], _DC[:, 1], 0.5)]
+M_ALPHA = np.array([DN_GP[g, :, k] for g, k, _, _ in _GPM] + [shape(*p)[1][:, k] for p, k, _, _, _ in _MTY]
+                   + [u for u, _, _ in _TW])
+M_BETA = np.array([DN_GP[g, :, l] for g, _, l, _ in _GPM] + [shape(*p)[1][:, l] for p, _, l, _, _ in _MTY]
+                  + [v for _, v, _ in _TW])
+M_TIE = np.array([[0.0, 0.0, c] for *_, c in _GPM] + [[0.0, 0.0, c] for _, _, _, c, _ in _MTY]
+                 + [[0.0, 0.0, c] for *_, c in _TW])
+N_MEM = len(M_TIE)                                      # 22 raw membrane strains
 MEMBRANES = ("full", "ans")
 
 
@@ -121,8 +143,9 @@ def raw_strains(xo, xn):
 
 
 def _assumed_membrane(Xo, Cm_gp, Jw):
-    """(M,17,17): rigidity of the assumed membrane field (module docstring) on its 17 raw strains
-    (M_ALPHA/M_BETA/M_TIE: 12 compatible ones at the Gauss points, then the 5 tying strains), from
+    """(M,22,22): rigidity of the assumed membrane field (module docstring) on its 22 raw strains
+    (M_ALPHA/M_BETA/M_TIE: 12 compatible ones at the Gauss points, the 5 tying strains, 5 twist
+    terms), from
     the natural-strain rigidities Cm_gp (M,4,3,3) = T^T C_m T J_o w at the Gauss points."""
     M = len(Xo)
     A1c = np.einsum("i,mic->mc", shape(0.0, 0.0)[1][:, 0], Xo)
@@ -138,15 +161,32 @@ def _assumed_membrane(Xo, Cm_gp, Jw):
     Mt = np.stack([np.einsum("ma,ab->mb", _cartesian_to_natural(Xo, p, ex0, ey0)[:, r],
                              _assumed_field(*p)) for p, _, _, _, r in _MTY], 1)      # (M,5,5)
     b45 = np.linalg.inv(Mt)[:, 3:]                               # (M,2,5): b4, b5 from the tying
-    mean = np.zeros((M, 3, 17))                                  # (e1, e2, e3) from the 12 gp strains
+    mean = np.zeros((M, 3, N_MEM))                               # (e1, e2, e3) from the 12 gp strains
     Winv = np.linalg.inv(W)
     for g in range(4):                                           # the four Gauss points
         mean[:, :, 3 * g:3 * g + 3] = (Jw[:, g] / area)[:, None, None] * Winv[:, g]
-    S = np.empty((M, 4, 3, 17))                                  # natural strains at gp g
+    # twist correction: the mean of a_xi.a_xi/2 over the Gauss points carries |h|^2/6 where the
+    # edges carry |h|^2/2, so a flat element twisted with its edge lengths kept (a fold across it)
+    # shows a parasitic mean stretch -|h|^2/3 in xi and eta: add c/3, c = |h - alpha a_xi -
+    # beta a_eta|^2 (alpha, beta: the reference hourglass H in the centre tangents), which is zero
+    # with zero slope for every affine motion of a flat element, so the patch test is unaffected
+    A1c, A2c = np.einsum("i,mic->mc", _DC[:, 0], Xo), np.einsum("i,mic->mc", _DC[:, 1], Xo)
+    H = np.einsum("i,mic->mc", _HG, Xo)
+    G = np.stack([np.einsum("mc,mc->m", A1c, A1c), np.einsum("mc,mc->m", A1c, A2c),
+                  np.einsum("mc,mc->m", A1c, A2c), np.einsum("mc,mc->m", A2c, A2c)], -1).reshape(M, 2, 2)
+    ab = np.linalg.solve(G, np.stack([np.einsum("mc,mc->m", H, A1c), np.einsum("mc,mc->m", H, A2c)], -1)[..., None])[..., 0]
+    a_, b_ = ab[:, 0], ab[:, 1]
+    # c = t17 - 2 alpha t18 - 2 beta t19 + 2 alpha^2 t20 + 2 beta^2 t21 + 2 alpha beta t16
+    coef = np.zeros((M, N_MEM))
+    coef[:, 17], coef[:, 18], coef[:, 19] = 1.0, -2.0 * a_, -2.0 * b_
+    coef[:, 20], coef[:, 21], coef[:, 16] = 2.0 * a_ * a_, 2.0 * b_ * b_, 2.0 * a_ * b_
+    tw = np.einsum("mg,mgab,b->ma", Jw / area[:, None], Winv, np.array([1.0, 1.0, 0.0]) / 3.0)
+    mean += tw[:, :, None] * coef[:, None, :]
+    S = np.empty((M, 4, 3, N_MEM))                               # natural strains at gp g
     for g, (xg, eg) in enumerate(GAUSS):
         E = mean.copy()
-        E[:, 0, 12:] += (eg - eta_c)[:, None] * b45[:, 0]
-        E[:, 1, 12:] += (xg - xi_c)[:, None] * b45[:, 1]
+        E[:, 0, 12:17] += (eg - eta_c)[:, None] * b45[:, 0]
+        E[:, 1, 12:17] += (xg - xi_c)[:, None] * b45[:, 1]
         S[:, g] = np.einsum("mab,mbt->mat", W[:, g], E)
     return np.einsum("mgat,mgab,mgbu->mtu", S, Cm_gp, S)
 
@@ -157,7 +197,7 @@ def precompute(Xo, Xn, C_m, C_b, C_t, E_z, warp_angle, membrane="full"):
     membrane : "full" (compatible strains at the Gauss points) or "ans" (assumed membrane strains,
         see the module docstring: their rigidity moves from Cmb into the tying block of Cs).
     Returns dict(Cmb (M,4,2,3,3), Cs (M,nt,nt), Cz (M,4,4), r_mb, r_s, r_z, T (M,4,3,3), J (M,4),
-    alpha, beta (nt,4), tie (nt,3)) with nt = 4 ("full") or 21 ("ans").
+    alpha, beta (nt,4), tie (nt,3)) with nt = 4 ("full") or 26 ("ans").
     """
     if membrane not in MEMBRANES:
         raise ValueError(f"membrane must be one of {MEMBRANES}, got {membrane!r}")

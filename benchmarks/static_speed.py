@@ -65,8 +65,9 @@ def _category(fn_key) -> str:
     f = filename.replace("\\", "/")
     n = name.lower()
     if "gstrf" in n or "superlu" in n or "splu" in n or name in ("_factor", "_shifted_factor") \
-            or "dsolve" in f or name == "spsolve":
-        return "factorisation / solve (SuperLU)"
+            or "dsolve" in f or name == "spsolve" or "cholmod" in n or "cholmod" in f \
+            or f.endswith("solidshell/solvers/linear.py"):
+        return "factorisation / solve (CHOLMOD, SuperLU)"
     if "eigsh" in n or "arpack" in f or "aupd" in n or "eupd" in n:
         return "stability check (eigsh)"
     if "solidshell/elements" in f:
@@ -109,11 +110,20 @@ def main(argv=None):
     ap.add_argument("--cases", default="strip,pedestal,disc")
     ap.add_argument("--repeats", type=int, default=2)
     ap.add_argument("--no-profile", action="store_true")
+    ap.add_argument("--keep", action="store_true", help="update the stored cases instead of "
+                    "moving them to previous_sessions")
     a = ap.parse_args(argv)
     OUT.mkdir(parents=True, exist_ok=True)
     res_path = OUT / "static_speed.json"
     res = json.loads(res_path.read_text()) if res_path.exists() else {}
+    if res.get("cases") and "--keep" not in (argv or sys.argv[1:]):
+        # keep the last session's figures for comparison, under previous_sessions
+        res.setdefault("previous_sessions", []).insert(0, {
+            "note": res.get("note", "the previous run of this script"), "cases": res["cases"]})
+        res["cases"] = {}
     res.setdefault("cases", {})
+    res["note"] = (f"{time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}, CHOLMOD Cholesky "
+                   "(cvxopt) for the Newton tangents")
     res["cpu_count"] = os.cpu_count()
     print("warm-up (compilation): strip-warp 10x1 ...", flush=True)
     t0 = time.perf_counter()
@@ -174,20 +184,6 @@ def write_md(res):
                      + ", ".join(f"{r['total_s']:.2f}" for r in d["runs"]) + " | "
                      f"{d['uptime_before'].split('load average:')[-1].strip()} / "
                      f"{d['runs'][-1]['uptime_after'].split('load average:')[-1].strip()} |")
-    if "disc" not in res.get("cases", {}):
-        # not repeated here (about 20 min per run on the loaded machine): the single run of
-        # verification/static_scenes.py, if there is one
-        q = ROOT / "verification" / "out" / "static_scenes" / "square-on-disc__30x240__newton.json"
-        if q.exists():
-            r = json.loads(q.read_text())
-            L.append(f"| square-on-disc | 30x240 | < 300 s | {r.get('wall_time_s', float('nan')):.1f} | "
-                     f"{r.get('total_time_s', float('nan')):.1f} (incl. files and pictures) | single run | "
-                     f"{r.get('iterations')} | {'yes' if (r.get('wall_time_s') or 1e9) < 300 else 'NO'} | "
-                     "see note |")
-            L += ["", "square-on-disc: one run only, from `verification/static_scenes.py` (2026-11-22 "
-                  "01:55-02:15 UTC, load average 4.7-7.7 on 2 cores, 4-6 solver processes of ours "
-                  "running at once), not the two warm runs asked for: there was no time for 2 x 20 min "
-                  "more before the deadline."]
     p = res.get("profile")
     if p:
         L += ["", f"## cProfile: {p['scene']} {p['mesh']} ({p['wall_s']:.1f} s under the profiler, "

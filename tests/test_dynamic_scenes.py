@@ -88,5 +88,5 @@ def test_sphere_study_report_from_cache(tmp_path, monkeypatch):
     rows = dynamic_sphere.report()
     assert len(rows) == 1
     text = (tmp_path / "dynamic_sphere.md").read_text()
-    assert "| s30-green-uni | 30x30 | green | uniform x100 | 0.3 | yes |" in text
+    assert "| s30-green-uni | x | 30x30 | green | uniform x100 | 0.3 | yes |" in text
     assert "0.100" in text and "1 1 1 -> 2 2 2" in text and "Not run" in text

@@ -36,6 +36,7 @@ RUNS = Path(os.environ.get("DYNAMIC_SPHERE_RUNS", "/tmp/dynamic_sphere_runs"))
 
 UNI = dict(damping="rayleigh", alpha=5.0, mass_scaling=100, mass_scaling_mode="uniform", threads=1)
 DIR = dict(damping="rayleigh", alpha=5.0, mass_scaling=100, mass_scaling_mode="director", threads=1)
+KIN = dict(damping="kinetic", mass_scaling=1e4, mass_scaling_mode="director", threads=1)
 QUASI = {"model.thickness_strain": "quasi"}
 
 # name -> (mesh, solver settings, scene overrides, label)
@@ -50,8 +51,13 @@ CASES = {
     "s60-quasi-dir1e4": ("60x60", dict(DIR, mass_scaling=1e4, max_wall_time=600.0), dict(QUASI),
                          "Eq. (24), dir1e4, mu 0.3"),
     "s60-green-dir1e4": ("60x60", dict(DIR, mass_scaling=1e4, max_wall_time=600.0), {}, "Green, dir1e4, mu 0.3"),
+    # ... and with Rayleigh damping it went non-finite at t = 2.39 s after 41 corner flips; kinetic
+    # (Cundall) damping removes the injected energy at every kinetic-energy peak
+    "s60-quasi-kin": ("60x60", dict(KIN, max_wall_time=300.0), dict(QUASI), "Eq. (24), kinetic, dir1e4, mu 0.3"),
+    "s60-green-kin": ("60x60", dict(KIN, max_wall_time=300.0), {}, "Green, kinetic, dir1e4, mu 0.3"),
     "s100-green-uni": ("100x100", dict(UNI, max_wall_time=600.0), {}, "Green, uni100, mu 0.3"),
-    "s100-green-dir": ("100x100", dict(DIR, max_wall_time=1500.0), {}, "Green, dir100, mu 0.3"),
+    "s100-green-dir": ("100x100", dict(DIR, max_wall_time=1200.0), {}, "Green, dir100, mu 0.3"),
+    "s100-green-kin": ("100x100", dict(KIN, max_wall_time=600.0), {}, "Green, kinetic, dir1e4, mu 0.3"),
 }
 
 KEYS = ("converged", "steady_state_reached", "status", "message", "steps", "dt", "critical_time_step",
@@ -63,8 +69,57 @@ KEYS = ("converged", "steady_state_reached", "status", "message", "steps", "dt",
         "thickness_strain_energy_jump", "thickness_strain_switch_samples", "thickness_strain_corner_switches",
         "final_relative_residual", "min_z", "threads", "mass_scaling", "mass_scaling_mode", "alpha", "friction")
 
-# observations not in any cached case
-NOTES: list[str] = []
+# observations (read off the cached cases and their run directories; not regenerated)
+NOTES: list[str] = [
+    "Friction coefficient: the paper does not say whether its sphere has friction (Sec. 4.2 cites the penalty "
+    "method of [9] and nothing more).  0.3 is the scene's value: a middle value for wool on a smooth solid "
+    "(Morton & Hearle, Physical Properties of Textile Fibres, Table 25.8: dry wool on wool 0.11-0.14 with/against "
+    "the scales, dry wool on horn 0.3-0.5).  It is an assumption, not a measured value for Table 1's fabric; "
+    "`--set contact.0.friction=0` restores the paper's frictionless contact.",
+    "With friction every run stays on the sphere (min z -18.3 to -18.5 cm = the corners hanging 13.4 cm below the "
+    "equator: the cloth is centred) and every run that stayed finite and was not stopped by its wall-time cap "
+    "reached the steady-state test.  "
+    "Frictionless (dynamic_scenes.py, sphere30-green): the 30x30 cloth slid off and fell (min z -1.6e6 cm at 60 s).",
+    "Friction makes the steady drape path dependent.  30x30 Green: uniform x100 (the paper's relaxation: the cloth "
+    "sinks at <= g/(100 alpha) ~ 2 cm/s) ends at DC 0.249 with friction work 0.4 % of W_ext; director-only x100 "
+    "(translational inertia unscaled: it falls at g and swings) ends at DC 0.156 with friction work 8 % of W_ext; "
+    "both 4 folds.  The relaxation's 'steady state' is then one of many frictional equilibria, and which one "
+    "depends on the mass scaling and damping; the paper's frictionless equilibrium is not a stable one.",
+    "The penalty stiffness follows the scaled translational mass (k = 0.1 m omega_max^2, contact.py), so with "
+    "director-only scaling the contact is 100x softer than with uniform scaling: deepest penetration 0.012-0.017 cm "
+    "(dir100) vs 1.5e-4 cm (uni100), against the offset h/2 = 0.030 cm.",
+    "Eq. (24), Rayleigh alpha 5, director x100 (s60-quasi-dir): NON-FINITE at t = 0.247 s, 69 steps after a sample "
+    "that showed no Eq. (24) branch switch and no interpenetrated node; the Green run with the same settings is "
+    "fine.  So a blow-up within < 70 steps, consistent with a corner flipping (n_p.d_p < -mu) and its director "
+    "then being driven through zero length, where the stiffness of the Eq. (24) thickness term, ~C_z (|x_n| + 1)/|x_n| "
+    "across the director, is unbounded and no fixed explicit step is stable -- not verified further.",
+    "Eq. (24), Rayleigh alpha 5, director x1e4 (s60-quasi-dir1e4): 41 element corners switched branch in 3 sample "
+    "intervals; the booked jump energy is 4698 gf cm, 35x the work of gravity (133 gf cm); with the jumps booked "
+    "the energy balance error stayed 0.006 (the guard did NOT stop the run, as intended), but the run then went "
+    "non-finite at t = 2.39 s with E_kin = 1949 gf cm.  The energy a flip injects (~2 C_z per corner) is real for "
+    "the dynamics, not a bookkeeping artefact: under Rayleigh damping this Eq. (24) run is not physically fine, "
+    "and the earlier guard stop (dynamic_scenes.py, sphere60-quasi, 1.61 at 2.29 s) was the first sign of it.",
+    "Eq. (24) and Green with kinetic damping, director x1e4 (s60-*-kin): both steady at t ~ 1.5 s (~26k steps, "
+    "~90 s wall), 4 folds, DC 0.2504 (quasi) and 0.2505 (Green), no branch switch and NO interpenetrated node at any sample (every "
+    "100 steps).  The same Green mesh under Rayleigh alpha 5 / director x100 (s60-green-dir) had 79 interpenetrated "
+    "nodes (max first reached at t = 0.60 s, and 79 at the end): the interpenetration the paper describes for 60x60 (Sec. 4.3) shows up in the "
+    "dynamic (fast-falling) relaxation and not in the kinetic-damping one, whose path is close to quasi-static.",
+    "100x100 Green, Rayleigh alpha 5, director x100 (s100-green-dir): steady at t = 4.67 s after 137.8k steps in "
+    "1118 s wall (1.24e6 element-steps/s on 1 thread, load 2.0 -> 4.6): 1.9x over the 10-minute target.  5 folds, "
+    "DC 0.165; max 149 interpenetrated nodes (t = 0.51 s), 142 at the end -- unlike the paper's 100x100 Green run "
+    "(none): with unscaled translational inertia the cloth falls at g and folds hard on impact.",
+    "100x100 Green, uniform x100 (s100-green-uni, the paper's settings): NOT steady at the 600 s cap: t = 5.45 s, "
+    "74.5k steps, still sinking (min z -12.0 cm, residual 0.53 of the weight).  The 30x30 mesh with the same "
+    "settings needed 27.0 s of simulated time (369.6k steps of the same 7.3e-5 s, which the thickness mode "
+    "fixes independently of the mesh), so the 100x100 would need ~370k steps x 1e4 quads ~ 50 min at the "
+    "measured 1.25e6 element-steps/s.  No interpenetrated node up to t = 5.45 s (the paper: none with 100x100 Green).",
+    "100x100 Green, kinetic damping, director x1e4 (s100-green-kin): steady at t = 1.71 s after 50.6k steps in "
+    "429 s wall (load 3.2 -> 4.4): under the 10-minute target.  4 folds, DC 0.239 (the uniform-x100 30x30 and "
+    "the kinetic 60x60 runs: 0.249, 0.250), no interpenetrated node at any sample.",
+    "Timings: one case at a time from a clean checkout of commit 8cf3ae2 (the solver with friction; the element "
+    "kernels as of f5ecebd), numba threads = 1, on a 2-core machine shared with another engineer's runs (load "
+    "averages in the table).",
+]
 
 
 def _uptime() -> str:
@@ -111,16 +166,16 @@ def report() -> list:
     lines = ["# Cloth on a sphere by dynamic relaxation, with Coulomb friction (Sec. 4.2-4.3, issue #5)", "",
              "Generated by `python -m verification.dynamic_sphere --report` from `verification/out/dynamic_sphere/`. "
              "Scene `sphere` (30x30 cm wool on a 10 cm sphere, friction 0.3 unless said), `--solver relax`, "
-             "Rayleigh alpha = 5 1/s, steady state when E_kin/W_ext < 1e-6 and the residual < 1e-3 of the weight. "
+             "damping as in the settings column (Rayleigh alpha = 5 1/s or kinetic), steady state when E_kin/W_ext < 1e-6 and the residual < 1e-3 of the weight. "
              "Wall times on a shared 2-core machine, numba threads = 1; load = 1/5/15-min load average at start -> end.",
              "",
-             "| case | mesh | thickness strain | mass scaling | friction | steady | t_sim [s] | steps | dt [s] | "
+             "| case | settings | mesh | thickness strain | mass scaling | friction | steady | t_sim [s] | steps | dt [s] | "
              "crit. dt [s] | wall [s] | el-steps/s | folds | DC | max interp. nodes (at t [s]) | interp. at end | "
              "energy err | friction work / W_ext | Eq. 24 jumps (samples, corners, energy) | load start -> end |",
-             "|" + "---|" * 20]
+             "|" + "---|" * 21]
     for r in rows:
         if r.get("error"):
-            lines.append(f"| {r['case']} | {r['mesh']} | {r['thickness_strain']} | | | ERROR | | | | | | | | | | | | | "
+            lines.append(f"| {r['case']} | {r['label']} | {r['mesh']} | {r['thickness_strain']} | | | ERROR | | | | | | | | | | | | | "
                          f"| {r['load_start']} -> {r['load_end']} |")
             continue
         fr = r.get("friction") or [0.0]
@@ -131,7 +186,7 @@ def report() -> list:
                  f"{r['thickness_strain_energy_jump']:.3g}")
         ms = f"{r.get('mass_scaling_mode')} x{r.get('mass_scaling'):g}" if r.get("mass_scaling") else "–"
         lines.append(
-            f"| {r['case']} | {r['mesh']} | {r['thickness_strain']} | {ms} | {fr[0] if fr else 0:g} | "
+            f"| {r['case']} | {r.get('label', '')} | {r['mesh']} | {r['thickness_strain']} | {ms} | {fr[0] if fr else 0:g} | "
             f"{'yes' if r.get('steady_state_reached') else 'NO (' + str(r.get('status')) + ')'} | "
             f"{_f(r.get('t_final'), '.3f')} | {r.get('steps')} | {_f(r.get('dt'), '.3e')} | "
             f"{_f(r.get('critical_time_step'), '.3e')} | {_f(r.get('wall_time_s'), '.0f')} | "

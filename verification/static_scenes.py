@@ -232,7 +232,10 @@ def collect(extra_text="") -> list:
     known = {cache_path(case_key(*c)).name for c in all_cases()}
     for p in sorted(CACHE.glob("*.json")):
         if p.name not in known and not any(p.name.startswith(k[:-5] + "__maxiter") for k in known):
-            rows.append(json.loads(p.read_text()))
+            r = json.loads(p.read_text())
+            if r.get("overrides") and " + " not in str(r.get("solver")):   # a variant (static_convergence.py)
+                r["solver"] = f"{r.get('solver')} [{', '.join(f'{k}={v}' for k, v in r['overrides'].items())}]"
+            rows.append(r)
     OUT.mkdir(exist_ok=True)
     (OUT / "static_scenes.json").write_text(json.dumps(rows, indent=1, default=str))
     md = ["# Section 3 scenes with the static solvers", "",

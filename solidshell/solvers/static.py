@@ -74,7 +74,7 @@ from scipy.sparse.linalg import LinearOperator, eigsh
 from ..errors import InputError
 from ..problem import SolveResult, no_progress
 from .blas import single_threaded_blas
-from .linear import Cholesky, ldl_inertia
+from .linear import FACTORIZATIONS, Cholesky, SuperLUDefinite, ldl_inertia
 
 __all__ = ["StaticResult", "solve_static", "run", "METHODS"]
 
@@ -106,7 +106,8 @@ class StaticResult:
 class _System:
     """Model + constraints + loads + contact, with counters.  Works on full flat vectors D (6N)."""
 
-    def __init__(self, model, fixed, loads, prescribed, contact, contact_stiffness):
+    def __init__(self, model, fixed, loads, prescribed, contact, contact_stiffness,
+                 factorization="cholmod"):
         n = model.n_nodes
         self.model = model
         self.n = n
@@ -134,7 +135,10 @@ class _System:
         self.n_tangent = 0
         self.n_solves = 0
         self.n_factor = 0
-        self.chol = Cholesky()       # symbolic analysis shared by every tangent of this solve
+        # positive-definite factorisations: CHOLMOD (its symbolic analysis shared by every tangent
+        # of this solve) or, for comparison, SuperLU's LDL^T
+        self.factorization = factorization
+        self.chol = Cholesky() if factorization == "cholmod" else SuperLUDefinite()
         self._has_ef = hasattr(model, "energy_and_force")
 
     # -- vectors
@@ -457,7 +461,10 @@ def _paper_level(sys, D, lam, o, stats):
         try:
             A = sys.Kff(K)
             # Cholesky where K_t is positive definite (most iterations), SuperLU LDL^T elsewhere
-            dD = sys.chol.solve(r) if sys.chol.factor(A) else _factor(A)[0].solve(r)
+            if sys.factorization == "cholmod" and sys.chol.factor(A):
+                dD = sys.chol.solve(r)
+            else:
+                dD = _factor(A)[0].solve(r)
         except RuntimeError:
             return D, False, (f"singular tangent K_t at iteration {it} (relative residual {rel:.2e}); "
                               "the paper's scheme cannot proceed"), rel
@@ -728,7 +735,7 @@ def solve_static(model, fixed, loads, load_factors=None, method="newton", prescr
                  curvilinear=False, line_search="trust", trust_radius=0.02,
                  arc_length_initial=0.1,
                  max_arc_steps=500, check_stability=True, eig_max_dofs=60000, contact=None,
-                 contact_stiffness=None, progress=None) -> StaticResult:
+                 contact_stiffness=None, factorization="cholmod", progress=None) -> StaticResult:
     """Static equilibrium of ``model`` under dead ``loads`` and ``prescribed`` fixed dofs.
 
     Parameters
@@ -742,8 +749,10 @@ def solve_static(model, fixed, loads, load_factors=None, method="newton", prescr
     prescribed : (N,6) values of the fixed dofs at load factor 1 (default 0: clamped), or a
         function load_factor -> (N,6) giving them along the path
     tol, energy_tol : relative residual and energy-norm tolerances
-    max_iter : iterations per load step (default 30 for newton/arclength -- newton then cuts the
-        step back --, 5000 for paper)
+    max_iter : iterations per load step (default 1000 for newton/arclength -- newton then cuts the
+        step back --, 5000 for paper).  The trust-region Newton needs 80-300 iterations on the
+        paper's drapes (square-on-disc 30x240: 276-279), and a cap near that count turned a
+        converging run into a cut-back cascade when round-off changed its path (300 did, once)
     c, L_f : the paper's multiplier constant (1e-3..1e-2) and free-hanging length (default: largest
         distance from a free node to the nearest fixed one)
     max_step : cap on max|dD| per Newton update [length] (default L_f / 2), method newton
@@ -755,6 +764,9 @@ def solve_static(model, fixed, loads, load_factors=None, method="newton", prescr
     arc_length_initial : first arc-length step as a fraction of the target load factor
     check_stability : report positive_definite and min_tangent_eigenvalue of the final state
     contact, contact_stiffness : rigid bodies (solidshell.contact) and the penalty [force/length]
+    factorization : "cholmod" (default: CHOLMOD supernodal Cholesky of the positive-definite
+        tangents, SuperLU where the paper's scheme meets an indefinite one) or "superlu" (SuperLU's
+        LDL^T throughout, as before CHOLMOD was added; 3-5 times slower factorisations)
     progress : callback(fraction, text)
     """
     t0 = time.perf_counter()
@@ -771,12 +783,14 @@ def solve_static(model, fixed, loads, load_factors=None, method="newton", prescr
     factors = [1.0] if load_factors is None else [float(x) for x in np.atleast_1d(load_factors)]
     if not factors or not all(np.isfinite(factors)):
         raise InputError("load_factors must be a non-empty list of finite numbers")
-    sys = _System(model, fixed, loads, prescribed, contact, contact_stiffness)
+    if factorization not in FACTORIZATIONS:
+        raise InputError(f"factorization must be one of {FACTORIZATIONS}, got {factorization!r}")
+    sys = _System(model, fixed, loads, prescribed, contact, contact_stiffness, factorization)
     if sys.free.size == 0:
         raise InputError("every dof is fixed: nothing to solve")
     Lf = float(L_f) if L_f is not None else _free_length(model.mesh, fixed)
     o = _Opts(tol=float(tol), energy_tol=float(energy_tol),
-              max_iter=int(max_iter if max_iter is not None else (5000 if method == "paper" else 300)),
+              max_iter=int(max_iter if max_iter is not None else (5000 if method == "paper" else 1000)),
               c=float(c), L_f=Lf, max_step=float(max_step) if max_step is not None else 0.5 * Lf,
               curvilinear=bool(curvilinear), line_search=str(line_search),
               radius0=float(trust_radius) * Lf, radius_min=1e-9 * Lf)
@@ -841,7 +855,7 @@ def solve_static(model, fixed, loads, load_factors=None, method="newton", prescr
 _SETTINGS = {"method", "c", "tol", "energy_tol", "max_iter", "load_steps", "load_factors", "L_f",
              "max_step", "predictor", "increment", "min_increment", "max_cutbacks", "line_search",
              "trust_radius", "curvilinear", "arc_length_initial", "max_arc_steps",
-             "check_stability", "eig_max_dofs", "contact_stiffness"}
+             "check_stability", "eig_max_dofs", "contact_stiffness", "factorization"}
 
 
 def run(problem, settings: dict | None = None, progress=None) -> SolveResult:
@@ -850,7 +864,7 @@ def run(problem, settings: dict | None = None, progress=None) -> SolveResult:
     settings: method ("newton" | "paper" | "arclength"), c, tol, energy_tol, max_iter,
     load_steps (int n -> factors 1/n, 2/n, ..., 1) or load_factors (list), L_f, max_step, predictor,
     increment, min_increment, max_cutbacks, line_search, trust_radius, curvilinear, arc_length_initial, max_arc_steps, check_stability, eig_max_dofs,
-    contact_stiffness.  Settings of the other registered solvers (explicit, relax: e.g. ``t_end``)
+    contact_stiffness, factorization.  Settings of the other registered solvers (explicit, relax: e.g. ``t_end``)
     are ignored, so one settings dict can serve several solvers; any other key is an InputError
     naming it and the valid keys (a typo such as ``cc=0.01`` must not be silently ignored).
     """

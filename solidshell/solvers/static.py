@@ -17,10 +17,9 @@ Methods (``method=``)
     "trust"``: the Newton step is cut to a max-norm radius that starts at 0.02 L_f and grows/shrinks
     with the ratio of actual to predicted decrease of Pi; ``"armijo"``: backtracking line search;
     ``"none"``), and a tangent shift K_t + sigma diag|K_t| whenever K_t is not positive definite
-    (detected by the inertia of an LDL^T-type factorisation: SuperLU with diagonal pivoting in
-    symmetric mode, whose U diagonal has as many negative entries as K has negative eigenvalues,
-    Sylvester's law); sigma grows tenfold until the factorisation is positive definite and shrinks
-    tenfold on the next iteration.  Every step is therefore a descent step of Pi and the iteration
+    (detected by its Cholesky factorisation failing: CHOLMOD, solvers/linear.py; or, with
+    ``factorization="superlu"``, by the inertia of SuperLU's LDL^T, Sylvester's law); sigma grows
+    tenfold until the factorisation succeeds and shrinks tenfold on the next iteration.  Every step is therefore a descent step of Pi and the iteration
     cannot settle on a saddle or a maximum (the paper's scheme can: see ``positive_definite``).
     The full load is applied at once by default (``increment=1``); a failed step is cut back and
     the load then applied in adaptive sub-steps with a path-extrapolating predictor.
@@ -244,11 +243,6 @@ class _System:
 
 
 # ============================================================================ linear algebra
-def _factor(A):
-    """(lu, n_negative) of the symmetric A: SuperLU LDL^T-type with inertia (see linear.py)."""
-    return ldl_inertia(A)
-
-
 def _shifted_factor(chol, A, scale, sigma0, sigma_max=1e12):
     """Cholesky of A + sigma diag(scale) with the smallest sigma >= sigma0 (tenfold steps from
     1e-8) that is positive definite.  Returns (chol, sigma, n_factorisations)."""
@@ -464,7 +458,7 @@ def _paper_level(sys, D, lam, o, stats):
             if sys.factorization == "cholmod" and sys.chol.factor(A):
                 dD = sys.chol.solve(r)
             else:
-                dD = _factor(A)[0].solve(r)
+                dD = ldl_inertia(A)[0].solve(r)
         except RuntimeError:
             return D, False, (f"singular tangent K_t at iteration {it} (relative residual {rel:.2e}); "
                               "the paper's scheme cannot proceed"), rel
@@ -597,7 +591,7 @@ def _arc_length(sys, D, lam_target, o, stats, progress, path, dlam0, max_steps, 
         raise InputError("arc-length supports dead loads only (prescribed values must be zero)")
     lam = stats["load_factor"]
     F, K = sys.force_tangent(D)
-    lu, _ = _factor(sys.Kff(K))
+    lu, _ = ldl_inertia(sys.Kff(K))
     sys.n_solves += 1
     sys.n_factor += 1
     dt = lu.solve(Pf)
@@ -608,7 +602,7 @@ def _arc_length(sys, D, lam_target, o, stats, progress, path, dlam0, max_steps, 
     for step in range(max_steps):
         F, K = sys.force_tangent(D)
         try:
-            lu, neg = _factor(sys.Kff(K))
+            lu, neg = ldl_inertia(sys.Kff(K))
         except RuntimeError:
             return D, False, f"singular tangent at load factor {lam:.4g} (bifurcation point?)", rel
         if neg is not None:
@@ -634,7 +628,7 @@ def _arc_length(sys, D, lam_target, o, stats, progress, path, dlam0, max_steps, 
                 break
             stats["iterations"] += 1
             try:
-                lu, _ = _factor(sys.Kff(K))
+                lu, _ = ldl_inertia(sys.Kff(K))
             except RuntimeError:
                 break
             sys.n_solves += 2
@@ -708,7 +702,7 @@ def _stability(sys, D, eig_max_dofs):
     pd = chol.factor(A)
     if not pd:
         try:
-            _, neg = _factor(A)
+            _, neg = ldl_inertia(A)
             pd = None if neg is None else bool(neg == 0)
         except RuntimeError:
             pd = False

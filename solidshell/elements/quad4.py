@@ -145,11 +145,11 @@ def raw_strains(xo, xn):
 def _assumed_membrane(Xo, Cm_gp, Jw):
     """(M,22,22): rigidity of the assumed membrane field (module docstring) on its 22 raw strains
     (M_ALPHA/M_BETA/M_TIE: 12 compatible ones at the Gauss points, the 5 tying strains, 5 twist
-    terms), from
-    the natural-strain rigidities Cm_gp (M,4,3,3) = T^T C_m T J_o w at the Gauss points."""
+    terms), from the natural-strain rigidities Cm_gp (M,4,3,3) = T^T C_m T J_o w at the Gauss
+    points."""
     M = len(Xo)
-    A1c = np.einsum("i,mic->mc", shape(0.0, 0.0)[1][:, 0], Xo)
-    A2c = np.einsum("i,mic->mc", shape(0.0, 0.0)[1][:, 1], Xo)
+    A1c = np.einsum("i,mic->mc", _DC[:, 0], Xo)                 # centre tangents
+    A2c = np.einsum("i,mic->mc", _DC[:, 1], Xo)
     ex0 = A1c / np.linalg.norm(A1c, axis=-1, keepdims=True)
     ez0 = np.cross(A1c, A2c)
     ey0 = np.cross(ez0 / np.linalg.norm(ez0, axis=-1, keepdims=True), ex0)
@@ -170,7 +170,6 @@ def _assumed_membrane(Xo, Cm_gp, Jw):
     # shows a parasitic mean stretch -|h|^2/3 in xi and eta: add c/3, c = |h - alpha a_xi -
     # beta a_eta|^2 (alpha, beta: the reference hourglass H in the centre tangents), which is zero
     # with zero slope for every affine motion of a flat element, so the patch test is unaffected
-    A1c, A2c = np.einsum("i,mic->mc", _DC[:, 0], Xo), np.einsum("i,mic->mc", _DC[:, 1], Xo)
     H = np.einsum("i,mic->mc", _HG, Xo)
     G = np.stack([np.einsum("mc,mc->m", A1c, A1c), np.einsum("mc,mc->m", A1c, A2c),
                   np.einsum("mc,mc->m", A1c, A2c), np.einsum("mc,mc->m", A2c, A2c)], -1).reshape(M, 2, 2)

@@ -180,22 +180,30 @@ def test_step_above_critical_is_refused_reduced_or_detected(strip):
 
 
 # ------------------------------------------------------------------------------ checkpoint
+def _interrupted_then_resumed(prob, s, ck, every, frac, before_resume=None):
+    """Run ``s`` with a checkpoint every ``every`` steps, stop it by an exception from the progress
+    callback once past ``frac`` of the run, then resume from the checkpoint; the resumed result."""
+
+    class Stop(Exception):
+        pass
+
+    def interrupt(f, text):
+        if frac < f < 1.0:
+            raise Stop
+
+    with pytest.raises(Stop):
+        explicit.run(prob, {**s, "checkpoint": ck, "checkpoint_every": every}, progress=interrupt)
+    if before_resume is not None:
+        before_resume()
+    return explicit.run(prob, {**s, "checkpoint": ck, "checkpoint_every": every, "restart": ck})
+
+
 def test_checkpoint_restart_bit_for_bit(tmp_path):
     prob = cantilever(gravity=0.01)
     s = {"t_end": 0.1, "alpha": 5.0, "snapshots": [0.01, 0.03], "sample_every": 7}
     full = explicit.run(prob, s)
     ck = str(tmp_path / "run.ckpt.npz")
-
-    class Stop(Exception):
-        pass
-
-    def interrupt(frac, text):
-        if 0.55 < frac < 1.0:
-            raise Stop
-
-    with pytest.raises(Stop):
-        explicit.run(prob, {**s, "checkpoint": ck, "checkpoint_every": 37}, progress=interrupt)
-    resumed = explicit.run(prob, {**s, "checkpoint": ck, "checkpoint_every": 37, "restart": ck})
+    resumed = _interrupted_then_resumed(prob, s, ck, 37, 0.55)
     assert resumed.info["restarted_from_step"] > 0
     assert np.array_equal(resumed.U, full.U)
     assert [t for t, _ in resumed.frames] == [t for t, _ in full.frames]
@@ -460,18 +468,11 @@ def test_frictional_checkpoint_restart_bit_for_bit(tmp_path):
     full = explicit.run(prob, s)
     ck = str(tmp_path / "fric.ckpt.npz")
 
-    class Stop(Exception):
-        pass
+    def check_checkpoint():
+        with np.load(ck) as z:
+            assert z["anchors"].shape == (1, 4, 3) and np.all(np.isfinite(z["anchors"]))  # all 4 in contact
 
-    def interrupt(frac, text):
-        if 0.5 < frac < 1.0:
-            raise Stop
-
-    with pytest.raises(Stop):
-        explicit.run(prob, {**s, "checkpoint": ck, "checkpoint_every": 23}, progress=interrupt)
-    with np.load(ck) as z:
-        assert z["anchors"].shape == (1, 4, 3) and np.all(np.isfinite(z["anchors"]))  # all 4 in contact
-    resumed = explicit.run(prob, {**s, "checkpoint": ck, "checkpoint_every": 23, "restart": ck})
+    resumed = _interrupted_then_resumed(prob, s, ck, 23, 0.5, check_checkpoint)
     assert resumed.info["restarted_from_step"] > 0
     assert np.array_equal(resumed.U, full.U)
     for k in ("energy_balance_error", "friction_work", "friction_stick_energy", "contact_work", "steps"):

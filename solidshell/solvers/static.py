@@ -698,7 +698,7 @@ def _stability(sys, D, eig_max_dofs):
     A = sys.Kff(K)
     n = A.shape[0]
     s = 1e-10 * float(np.abs(A.diagonal()).mean())
-    chol = Cholesky()
+    chol = sys.chol if isinstance(sys.chol, Cholesky) else Cholesky()   # reuse its analysis
     pd = chol.factor(A)
     if not pd:
         try:

@@ -18,7 +18,8 @@ warm-up that compiles the kernels), element-steps per second, drape coefficient,
 interpenetrated nodes, energy balance error, and the largest node-position difference from the
 first variant's steady state.  ``--passes`` (default 2) repeats the whole set so that the machine's
 noise shows; the table quotes each pass and the median, and the ratio of the variants' wall times
-inside each pass.  ``uptime`` is recorded before and after each run.
+inside each pass.  ``uptime`` is recorded before and after each run.  Last, a cProfile of
+``--profile-steps`` steps of the first case and variant lists the top items by own time.
 
     python benchmarks/explicit_relaxation.py [--cases square-pedestal:48x16x4 sphere:100x100]
         [--variants uniform director] [--passes 2] [--max-wall 1800]
@@ -29,8 +30,11 @@ Writes benchmarks/out/explicit_relaxation.{md,json}.
 from __future__ import annotations
 
 import argparse
+import cProfile
+import io
 import json
 import os
+import pstats
 import statistics
 import subprocess
 import sys
@@ -81,6 +85,20 @@ def run_one(case: str, variant: str, max_wall: float) -> tuple[dict, np.ndarray]
     return row, np.asarray(out.U)[:, :3]
 
 
+def profile(case: str, variant: str, steps: int, top: int = 12) -> list[dict]:
+    """cProfile of ``steps`` relaxation steps: the functions with the most own time."""
+    scene, mesh = case.split(":")
+    pr = cProfile.Profile()
+    pr.enable()
+    run_scene(scene, mesh=mesh, solver="relax", out_dir=None, progress=False, max_steps=steps, **VARIANTS[variant])
+    pr.disable()
+    st = pstats.Stats(pr, stream=io.StringIO())
+    total = sum(v[2] for v in st.stats.values())
+    items = sorted(st.stats.items(), key=lambda kv: -kv[1][2])[:top]
+    return [dict(function=f"{Path(f).name}:{line}({name})", calls=v[1], own_s=v[2], cumulative_s=v[3],
+                 own_fraction=v[2] / total) for (f, line, name), v in items]
+
+
 def _fmt(x, f="{:.4g}"):
     return "–" if x is None else (("yes" if x else "no") if isinstance(x, bool) else f.format(x))
 
@@ -110,6 +128,14 @@ def write_md(res: dict, path: Path) -> str:
     for m in res["medians"]:
         lines.append(f"| {m['case']} | {m['variant']} | {m['median_wall_s']:.1f} | {_fmt(m['target_s'], '{:.0f}')} | "
                      f"{_fmt(m['meets_target'])} | {', '.join(f'{x:.2f}' for x in m['ratios'])} |")
+    if res.get("profile"):
+        pf = res["profile"]
+        lines += ["", f"Profile (cProfile) of {pf['steps']} steps of {pf['case']} / {pf['variant']}, top items "
+                  "by own time (numba kernels count as their Python caller's own time):", "",
+                  "| function | calls | own [s] | own share | cumulative [s] |", "|---|---|---|---|---|"]
+        for it in pf["top"]:
+            lines.append(f"| `{it['function']}` | {it['calls']} | {it['own_s']:.2f} | {100 * it['own_fraction']:.1f} % "
+                         f"| {it['cumulative_s']:.2f} |")
     text = "\n".join(lines) + "\n"
     path.write_text(text)
     return text
@@ -121,6 +147,8 @@ def main(argv=None):
     ap.add_argument("--variants", nargs="+", default=["uniform", "director"], choices=list(VARIANTS))
     ap.add_argument("--passes", type=int, default=2)
     ap.add_argument("--max-wall", type=float, default=1800.0, help="wall-time limit per run [s]")
+    ap.add_argument("--profile-steps", type=int, default=5000,
+                    help="profile this many steps of the first case and variant (0: no profile)")
     ap.add_argument("--out", default=str(OUT / "explicit_relaxation"), help="writes OUT.md and OUT.json")
     a = ap.parse_args(argv)
     for c in a.cases:
@@ -156,7 +184,11 @@ def main(argv=None):
             tgt = TARGETS.get(case)
             medians.append(dict(case=case, variant=v, median_wall_s=med, target_s=tgt, ratios=ratios,
                                 meets_target=(None if tgt is None else bool(med < tgt and all(r["converged"] for r in rs)))))
-    res = dict(argv=list(argv if argv is not None else sys.argv[1:]), cpu_count=os.cpu_count(),
+    prof = None
+    if a.profile_steps:
+        prof = dict(case=a.cases[0], variant=a.variants[0], steps=a.profile_steps,
+                    top=profile(a.cases[0], a.variants[0], a.profile_steps))
+    res = dict(profile=prof, argv=list(argv if argv is not None else sys.argv[1:]), cpu_count=os.cpu_count(),
                date=time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()), rows=rows, medians=medians)
     out = Path(a.out)
     out.parent.mkdir(parents=True, exist_ok=True)

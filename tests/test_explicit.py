@@ -203,8 +203,9 @@ def test_step_above_critical_is_refused_reduced_or_detected(strip):
 
 # ------------------------------------------------------------------------------ checkpoint
 def _interrupted_then_resumed(prob, s, ck, every, frac, before_resume=None):
-    """Run ``s`` with a checkpoint every ``every`` steps, stop it by an exception from the progress
-    callback once past ``frac`` of the run, then resume from the checkpoint; the resumed result."""
+    """Run ``s`` with a checkpoint every ``every`` steps (None: by wall time, here every 100 steps),
+    stop it by an exception from the progress callback once past ``frac`` of the run, then resume
+    from the checkpoint; the resumed result."""
 
     class Stop(Exception):
         pass
@@ -213,19 +214,23 @@ def _interrupted_then_resumed(prob, s, ck, every, frac, before_resume=None):
         if frac < f < 1.0:
             raise Stop
 
+    cks = {"checkpoint": ck, **({"checkpoint_every": every} if every else {"checkpoint_wall": 1e-9})}
     with pytest.raises(Stop):
-        explicit.run(prob, {**s, "checkpoint": ck, "checkpoint_every": every}, progress=interrupt)
+        explicit.run(prob, {**s, **cks}, progress=interrupt)
     if before_resume is not None:
         before_resume()
-    return explicit.run(prob, {**s, "checkpoint": ck, "checkpoint_every": every, "restart": ck})
+    return explicit.run(prob, {**s, **cks, "restart": ck})
 
 
-def test_checkpoint_restart_bit_for_bit(tmp_path):
+@pytest.mark.parametrize("every", [37, None])
+def test_checkpoint_restart_bit_for_bit(tmp_path, every):
     prob = cantilever(gravity=0.01)
-    s = {"t_end": 0.1, "alpha": 5.0, "snapshots": [0.01, 0.03], "sample_every": 7}
+    # interval frames thinned twice or more (50 intervals, at most 8 kept): their state is restored too
+    s = {"t_end": 0.1, "alpha": 5.0, "snapshots": [0.01, 0.03], "sample_every": 7, "frame_interval": 0.002,
+         "max_frames": 8}
     full = explicit.run(prob, s)
     ck = str(tmp_path / "run.ckpt.npz")
-    resumed = _interrupted_then_resumed(prob, s, ck, 37, 0.55)
+    resumed = _interrupted_then_resumed(prob, s, ck, every, 0.55)
     assert resumed.info["restarted_from_step"] > 0
     assert np.array_equal(resumed.U, full.U)
     assert [t for t, _ in resumed.frames] == [t for t, _ in full.frames]
@@ -261,6 +266,9 @@ def test_dynamic_relaxation_stops_itself_and_damping_modes_agree():
         assert r.converged and r.info["steady_state_reached"], r.message
         assert r.info["final_relative_residual"] < 1e-4
     assert kin.info["kinetic_resets"] > 0
+    t = [f[0] for f in ray.frames]   # the default time series: t = 0, every 0.05 s, the steady state
+    assert t[0] == 0.0 and t[-1] == ray.info["t_final"] and 0.05 <= t[1] < 0.05 + 2 * ray.info["dt"]
+    assert len(t) >= min(ray.info["t_final"] / 0.05, 50)
     # both reach the same static equilibrium: residual 1e-4 of the weight on a strip whose tip
     # deflects ~L; the two shapes agree to 1e-3 L
     assert np.max(np.abs(ray.U[:, :3] - kin.U[:, :3])) < 3e-3
@@ -411,6 +419,21 @@ def test_snapshots_and_frames(strip):
     assert t[0] == 0.0 and t[-1] == pytest.approx(0.01) and len(t) == 3
     assert abs(t[1] - 0.004) <= r.info["dt"] / 2
     assert r.info["snapshots_after_t_end_dropped"] == [0.5]   # e.g. a scene's times, shorter t_end
+    # interval frames: every frame_interval of simulated time, thinned past max_frames by dropping
+    # every other one and doubling the interval; t = 0, snapshots and the end are always kept
+    r = explicit.run(strip, {"t_end": 0.01, "snapshots": [0.0, 0.004], "alpha": 0.0, "frame_interval": 5e-4,
+                             "max_frames": 6})
+    t, dt = np.array([f[0] for f in r.frames]), r.info["dt"]
+    assert t[0] == 0.0 and t[-1] == pytest.approx(0.01) and np.any(np.abs(t - 0.004) <= dt / 2)
+    iv = t[(np.abs(t - 0.004) > dt / 2) & (t > 0) & (t < t[-1])]
+    # 20 intervals of 5e-4 s, at most 6 kept -> two doublings -> 2e-3 s: each frame is the first
+    # step at or after a multiple of it
+    k = 2e-3 * np.arange(1, 5)
+    assert len(iv) == 4 and np.all(np.diff(t) > 0) and np.all((iv >= k - 1e-15) & (iv < k + dt)), (iv, dt)
+    assert np.all([np.isfinite(U).all() for _, U in r.frames])
+    # a relaxation keeps a time series by default (every 0.05 s); frame_interval = 0 turns it off
+    with pytest.raises(InputError):
+        explicit.run(strip, {"t_end": 0.01, "frame_interval": -1.0})
     with pytest.raises(InputError):
         explicit.run(strip, {"t_end": 0.01, "snapshots": [-1.0]})
     with pytest.raises(InputError, match="unknown explicit setting"):

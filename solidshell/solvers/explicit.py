@@ -88,8 +88,12 @@ run:        t_end [s] (required), snapshots (list of times [s] to keep as frames
             ("uniform"), sample_every (steps between energy/interpenetration samples), U0, V0 ((N,6)
             initial state), critical_time_step [s] (skip the estimate), critical_step_method
             ("lanczos" | "power" | "tangent"), critical_step_tol (1e-6), contact_penalty_factor
-            (0.1), checkpoint (path), checkpoint_every (steps, 2000), restart (path),
-            max_wall_time [s] (stop, unconverged, when exceeded), frame_every (steps), threads
+            (0.1), checkpoint (path), checkpoint_every (steps; default: every checkpoint_wall = 60 s
+            of wall time), restart (path),
+            max_wall_time [s] (stop, unconverged, when exceeded), frame_every (steps), frame_interval
+            [s] (simulated time between kept frames; relax default 0.05, explicit 0 = off) and
+            max_frames (100: past it every other interval frame is dropped and the interval
+            doubled), threads
             (numba threads for the force kernel; default 1 below SMALL_MESH_ELEMENTS elements),
             max_energy_error (0.5: a sampled energy balance error above it means the run creates
             energy -- an instability -- and stops it, returning the last good state),
@@ -125,7 +129,7 @@ _CHECKPOINT_VERSION = 1
 _RUN_KEYS = {"t_end", "snapshots", "dt", "safety", "allow_reduce", "allow_unstable", "alpha",
              "mass_scaling", "mass_scaling_mode", "sample_every", "U0", "V0", "critical_time_step",
              "critical_step_method", "critical_step_tol", "contact_penalty_factor", "checkpoint",
-             "checkpoint_every", "restart", "max_wall_time", "frame_every", "progress_every", "threads", "max_energy_error", "recheck_every",
+             "checkpoint_every", "checkpoint_wall", "restart", "max_wall_time", "frame_every", "frame_interval", "max_frames", "progress_every", "threads", "max_energy_error", "recheck_every",
              "friction_stiffness"}
 _RELAX_KEYS = _RUN_KEYS - {"t_end", "snapshots"} | {"damping", "tol_kinetic", "tol_residual",
                                                      "check_every", "t_max", "max_steps"}
@@ -212,21 +216,46 @@ class _State:
               "anchors", "fric_work", "max_slip",
               # Eq. (24) energy jumps (zero / empty unless thickness_strain = "quasi")
               "w_int", "w_int_prev", "es_prev", "qflags", "q_jump", "q_samples", "q_corners",
-              "q_F", "q_D", "t_max_interp")
+              "q_F", "q_D", "t_max_interp",
+              # interval frames: per frame its interval index (-1: t = 0, a snapshot or the end), the interval
+              "frame_k", "frame_dt")
     # fields a checkpoint written before they existed may lack (a frictionless, Green-strain run)
     DEFAULTS = dict(anchors=lambda n: np.zeros((0, n, 3)), fric_work=lambda n: 0.0, max_slip=lambda n: 0,
                     w_int=lambda n: 0.0, w_int_prev=lambda n: 0.0, es_prev=lambda n: 0.0,
                     qflags=lambda n: np.zeros(0, bool), q_jump=lambda n: 0.0, q_samples=lambda n: 0,
                     q_corners=lambda n: 0, q_F=lambda n: np.zeros(0), q_D=lambda n: np.zeros(0),
-                    t_max_interp=lambda n: 0.0)
+                    t_max_interp=lambda n: 0.0, frame_dt=lambda n: 0.0)
 
     def __init__(self, **kw):
         self.__dict__.update(kw)
 
 
+def _keep_frame(st: _State, t: float, D: np.ndarray, k: int, shape, max_frames: int) -> None:
+    """Append the frame (t, D) with its interval index k (-1: not an interval frame); past
+    ``max_frames`` interval frames, keep the even-indexed ones and double the interval."""
+    st.frame_t.append(float(t))
+    st.frame_U.append(D.reshape(shape).copy())
+    st.frame_k.append(int(k))
+    if sum(1 for kk in st.frame_k if kk >= 0) > max_frames:
+        keep = [i for i, kk in enumerate(st.frame_k) if kk < 0 or kk % 2 == 0]
+        st.frame_t = [st.frame_t[i] for i in keep]
+        st.frame_U = [st.frame_U[i] for i in keep]
+        st.frame_k = [kk if kk < 0 else kk // 2 for kk in (st.frame_k[i] for i in keep)]
+        st.frame_dt *= 2.0
+
+
+def _next_frame_time(st: _State) -> float:
+    """Simulated time [s] of the next interval frame (inf without interval frames)."""
+    if st.frame_dt <= 0.0:
+        return math.inf
+    last = next((k for k in reversed(st.frame_k) if k >= 0), 0)
+    return (last + 1) * st.frame_dt
+
+
 def _save_checkpoint(path, st: _State, fixed_info: dict):
     tmp = f"{path}.tmp{os.getpid()}.npz"
-    arrays = {k: np.asarray(getattr(st, k)) for k in _State.FIELDS if k not in ("frame_t", "frame_U")}
+    arrays = {k: np.asarray(getattr(st, k)) for k in _State.FIELDS if k not in ("frame_t", "frame_U", "frame_k")}
+    arrays["frame_k"] = np.asarray(st.frame_k, dtype=np.int64)
     arrays["frame_t"] = np.asarray(st.frame_t, dtype=float)
     arrays["frame_U"] = (np.stack(st.frame_U) if st.frame_U else np.zeros((0,) + st.D.shape))
     for k, v in fixed_info.items():
@@ -256,12 +285,14 @@ def _load_checkpoint(path, fixed_info: dict) -> _State:
                 raise InputError(f"restart file {path} does not match this run: {k} was {saved.tolist() if saved.size < 8 else '...'}, "
                                  f"now {np.asarray(v).tolist() if np.asarray(v).size < 8 else '...'}")
         n_nodes = int(fixed_info["n_nodes"])
-        kw = {k: (z[k].copy() if k in z.files else _State.DEFAULTS[k](n_nodes)) for k in _State.FIELDS}
+        kw = {k: (z[k].copy() if k in z.files else _State.DEFAULTS[k](n_nodes)) for k in _State.FIELDS
+              if k != "frame_k"}
+        kw["frame_k"] = [int(k) for k in z["frame_k"]] if "frame_k" in z.files else [-1] * len(z["frame_t"])
     for k in ("step", "max_interp", "max_contact", "resets", "n_base", "rechecks", "reductions", "max_slip",
               "q_samples", "q_corners"):
         kw[k] = int(kw[k])
     for k in ("dt_cur", "t_base", "dtc_min", "damp_sum", "max_pen", "ekin_max", "balance_err", "contact_work", "ek_prev_half", "last_ekin", "last_rel_res",
-              "fric_work", "w_int", "w_int_prev", "es_prev", "q_jump", "t_max_interp"):
+              "fric_work", "w_int", "w_int_prev", "es_prev", "q_jump", "t_max_interp", "frame_dt"):
         kw[k] = float(kw[k])
     kw["frame_t"] = [float(t) for t in kw["frame_t"]]
     kw["frame_U"] = [u for u in kw["frame_U"]]
@@ -429,8 +460,19 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
 
     sample_every = _num(settings, "sample_every", max(1, min(100, n_steps // 100)), positive=True, integer=True)
     frame_every = _num(settings, "frame_every", None, positive=True, integer=True)
+    # a relaxation keeps a frame every frame_interval of simulated time by default (a time series
+    # to watch it settle); max_frames bounds the memory: beyond it every other interval frame is
+    # dropped and the interval doubled, so a run of any length keeps 1/2..1 x max_frames of them
+    frame_iv = _num(settings, "frame_interval", 0.05 if (relax and frame_every is None) else 0.0, nonneg=True)
+    max_frames = _num(settings, "max_frames", 100, positive=True, integer=True)
+
+    def keep_frame(st, t, D, k):
+        _keep_frame(st, t, D, k, shape, max_frames)
     ckpt_path = settings.get("checkpoint")
-    ckpt_every = _num(settings, "checkpoint_every", 2000, positive=True, integer=True)
+    # by steps when asked; otherwise every checkpoint_wall seconds of wall time (a checkpoint holds
+    # the kept frames too: tens of MB on a big mesh, too much to write every few thousand steps)
+    ckpt_every = _num(settings, "checkpoint_every", None, positive=True, integer=True)
+    ckpt_wall = _num(settings, "checkpoint_wall", 60.0, positive=True)
     prog_every = _num(settings, "progress_every", max(1, n_steps // 100), positive=True, integer=True)
 
     # ------------------------------------------------------------------ coefficients of Eq. (23)
@@ -556,11 +598,10 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
                     max_interp=mi0, contact_work=0.0, max_contact=0, max_pen=0.0, ek_prev_half=0.0,
                     resets=0, last_ekin=Ek0, last_rel_res=(_norm((P - F0 + C0)[free_idx]) / Pn
                                                          if Pn > 0 else 0.0),
-                    frame_t=[], frame_U=[], dt_cur=dt, n_base=0, t_base=0.0,
+                    frame_t=[], frame_U=[], frame_k=[], frame_dt=frame_iv, dt_cur=dt, n_base=0, t_base=0.0,
                     mode=(mode0 if mode0 is not None else np.zeros(6 * N)), rechecks=0, reductions=0, dtc_min=dt_crit)
         if 0 in snap_steps or relax or (not snap_steps):
-            st.frame_t.append(0.0)
-            st.frame_U.append(D0.reshape(shape).copy())
+            keep_frame(st, 0.0, D0, -1)
         restarted_from = None
 
     D, Dp = st.D.copy(), st.Dp.copy()
@@ -572,6 +613,8 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
         return st.t_base + (n - st.n_base) * dt
 
     good_D, good_t = D.copy(), time_of(st.step)  # the last state that passed the sample checks
+    frame_next_t = _next_frame_time(st)
+    ckpt_t = time.perf_counter()
     max_err = _num(settings, "max_energy_error", 0.5, positive=True)
     Dn1 = np.empty_like(D)
     R = np.empty_like(D)
@@ -678,11 +721,12 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
                 st.last_rel_res = _norm(R[free_idx]) / (Pn if Pn > 0 else max(_norm(F), 1e-300))
             # ---------------------------------------------------- frames
             if n in snap_steps and n > 0:
-                st.frame_t.append(time_of(n))
-                st.frame_U.append(D.reshape(shape).copy())
-            if frame_every and n > 0 and n % frame_every == 0:
-                st.frame_t.append(time_of(n))
-                st.frame_U.append(D.reshape(shape).copy())
+                keep_frame(st, time_of(n), D, -1)
+            elif frame_every and n > 0 and n % frame_every == 0:
+                keep_frame(st, time_of(n), D, -1)
+            elif st.frame_dt > 0.0 and n > 0 and time_of(n) >= frame_next_t:
+                keep_frame(st, time_of(n), D, int(time_of(n) / st.frame_dt))
+                frame_next_t = _next_frame_time(st)
             # ---------------------------------------------------- steady state?
             if check and n > 0:
                 Wext_c = _dot(P, D - D0)
@@ -753,10 +797,12 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
                         st.reductions += 1
                         cF, cD, cDp = coefficients(dt)
                         end_step, snap_steps = schedule(st.n_base, st.t_base, dt)
-            if ckpt_path and st.step % ckpt_every == 0:
+            if ckpt_path and (st.step % ckpt_every == 0 if ckpt_every else
+                              (st.step % 100 == 0 and time.perf_counter() - ckpt_t >= ckpt_wall)):
                 st.D, st.Dp = D, Dp
                 _save_checkpoint(ckpt_path, st, fixed_info)
                 st.D, st.Dp = None, None
+                ckpt_t = time.perf_counter()
             if st.step % prog_every == 0:
                 frac = st.step / max(end_step, 1)
                 if relax and st.last_rel_res > 0:
@@ -779,15 +825,13 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
             message = (f"reached t_end = {time_of(end_step):.6g} s in {end_step} steps of {dt:.6g} s"
                        + (f" ({st.reductions} step reduction(s) after re-checking the critical step)"
                           if st.reductions else ""))
-            st.frame_t.append(time_of(end_step))
-            st.frame_U.append(D.reshape(shape).copy())
+            keep_frame(st, time_of(end_step), D, -1)
             if ckpt_path:
                 st.D, st.Dp = D, Dp
                 _save_checkpoint(ckpt_path, st, fixed_info)
     if status == "steady":
         if not st.frame_t or st.frame_t[-1] != time_of(st.step):
-            st.frame_t.append(time_of(st.step))
-            st.frame_U.append(D.reshape(shape).copy())
+            keep_frame(st, time_of(st.step), D, -1)
 
     if status in ("nonfinite", "diverged"):
         D = good_D

@@ -68,6 +68,8 @@ CASES = {
     "s60-green-a50": ("60x60", dict(PAPER_EQ, max_wall_time=1500.0), {}, "Green, alpha 50, dir100 (= paper), mu 0.3"),
     "s60-quasi-a50": ("60x60", dict(PAPER_EQ, max_wall_time=1500.0), dict(QUASI),
                       "Eq. (24), alpha 50, dir100 (= paper), mu 0.3"),
+    "s60-green-uni": ("60x60", dict(UNI, max_wall_time=1800.0), {}, "Green, uni100 (paper), mu 0.3"),
+    "s60-quasi-uni": ("60x60", dict(UNI, max_wall_time=1800.0), dict(QUASI), "Eq. (24), uni100 (paper), mu 0.3"),
     "s100-green-a50": ("100x100", dict(PAPER_EQ, max_wall_time=2400.0), {}, "Green, alpha 50, dir100 (= paper), mu 0.3"),
 }
 

@@ -126,7 +126,7 @@ NOTES = [
     "'alpha 1' (= 10): STEADY at t = 2.07 s after 56.0k steps, 377 s wall, DC 0.0653, 8 folds, 0 interpenetrated "
     "nodes, energy error 7.8e-6.  Two different 8-fold states (top.png of the runs): alpha 50 creeps into the static "
     "solution's pattern, folds centred at +-22.5 deg off the warp/weft axes; alpha 10 swings into folds on the axes "
-    "and the diagonals, hanging deeper (min z -24.5 vs -25.3 cm, DC 12 % higher).  The paper reports 10 folds "
+    "and the diagonals, which stand further out (DC 12 % higher; min z -24.5 vs -25.3 cm).  The paper reports 10 folds "
     "(alpha 5) and 8 (alpha 1), 12 statically; we get 8 throughout: the fold count is the paper's for alpha 1 only.  "
     "The previous session's runs with alpha 5 and 1 on the director-scaled masses (cases disc-a5-dir100, "
     "disc-a1-dir100 below) were 10x less damped than the paper's path, which is why alpha 1 did not settle.",

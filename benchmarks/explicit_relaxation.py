@@ -35,6 +35,7 @@ import io
 import json
 import os
 import pstats
+import re
 import statistics
 import subprocess
 import sys
@@ -106,20 +107,21 @@ def _fmt(x, f="{:.4g}"):
 def write_md(res: dict, path: Path) -> str:
     rows = res["rows"]
     lines = ["# Dynamic relaxation: wall time to steady state (issue 5)", "",
-             f"`python benchmarks/explicit_relaxation.py {' '.join(res['argv'])}` on {res['date']}, "
+             "`python benchmarks/explicit_relaxation.py " + "`, then `".join(res["argv"]) + f"` (last on {res['date']}), "
              f"{res['cpu_count']} CPUs (shared; the 1/5/15-min load averages before and after each run are "
              "given).  wall = the solver's own time (after a warm-up that compiled the kernels); "
-             "|Δx| = largest node-position difference from the first variant's steady state in the same pass.",
+             "|Δx| = largest node-position difference from the first variant's steady state in the same pass; "
+             "runs taken from the log of an interrupted invocation (`--import-log`) lack the fields it did not print (–).",
              "",
              "| case | variant | pass | steady | steps | dt [s] | t_sim [s] | wall [s] | element-steps/s | DC | folds "
              "| max interp. | energy err | abs Δx [cm] | load before → after |",
              "|" + "---|" * 15]
     for r in rows:
         lines.append("| " + " | ".join([
-            r["case"], r["variant"], str(r["pass_"]), _fmt(r["converged"]), _fmt(r["steps"], "{}"),
-            _fmt(r["dt"], "{:.3e}"), _fmt(r["t_sim"], "{:.3f}"), _fmt(r["wall_s"], "{:.1f}"),
-            _fmt(r["element_steps_per_s"], "{:.3g}"), _fmt(r["drape_coefficient"]), _fmt(r["fold_count"], "{}"),
-            _fmt(r["max_interpenetrated_nodes"], "{}"), _fmt(r["energy_balance_error"], "{:.1e}"),
+            r["case"], r["variant"], str(r["pass_"]), _fmt(r.get("converged")), _fmt(r.get("steps"), "{}"),
+            _fmt(r.get("dt"), "{:.3e}"), _fmt(r.get("t_sim"), "{:.3f}"), _fmt(r.get("wall_s"), "{:.1f}"),
+            _fmt(r.get("element_steps_per_s"), "{:.3g}"), _fmt(r.get("drape_coefficient")), _fmt(r.get("fold_count"), "{}"),
+            _fmt(r.get("max_interpenetrated_nodes"), "{}"), _fmt(r.get("energy_balance_error"), "{:.1e}"),
             _fmt(r.get("max_position_difference_cm"), "{:.2e}"),
             f"{r['load_before']} → {r['load_after']}"]) + " |")
     lines += ["", "Medians over the passes (target from issue 5):", "",
@@ -149,6 +151,8 @@ def main(argv=None):
     ap.add_argument("--max-wall", type=float, default=1800.0, help="wall-time limit per run [s]")
     ap.add_argument("--profile-steps", type=int, default=5000,
                     help="profile this many steps of the first case and variant (0: no profile)")
+    ap.add_argument("--append", action="store_true", help="add to OUT.json's runs (passes numbered on)")
+    ap.add_argument("--import-log", default=None, help="also take the runs printed in this log of an earlier invocation")
     ap.add_argument("--out", default=str(OUT / "explicit_relaxation"), help="writes OUT.md and OUT.json")
     a = ap.parse_args(argv)
     for c in a.cases:
@@ -157,8 +161,17 @@ def main(argv=None):
     # warm-up: compile (or load) the kernels so the first timed run does not pay for it
     run_scene("square-pedestal", mesh="6x2x4", solver="relax", out_dir=None, progress=False, max_steps=50,
               **VARIANTS["director"])
-    rows = []
-    for p in range(1, a.passes + 1):
+    out = Path(a.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    res = dict(profile=None, argv=[], rows=[])
+    if a.append and out.with_suffix(".json").exists():
+        res = json.loads(out.with_suffix(".json").read_text())
+    res["argv"] = res.get("argv", []) + [" ".join(argv if argv is not None else sys.argv[1:])]
+    rows = res["rows"]
+    if a.import_log:
+        rows += import_log(a.import_log)
+    p0 = max((r["pass_"] for r in rows), default=0)
+    for p in range(p0 + 1, p0 + a.passes + 1):
         for case in a.cases:
             first = None
             for v in a.variants:
@@ -174,27 +187,57 @@ def main(argv=None):
                       f"DC {row['drape_coefficient']:.4f}  folds {row['fold_count']}  "
                       f"|dx| {row['max_position_difference_cm']:.2e} cm  load [{row['load_before']}] -> "
                       f"[{row['load_after']}]", flush=True)
-    medians = []
-    for case in a.cases:
-        for v in a.variants:
-            rs = [r for r in rows if r["case"] == case and r["variant"] == v]
-            med = statistics.median(r["wall_s"] for r in rs)
-            ratios = [r["wall_s"] / next(q["wall_s"] for q in rows if q["case"] == case and q["pass_"] == r["pass_"]
-                                         and q["variant"] == a.variants[0]) for r in rs]
-            tgt = TARGETS.get(case)
-            medians.append(dict(case=case, variant=v, median_wall_s=med, target_s=tgt, ratios=ratios,
-                                meets_target=(None if tgt is None else bool(med < tgt and all(r["converged"] for r in rs)))))
-    prof = None
+                save(res, out)   # after every run: a long benchmark stopped half-way keeps what it measured
     if a.profile_steps:
-        prof = dict(case=a.cases[0], variant=a.variants[0], steps=a.profile_steps,
-                    top=profile(a.cases[0], a.variants[0], a.profile_steps))
-    res = dict(profile=prof, argv=list(argv if argv is not None else sys.argv[1:]), cpu_count=os.cpu_count(),
-               date=time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()), rows=rows, medians=medians)
-    out = Path(a.out)
-    out.parent.mkdir(parents=True, exist_ok=True)
+        res["profile"] = dict(case=a.cases[0], variant=a.variants[0], steps=a.profile_steps,
+                              top=profile(a.cases[0], a.variants[0], a.profile_steps))
+    print(save(res, out))
+
+
+LOG_LINE = re.compile(
+    r"pass (?P<pass_>\d+) (?P<case>\S+)\s+(?P<variant>\S+)\s+(?P<steady>steady|NOT steady)\s+(?P<steps>\d+) steps of "
+    r"(?P<dt>\S+) s\s+t_sim (?P<t_sim>\S+) s\s+wall\s+(?P<wall_s>\S+) s\s+(?P<eps>\S+) el-steps/s\s+DC (?P<dc>\S+)\s+"
+    r"folds (?P<folds>\d+)\s+\|dx\| (?P<dx>\S+) cm\s+load \[(?P<lb>[^]]*)\] -> \[(?P<la>[^]]*)\]")
+
+
+def import_log(path: str) -> list[dict]:
+    """Rows from the printed lines of an earlier invocation (one that was stopped before it wrote
+    its JSON); the fields a line does not print are left out."""
+    rows = []
+    for line in Path(path).read_text().splitlines():
+        m = LOG_LINE.match(line.strip())
+        if m:
+            g = m.groupdict()
+            rows.append(dict(case=g["case"], variant=g["variant"], pass_=int(g["pass_"]),
+                             converged=g["steady"] == "steady", steps=int(g["steps"]), dt=float(g["dt"]),
+                             t_sim=float(g["t_sim"]), wall_s=float(g["wall_s"]), element_steps_per_s=float(g["eps"]),
+                             drape_coefficient=float(g["dc"]), fold_count=int(g["folds"]),
+                             max_position_difference_cm=float(g["dx"]), load_before=g["lb"], load_after=g["la"],
+                             from_log=str(path)))
+    return rows
+
+
+def save(res: dict, out: Path) -> str:
+    """Medians over the passes, then OUT.json and OUT.md; returns the markdown."""
+    rows = res["rows"]
+    medians = []
+    for case in dict.fromkeys(r["case"] for r in rows):
+        first_v = next(r["variant"] for r in rows if r["case"] == case)
+        for v in dict.fromkeys(r["variant"] for r in rows if r["case"] == case):
+            rs = [r for r in rows if r["case"] == case and r["variant"] == v]
+            ratios = []
+            for r in rs:
+                ref = [q["wall_s"] for q in rows if q["case"] == case and q["pass_"] == r["pass_"] and q["variant"] == first_v]
+                if ref:
+                    ratios.append(r["wall_s"] / ref[0])
+            med = statistics.median(r["wall_s"] for r in rs)
+            tgt = TARGETS.get(case)
+            medians.append(dict(case=case, variant=v, runs=len(rs), median_wall_s=med, target_s=tgt, ratios=ratios,
+                                meets_target=(None if tgt is None else bool(med < tgt and all(r["converged"] for r in rs)))))
+    res.update(medians=medians, cpu_count=os.cpu_count(), date=time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()))
     with open(out.with_suffix(".json"), "w") as fh:
         json.dump(res, fh, indent=1, default=str)
-    print(write_md(res, out.with_suffix(".md")))
+    return write_md(res, out.with_suffix(".md"))
 
 
 if __name__ == "__main__":

@@ -1,7 +1,7 @@
 """Explicit dynamics (Eq. 23), dynamic relaxation, critical time step, checkpoints and contact.
 
 All meshes are tiny (a few dozen quads) so that the whole file runs in well under two minutes; the
-force kernel runs single-threaded for such meshes (explicit.SMALL_MESH_ELEMENTS)."""
+force kernel runs single-threaded for such meshes (explicit.SMALL_MESH_ELEMENTS = 1000)."""
 
 import math
 

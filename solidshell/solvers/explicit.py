@@ -902,12 +902,16 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
     return SolveResult(U=U, converged=bool(ok_run or steady), message=message, info=info, frames=frames)
 
 
-SMALL_MESH_ELEMENTS = 10000
+SMALL_MESH_ELEMENTS = 1000
 """Below this many elements the loop runs the force kernel on one thread by default: a step then
-takes micro- to milliseconds and starting/joining the kernel's worker threads every step costs more
-than it saves.  Measured (benchmarks/explicit_throughput.py, 2-core machine under load 7): 20 quads
-45 us/step on 1 thread vs 2.4 ms on 2; 1600 quads 6.5e5 vs 1.3e5 element-steps/s; 6400 quads
-9.7e5 vs 3.6e5.  On an idle many-core machine the crossover is lower: pass ``threads``."""
+takes microseconds and starting/joining the kernel's worker threads every step costs more than it
+saves.  Measured on the quiet 2-core machine (benchmarks/explicit_throughput.py --threads 1|2, two
+passes, load ~1): 400 quads 1.18/1.20 M element-steps/s on 1 thread vs 0.45/1.83 M on 2; 900 quads
+1.27/1.23 M vs 1.87/1.48 M; 1600 quads 1.30/1.21 M vs 2.09/1.56 M; 2500 quads 1.18/1.19 M vs
+1.98/2.31 M (benchmarks/dynamic_speed.py).  The results are bitwise the same on any number of
+threads (element forces in parallel, one serial scatter).  On a machine whose cores are busy with
+other jobs, two threads are much slower (a worker waits a whole time slice for a core: 0.31 M vs
+1.76 M at 2500 quads under load 5); pass ``threads=1`` there."""
 
 
 def _with_threads(problem, settings, progress, relax):

@@ -724,7 +724,7 @@ def _integrate(problem: Problem, settings: dict, progress, relax: bool) -> Solve
                 keep_frame(st, time_of(n), D, -1)
             elif frame_every and n > 0 and n % frame_every == 0:
                 keep_frame(st, time_of(n), D, -1)
-            elif st.frame_dt > 0.0 and n > 0 and time_of(n) >= frame_next_t:
+            elif time_of(n) >= frame_next_t:   # inf without interval frames; >= the interval > 0 else
                 keep_frame(st, time_of(n), D, int(time_of(n) / st.frame_dt))
                 frame_next_t = _next_frame_time(st)
             # ---------------------------------------------------- steady state?

@@ -1,0 +1,89 @@
+"""Typed solver settings: one declarative schema per solver kind, checked once before any work.
+
+Each solver declares its settings as a pydantic model (a frozen ``SettingsModel`` subclass) next to
+the solver that reads them; :func:`parse` turns a plain dict (a scene file's ``[solver.KIND]``
+table merged with ``--set`` overrides) into that model or raises one :class:`InputError` line that
+names the offending key, what it got and what it accepts.  Unknown keys are refused by name.
+
+:func:`validate` is the registry the runner calls before it writes a file: it knows which model
+belongs to which solver kind.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Annotated, Any
+
+from pydantic import AfterValidator, BaseModel, ConfigDict, ValidationError
+
+from .errors import InputError
+
+__all__ = ["SettingsModel", "parse", "validate", "Finite", "SOLVER_KINDS"]
+
+SOLVER_KINDS = ("static", "explicit", "relax")
+
+
+def _finite(x: float) -> float:
+    if not math.isfinite(x):
+        raise ValueError("must be finite")
+    return x
+
+
+Finite = Annotated[float, AfterValidator(_finite)]
+"""A float that must be finite (use with pydantic's Field(gt=..., ge=...) for ranges)."""
+
+
+class SettingsModel(BaseModel):
+    """Base of every solver's settings: frozen, unknown keys refused, strict-ish numbers (a string
+    "abc" is refused; "1e-3" from a command line is accepted as 1e-3 by pydantic's lax mode)."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, arbitrary_types_allowed=True,
+                              validate_default=True)
+
+    def as_dict(self) -> dict:
+        """The settings as a plain dict (every key, defaults filled in)."""
+        return {k: getattr(self, k) for k in type(self).model_fields}
+
+
+def _one_line(exc: ValidationError, where: str, model: type[SettingsModel]) -> str:
+    parts = []
+    for e in exc.errors():
+        key = ".".join(str(p) for p in e.get("loc", ())) or "?"
+        if e.get("type") == "extra_forbidden":
+            known = ", ".join(sorted(model.model_fields))
+            parts.append(f"unknown setting {key!r} (known: {known})")
+            continue
+        got = e.get("input")
+        got_s = repr(got) if not hasattr(got, "shape") else f"array of shape {got.shape}"
+        msg = e.get("msg", "invalid").replace("Value error, ", "")
+        parts.append(f"setting {key} = {got_s[:60]}: {msg}")
+    return f"{where}: " + "; ".join(parts)
+
+
+def parse(model: type[SettingsModel], settings: dict | None, where: str = "settings") -> SettingsModel:
+    """``model`` built from ``settings`` (None: all defaults); InputError (one line) if invalid."""
+    if isinstance(settings, model):
+        return settings
+    try:
+        return model.model_validate(dict(settings or {}))
+    except ValidationError as exc:
+        raise InputError(_one_line(exc, where, model)) from None
+
+
+def model_for(kind: str) -> type[SettingsModel]:
+    """The settings model of a solver kind (imported on demand: the solvers pull in numba)."""
+    if kind == "static":
+        from .solvers.static_settings import StaticSettings
+        return StaticSettings
+    if kind == "explicit":
+        from .solvers.explicit.settings import ExplicitSettings
+        return ExplicitSettings
+    if kind == "relax":
+        from .solvers.explicit.settings import RelaxSettings
+        return RelaxSettings
+    raise InputError(f"unknown solver {kind!r}; choose one of: {', '.join(SOLVER_KINDS)}")
+
+
+def validate(kind: str, settings: dict | None, where: str | None = None) -> Any:
+    """Check a solver kind's settings before any work; returns the parsed settings model."""
+    return parse(model_for(kind), settings, where or f"solver.{kind}")

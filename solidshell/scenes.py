@@ -78,6 +78,13 @@ Scene file format
     alpha = 5.0
     mass_scaling = 100
 
+    [adapt]                               # optional: reversible adaptive subdivision (Sec. 5),
+    enabled = false                       #   dynamic runs only (or --adaptive); the level-0 mesh is
+    levels = 3                            #   mesh.adaptive_level0 (or --mesh); every key of
+    const = 0.5                           #   solidshell.adapt.settings.AdaptSettings: levels, const,
+    eps = 0.2                             #   eps (Eqs. 25-26), every (steps between passes),
+    every = 200                           #   transfer ("dk" | "linear"), project_boundary
+
     [output]
     snapshots = [0.0, 0.1, 0.4, 2.1]      # times [s] kept in the time series and pictured
     pictures = ["top", "iso"]             # any of top, iso, side (x-z), side_yz (y-z)
@@ -264,6 +271,7 @@ class Scene:
     contact: tuple            # ({"type": ..., ...}, ...)
     solver: dict              # {"kind": str, "static": {...}, "explicit": {...}, "relax": {...}}
     output: dict              # {"snapshots": [...], "pictures": [...]}
+    adapt: dict = field(default_factory=dict)   # the [adapt] table (solidshell.adapt.settings.AdaptSettings)
     source: str = "<dict>"
     raw: dict = field(default_factory=dict, repr=False, compare=False)
 
@@ -274,7 +282,7 @@ class Scene:
         raw = copy.deepcopy(data)
         _table(ctx, "(top level)", data)
         top = {"name", "title", "paper_section", "description", "geometry", "mesh", "material", "model",
-               "supports", "loads", "contact", "solver", "output"}
+               "supports", "loads", "contact", "solver", "output", "adapt"}
         _unknown(ctx, "", data, top)
         for req in ("name", "title", "geometry"):
             if req not in data:
@@ -503,10 +511,16 @@ class Scene:
                 raise ctx.err(f"output.pictures[{i}]", f"unknown view {p!r} (known: {', '.join(PICTURES)})")
         output = {"snapshots": snaps, "pictures": list(pics)}
 
+        # adaptivity (§5): the table is checked here, so a bad value fails before any work ----------
+        adapt = dict(_table(ctx, "adapt", data.get("adapt", {})))
+        if adapt:
+            from .adapt.settings import parse_adapt
+            parse_adapt(adapt, f"{source}: adapt")
+
         return cls(name=name, title=title, paper_section=section, description=description,
                    geometry=geometry, mesh=mesh, material=material, model=model, supports=supports,
-                   loads=loads, contact=tuple(contact), solver=solver, output=output, source=source,
-                   raw=raw)
+                   loads=loads, contact=tuple(contact), solver=solver, output=output, adapt=adapt,
+                   source=source, raw=raw)
 
     # ------------------------------------------------------------------ derived
     @property
@@ -613,7 +627,7 @@ class Scene:
                 "material": plain(self.material), "model": plain(self.model),
                 "supports": plain(self.supports), "loads": plain(self.loads),
                 "contact": plain(list(self.contact)), "solver": plain(self.solver),
-                "output": plain(self.output)}
+                "output": plain(self.output), "adapt": plain(self.adapt)}
 
 
 def _setting(ctx, key, v):

@@ -1,0 +1,255 @@
+"""The adaptive meshing procedure of §5.5 inside a dynamic run (explicit or relaxation).
+
+    a. background mesh from the level-0 mesh (background.py)        b. level 0 switched on
+    c. Integrator.advance(every)                                     d. mark by Eqs. (25)-(26)
+    e. split / merge (2:1 balanced, transition elements), new nodes by the DK condition
+    f. a new problem on the new mesh (masses, loads, critical step)  g. back to c.
+
+The driver knows the solver only through the integrator's small interface (``advance``,
+``state``, ``from_state``, ``energies``) and the scene only through ``make_problem(mesh)``; the
+solvers never import this package.  The central-difference state (D_n and D_n-1) of every new node
+is transferred, so its velocity is too; friction anchors follow the background nodes (a new node
+starts with no stick anchor).  The energy the transfer adds or removes is booked by the integrator
+as ``remesh_energy_jump`` (a new ledger segment at each mesh change), so the balance check stays
+honest; the driver also lists each remesh's jump.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import InputError
+from ..problem import SolveResult, no_progress
+from .background import BackgroundMesh, estimate_background_bytes, _available_bytes
+from .criteria import leaf_bending_strain, level_side_lengths, mark
+from .forest import ActiveMesh, AdaptiveMesh
+from .settings import MAX_LEVELS, AdaptSettings
+from .transfer import fill_new_nodes
+
+_STATE_PREFIX = "adapt_"
+
+
+@dataclass
+class Segment:
+    """One mesh of the run: valid from simulated time t0 [s] (step0) until the next remesh."""
+
+    t0: float
+    step0: int
+    active: ActiveMesh
+
+
+@dataclass
+class AdaptiveOutput:
+    """What :func:`run_adaptive` returns: the solver's result on the final mesh, that mesh, and the
+    time series on the meshes of their own times: ``series`` = [(t, ShellMesh, U (N,6))]."""
+
+    result: SolveResult
+    mesh: object
+    series: list = field(default_factory=list)
+    active: ActiveMesh | None = None
+
+
+def check_level0(mesh, adapt: AdaptSettings) -> None:
+    """Refuse what the procedure does not support, before any work (InputError, one line)."""
+    if mesh.n_tris:
+        raise InputError(f"adaptive subdivision needs a level-0 mesh of quadrilaterals only (1-to-4 splitting, "
+                         f"§5.1); this mesh has {mesh.n_tris} triangle(s)")
+    need = estimate_background_bytes(mesh.n_quads, adapt.levels)
+    avail = _available_bytes()
+    if not adapt.allow_large and (adapt.levels > MAX_LEVELS or need > 0.5 * avail):
+        raise InputError(f"adapt.levels = {adapt.levels} on {mesh.n_quads} level-0 quads needs a background mesh "
+                         f"of {mesh.n_quads * 4 ** adapt.levels} elements, about {need / 2**20:.0f} MiB "
+                         f"({avail / 2**20:.0f} MiB available; at most {MAX_LEVELS} levels without "
+                         f"adapt.allow_large = true)")
+
+
+class AdaptiveRun:
+    """One adaptive dynamic run.  ``integrator_cls`` is the explicit Integrator (its from_state
+    continues a state on a new problem)."""
+
+    def __init__(self, level0, make_problem, integrator_cls, settings, adapt: AdaptSettings, *, relax: bool,
+                 curves=None, progress=no_progress):
+        check_level0(level0, adapt)
+        self.make_problem, self.cls, self.settings, self.adapt = make_problem, integrator_cls, settings, adapt
+        self.relax, self.progress = relax, progress or no_progress
+        self.bg = BackgroundMesh.from_level0(level0, adapt.levels, curves if adapt.project_boundary else None)
+        self.L = level_side_lengths(self.bg)
+        self.forest = AdaptiveMesh(self.bg)
+        self.segments: list[Segment] = []
+        self.history = []          # (t, active nodes, elements) after every mesh change and at the start
+        self.remeshes = []         # per remesh: t, splits, merges, nodes in/out, energy jump
+        self.remesh_seconds = 0.0
+        self.integ = None
+
+    # ------------------------------------------------------------------ start / restart
+    def start(self) -> None:
+        act = self.forest.active_mesh()
+        integ = self.cls(self.make_problem(act.mesh), self.settings, self.progress, relax=self.relax)
+        self._enter(integ, act)
+
+    def restart(self, path) -> None:
+        """Continue from a checkpoint written by this driver (bit for bit: the saved step, no new
+        ledger segment)."""
+        from ..solvers.explicit import checkpoint
+
+        state, extra = checkpoint.load(path)
+        arrays = {k[len(_STATE_PREFIX):]: v for k, v in extra.items() if k.startswith(_STATE_PREFIX)}
+        if not arrays:
+            raise InputError(f"restart file {path} was not written by an adaptive run")
+        self.forest = AdaptiveMesh.from_state_arrays(self.bg, arrays)
+        act = self.forest.active_mesh()
+        integ = self.cls.from_state(self.make_problem(act.mesh), state, self.settings, reestimate_step=False,
+                                    new_segment=False, progress=self.progress, relax=self.relax)
+        integ.restarted_from = state.step
+        self._enter(integ, act)
+
+    def _enter(self, integ, act: ActiveMesh) -> None:
+        self.integ, self.active = integ, act
+        st = integ.state
+        self.segments.append(Segment(st.t, st.step, act))
+        self.history.append((float(st.t), int(act.mesh.n_nodes), int(act.mesh.n_elements)))
+        integ.checkpoint_extra = self._checkpoint_arrays
+
+    def _checkpoint_arrays(self) -> dict:
+        return {_STATE_PREFIX + k: v for k, v in self.forest.state_arrays().items()}
+
+    # ------------------------------------------------------------------ the loop (§5.5 c-g)
+    def run(self) -> AdaptiveOutput:
+        if self.integ is None:
+            self.start()
+        while True:
+            status = self.integ.advance(self.adapt.every)
+            if status != "running":
+                break
+            t0 = time.perf_counter()
+            self._adapt_pass()
+            self.remesh_seconds += time.perf_counter() - t0
+        return self._output()
+
+    def _marks(self):
+        st = self.integ.state
+        U = st.D.reshape(-1, 6)
+        eb = self.integ.model.bending_strain(U)
+        leaves, eb_leaf = leaf_bending_strain(eb, self.active.elem_leaf)
+        return mark(eb_leaf, leaves, self.L, self.adapt.const, self.adapt.eps, max_level=self.bg.levels), leaves
+
+    def _adapt_pass(self) -> None:
+        """Steps d-f: mark, split/merge, and when the mesh changed continue on the new one."""
+        marks, leaves = self._marks()
+        n_split = int(np.count_nonzero(marks.split))
+        n_merge = len(marks.merge)
+        if not n_split and not n_merge:
+            return
+        before = self.forest.state_arrays()
+        if n_merge:
+            self.forest.merge(marks.merge)
+        if n_split:
+            self.forest.split(leaves[marks.split])
+        new = self.forest.active_mesh()
+        if np.array_equal(new.nodes, self.active.nodes) and _same_leaves(before, self.forest.state_arrays()):
+            return
+        self._switch(new, n_split, n_merge)
+
+    def _switch(self, new: ActiveMesh, n_split: int, n_merge: int) -> None:
+        old, integ = self.active, self.integ
+        st = integ.state
+        Nb = len(self.bg.Xo)
+        inserted = np.setdiff1d(new.nodes, old.nodes, assume_unique=True)
+        known = np.zeros(Nb, dtype=bool)
+        known[old.nodes] = True
+        moved = []
+        for vec in (st.D, st.D_prev):          # D_n and D_n-1: the velocity is transferred too
+            Ubg = np.zeros((Nb, 6))
+            Ubg[old.nodes] = vec.reshape(-1, 6)
+            Ubg = fill_new_nodes(self.bg, Ubg, inserted, self.adapt.transfer, known=known)
+            moved.append(Ubg[new.nodes].ravel())
+        st.D, st.D_prev = moved
+        st.anchors = _remap_anchors(st.anchors, old.nodes, new.nodes, Nb)
+        problem = self.make_problem(new.mesh)
+        e_before = integ.energies()
+        jump0 = st.remesh_energy_jump
+        self.integ = self.cls.from_state(problem, st, self.settings, reestimate_step=self._needs_new_step(old, new),
+                                         progress=self.progress, relax=self.relax)
+        self.integ.restarted_from = integ.restarted_from
+        self.integ.steps_done, self.integ.t_loop = integ.steps_done, integ.t_loop
+        self.integ.wall0 = integ.wall0
+        self.integ.warnings = integ.warnings
+        self.remeshes.append(dict(t=float(st.t), step=int(st.step), splits=n_split, merges=n_merge,
+                                  nodes_in=int(len(inserted)),
+                                  nodes_out=int(len(np.setdiff1d(old.nodes, new.nodes, assume_unique=True))),
+                                  active_nodes=int(new.mesh.n_nodes),
+                                  energy_jump=float(self.integ.state.remesh_energy_jump - jump0),
+                                  kinetic_before=float(e_before["kinetic"])))
+        self._enter(self.integ, new)
+
+    def _needs_new_step(self, old: ActiveMesh, new: ActiveMesh) -> bool:
+        """A new critical-step estimate when the finest level present changed (the step is set by
+        the smallest elements); otherwise the step is kept and the integrator's periodic re-check
+        watches it.  Cheap remeshes are what keeps remeshing under 10 % of the run."""
+        return int(old.elem_leaf[:, 0].max()) != int(new.elem_leaf[:, 0].max())
+
+    # ------------------------------------------------------------------ output
+    def _output(self) -> AdaptiveOutput:
+        res = self.integ.result()
+        res.info.update(self.summary_info())
+        series = self._series(res.frames)
+        return AdaptiveOutput(result=res, mesh=self.active.mesh, series=series, active=self.active)
+
+    def _series(self, frames) -> list:
+        out = []
+        for t, U in frames:
+            n = np.asarray(U).reshape(-1, 6).shape[0]
+            seg = next((s for s in reversed(self.segments) if s.t0 <= t + 1e-12 and s.active.mesh.n_nodes == n), None)
+            if seg is None:
+                seg = next(s for s in reversed(self.segments) if s.active.mesh.n_nodes == n)
+            out.append((float(t), seg.active.mesh, np.asarray(U).reshape(-1, 6)))
+        return out
+
+    def summary_info(self) -> dict:
+        counts = [h[1] for h in self.history]
+        wall = self.integ.result_wall() if hasattr(self.integ, "result_wall") else None
+        return {
+            "adaptive": True,
+            "adapt_levels": int(self.adapt.levels), "adapt_const": float(self.adapt.const),
+            "adapt_eps": float(self.adapt.eps), "adapt_every": int(self.adapt.every),
+            "adapt_transfer": self.adapt.transfer,
+            "level0_elements": int(self.bg.n_elements(0)), "background_nodes": int(len(self.bg.Xo)),
+            "max_active_nodes": int(max(counts)), "final_active_nodes": int(counts[-1]),
+            "active_nodes_history": [[round(t, 6), n, m] for t, n, m in self.history],
+            "remesh_count": len(self.remeshes),
+            "remesh_time_s": float(self.remesh_seconds),
+            "remesh_energy_jumps": [r["energy_jump"] for r in self.remeshes],
+            "remeshes": self.remeshes,
+            "max_level_reached": int(max(s.active.elem_leaf[:, 0].max() for s in self.segments)),
+        }
+
+
+def _same_leaves(a: dict, b: dict) -> bool:
+    return a.keys() == b.keys() and all(np.array_equal(a[k], b[k]) for k in a)
+
+
+def _remap_anchors(anchors, old_nodes, new_nodes, Nb):
+    """Friction anchors (n_fric, N_old, 3) -> (n_fric, N_new, 3) by background node; new nodes NaN
+    (no stick anchor yet: the return map starts them sticking where they touch)."""
+    a = np.asarray(anchors)
+    if a.size == 0 and a.shape[0] == 0:
+        return np.zeros((0, len(new_nodes), 3))
+    full = np.full((a.shape[0], Nb, 3), np.nan)
+    full[:, old_nodes] = a
+    return full[:, new_nodes]
+
+
+def run_adaptive(level0, make_problem, settings, adapt: AdaptSettings, *, relax: bool, curves=None,
+                 progress=no_progress, restart=None) -> AdaptiveOutput:
+    """Run an adaptive explicit (``relax=False``) or relaxation (``relax=True``) drape from the
+    level-0 mesh ``level0``; ``make_problem(mesh) -> Problem`` poses the scene on any active mesh."""
+    from ..solvers.explicit import Integrator
+
+    run = AdaptiveRun(level0, make_problem, Integrator, settings, adapt, relax=relax, curves=curves,
+                      progress=progress)
+    if restart:
+        run.restart(restart)
+    return run.run()

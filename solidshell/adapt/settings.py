@@ -1,0 +1,54 @@
+"""Settings of the adaptive procedure (§5.5): one typed schema, checked before any work.
+
+A scene file's ``[adapt]`` table (or ``--adaptive`` and ``--set adapt.KEY=VALUE`` on the command
+line) is parsed into :class:`AdaptSettings`; the criteria constants' defaults live with the
+criteria (``solidshell.adapt.criteria``) and are imported, not repeated.
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import Field, model_validator
+
+from ..settings import Finite, SettingsModel, parse
+from .criteria import DEFAULT_CONST, DEFAULT_EPS
+
+MAX_LEVELS = 6
+"""Deepest background mesh accepted without ``allow_large``: 4^6 = 4096 children per level-0 quad."""
+
+
+class AdaptSettings(SettingsModel):
+    """Reversible 1-to-4 adaptive subdivision inside a dynamic run (paper §5).
+
+    enabled   : run adaptively (``--adaptive``)
+    levels    : n, the number of 1-to-4 splittings of the level-0 mesh (§5.1; 3 in the paper)
+    const     : the dimensionless threshold of Eq. (25), split where ||eps_b|| L_i > const
+    eps       : the hysteresis of Eq. (26), merge where every sibling has ||eps_b|| L_(i-1) <= const - eps
+    every     : integration steps between two adaptive passes (§5.5 c)
+    transfer  : new mid-edge nodes by the discrete-Kirchhoff condition (Eqs. 27-34, "dk") or by linear
+                interpolation ("linear", for comparison); centre nodes always by the 8-node serendipity
+                functions
+    project_boundary : place new nodes on a curved boundary (a circular sheet or rim) on the true curve
+    allow_large : accept a background mesh past the memory guard
+    """
+
+    enabled: bool = False
+    levels: int = Field(3, ge=1, le=12)
+    const: Finite = Field(DEFAULT_CONST, gt=0.0)
+    eps: Finite = Field(DEFAULT_EPS, gt=0.0)
+    every: int = Field(200, ge=1)
+    transfer: Literal["dk", "linear"] = "dk"
+    project_boundary: bool = True
+    allow_large: bool = False
+
+    @model_validator(mode="after")
+    def _hysteresis(self):
+        if not self.eps < self.const:
+            raise ValueError(f"Eq. (26) needs 0 < eps < const, got const = {self.const:g}, eps = {self.eps:g}")
+        return self
+
+
+def parse_adapt(table: dict | None, where: str = "adapt") -> AdaptSettings:
+    """:class:`AdaptSettings` from a scene's ``[adapt]`` table (one-line InputError if invalid)."""
+    return parse(AdaptSettings, table, where)

@@ -8,7 +8,7 @@ import xml.etree.ElementTree as ET
 import numpy as np
 import pytest
 
-from solidshell import InputError, io
+from solidshell import InputError, io, meshing
 from solidshell.problem import SolveResult
 
 
@@ -92,7 +92,6 @@ def test_mesh_write_failure_leaves_nothing(tmp_path, monkeypatch):
 # ----------------------------------------------------------------------------- meshio files
 @pytest.fixture
 def small():
-    meshing = pytest.importorskip("solidshell.meshing", reason="solidshell.meshing not written yet")
     mesh = meshing.build_mesh("square", "4x3", size=8.0)
     U = np.zeros((mesh.n_nodes, 6))
     U[:, 2] = -0.05 * mesh.nodes[:, 0] ** 2
@@ -174,7 +173,6 @@ def fake_solver(record, converged=True):
 
 @pytest.fixture
 def fake(monkeypatch):
-    pytest.importorskip("solidshell.meshing", reason="solidshell.meshing not written yet")
     from solidshell import runner, solvers
 
     class Model:                     # stands in for solidshell.model.Model (no numba compile here)
@@ -193,7 +191,6 @@ def fake(monkeypatch):
 
 
 def test_run_scene_mesh_only(tmp_path):
-    pytest.importorskip("solidshell.meshing", reason="solidshell.meshing not written yet")
     from solidshell.runner import run_scene
 
     out = run_scene("strip-warp", mesh="10x1", solver="none", out_dir=tmp_path, progress=False)
@@ -250,7 +247,6 @@ def test_run_scene_not_converged(tmp_path, monkeypatch, fake):
 
 
 def test_run_scene_bad_inputs(tmp_path):
-    pytest.importorskip("solidshell.meshing", reason="solidshell.meshing not written yet")
     from solidshell.runner import run_scene
 
     with pytest.raises(InputError, match="density"):

@@ -5,7 +5,7 @@ import textwrap
 import numpy as np
 import pytest
 
-from solidshell import InputError, scenes
+from solidshell import InputError, meshing, scenes
 
 PAPER_SCENES = ["circle-pedestal", "hang-100", "hang-20", "large-square-pedestal", "sphere",
                 "square-on-disc", "square-pedestal", "strip-warp", "strip-weft"]
@@ -68,7 +68,6 @@ def test_scene_contents():
 
 @pytest.mark.parametrize("name", PAPER_SCENES)
 def test_meshes_build_with_paper_counts(name):
-    meshing = pytest.importorskip("solidshell.meshing", reason="solidshell.meshing not written yet")
     s = scenes.load(name)
     params = {k: v for k, v in s.geometry.items() if k != "recipe"}
     for density in dict.fromkeys([s.density, *s.mesh["paper_meshes"]]):
@@ -210,7 +209,6 @@ def test_missing_and_broken_files(tmp_path):
 
 
 def test_file_geometry_relative_to_scene(tmp_path):
-    meshing = pytest.importorskip("solidshell.meshing", reason="solidshell.meshing not written yet")
     from solidshell.runner import build_scene_mesh
 
     m = meshing.build_mesh("square", "3x2", size=6.0)

@@ -288,6 +288,41 @@ def test_fill_new_nodes_centre_with_inactive_mids_computed_on_the_fly():
     assert np.allclose(lin[8], U[:4].mean(0), atol=1e-15)
 
 
+def test_kirchhoff_centre_director():
+    """centre="kirchhoff": rigid motions stay exact; on a cylindrical bend the centre director is
+    the exact normal; on any state the centre's transverse shear strains x_n.x_o,xi - X_n.X_o,xi
+    (serendipity tangents) vanish and the position is the serendipity one."""
+    bg, _ = refine(_sheet(2, 2), levels=1)
+    N0 = int(np.sum(bg.node_level == 0))
+    new = np.arange(N0, len(bg.Xo))
+    Q = Rotation.from_rotvec([-0.7, 0.2, 1.3]).as_matrix()
+    exact = _rigid(bg.Xo, bg.Xn, Q, np.array([1.0, 2.0, 3.0]))
+    got = fill_new_nodes(bg, exact, new, centre="kirchhoff")
+    assert np.abs(got - exact).max() < 1e-12 * 2.0
+    kappa, X = 1.2, bg.Xo
+    x = np.stack([X[:, 0], np.sin(kappa * X[:, 1]) / kappa, (1 - np.cos(kappa * X[:, 1])) / kappa], 1)
+    xn = np.stack([0 * X[:, 0], -np.sin(kappa * X[:, 1]), np.cos(kappa * X[:, 1])], 1)
+    bend = np.concatenate([x - X, xn - bg.Xn], 1)
+    got = fill_new_nodes(bg, bend, new, centre="kirchhoff")
+    cen = np.flatnonzero(bg.centre_parent[:, 0] >= 0)
+    # measured 2e-16: the centre lies on the symmetry plane of its element's bend
+    assert np.abs(got[cen, 3:] - bend[cen, 3:]).max() < 1e-13
+    # a random state: zero shear at the centre, |x_n| = the interpolated stretch
+    U = np.zeros_like(bend)
+    U[:N0] = RNG.normal(size=(N0, 6)) * 0.1
+    ser = fill_new_nodes(bg, U, new)
+    kir = fill_new_nodes(bg, U, new, centre="kirchhoff")
+    assert np.array_equal(ser[:, :3], kir[:, :3])
+    cp = bg.centre_parent[cen]
+    xm = bg.Xo[cp[:, 4:]] + kir[cp[:, 4:], :3]
+    for a, b in ((1, 3), (2, 0)):
+        t, T = xm[:, a] - xm[:, b], bg.Xo[cp[:, 4 + a]] - bg.Xo[cp[:, 4 + b]]
+        g = np.sum((bg.Xn[cen] + kir[cen, 3:]) * t, 1) - np.sum(bg.Xn[cen] * T, 1)
+        assert np.abs(g).max() < 1e-13
+    with pytest.raises(ValueError, match="centre"):
+        fill_new_nodes(bg, U, new, centre="bilinear")
+
+
 def test_fill_new_nodes_refuses_unknown_parents_and_level0_nodes():
     bg, _ = refine(_sheet(1, 1), levels=2)
     U = np.zeros((len(bg.Xo), 6))

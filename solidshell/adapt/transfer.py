@@ -52,11 +52,12 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["dk_midedge", "linear_midedge", "serendipity_centre", "fill_new_nodes",
-           "STRETCH_MODES", "METHODS"]
+__all__ = ["dk_midedge", "linear_midedge", "serendipity_centre", "kirchhoff_centre_director",
+           "fill_new_nodes", "STRETCH_MODES", "METHODS", "CENTRE_MODES"]
 
 STRETCH_MODES = ("length", "paper")
 METHODS = ("dk", "linear")
+CENTRE_MODES = ("serendipity", "kirchhoff")
 
 
 def _unit(v):
@@ -158,6 +159,37 @@ def serendipity_centre(Ucorners, Umids):
     return -0.25 * np.sum(Ucorners, axis=1) + 0.5 * np.sum(Umids, axis=1)
 
 
+def kirchhoff_centre_director(Xo_c, Xn_c, Xo_m, U_m, U_c, stretch_c):
+    """Director of K centre nodes satisfying the Kirchhoff condition at the centre (an extension of
+    the paper's serendipity rule, ``centre="kirchhoff"`` of :func:`fill_new_nodes`).
+
+    The serendipity interpolation of U_n on an element that is twisted or bent in two directions
+    leaves the centre director off the surface normal by O(rotation differences^2) (on the wool
+    sheet's hanging corner of verification/adapt_transfer.py, by ~0.07 rad), which the element's
+    ANS shear (tied at edge mid-points) hid at the coarse level but the four children see.  Here
+    the transverse shear strains of Eq. (3) at the centre, x_n.x_o,xi - X_n.X_o,xi and likewise
+    for eta, are set to zero with the tangents of the serendipity geometry at the centre,
+    x_o,xi = (x_m1 - x_m3)/2, x_o,eta = (x_m2 - x_m0)/2, and the director length to
+    stretch_c |X_n|; its side is that of the serendipity director.
+
+    Xo_c, Xn_c : (K,3) initial centre position (unused but for shape) and director
+    Xo_m : (K,4,3) initial mid-edge positions (m0..m3: edges 0-1, 1-2, 2-3, 3-0); U_m (K,4,6) their
+    states; U_c (K,6) the serendipity state of the centre; stretch_c (K,) the director stretch.
+    Returns (K,3) the centre's U_n.
+    """
+    xm = Xo_m + U_m[..., :3]
+    T = np.stack([Xo_m[:, 1] - Xo_m[:, 3], Xo_m[:, 2] - Xo_m[:, 0]], axis=1) * 0.5   # (K,2,3)
+    t = np.stack([xm[:, 1] - xm[:, 3], xm[:, 2] - xm[:, 0]], axis=1) * 0.5
+    a = np.einsum("kj,kij->ki", Xn_c, T)                      # X_n.X_o,xi and X_n.X_o,eta
+    G = np.einsum("kij,klj->kil", t, t)                       # Gram matrix of the tangents
+    p = np.einsum("kij,ki->kj", t, np.linalg.solve(G, a[..., None])[..., 0])
+    nu = _unit(np.cross(t[:, 0], t[:, 1]))
+    ell2 = (stretch_c * np.linalg.norm(Xn_c, axis=-1)) ** 2
+    side = np.where(np.sum((Xn_c + U_c[:, 3:]) * nu, -1) < 0.0, -1.0, 1.0)
+    g = side * np.sqrt(np.maximum(ell2 - np.sum(p * p, -1), 0.0))
+    return p + g[:, None] * nu - Xn_c
+
+
 def _midedge_values(bg, U, A, B, E, M, method, stretch):
     if method == "linear":
         return linear_midedge(U[A], U[B])
@@ -166,7 +198,8 @@ def _midedge_values(bg, U, A, B, E, M, method, stretch):
                       stretch=stretch)
 
 
-def fill_new_nodes(bg, Ubg, new_nodes, method: str = "dk", known=None, *, stretch: str = "length"):
+def fill_new_nodes(bg, Ubg, new_nodes, method: str = "dk", known=None, *, stretch: str = "length",
+                   centre: str = "serendipity"):
     """States of newly inserted background nodes from already known ones (§5.4).
 
     Parameters
@@ -179,6 +212,9 @@ def fill_new_nodes(bg, Ubg, new_nodes, method: str = "dk", known=None, *, stretc
     known : (Nb,) bool, the nodes whose rows of Ubg are valid (the active nodes before the
         insertion); default: every node not in ``new_nodes``
     stretch : director stretch rule of :func:`dk_midedge`
+    centre : "serendipity" (the paper: all six components of the centre by the 8-node functions)
+        or "kirchhoff" (position by serendipity, director by :func:`kirchhoff_centre_director`
+        with the serendipity-interpolated stretch; method="dk" only)
 
     Nodes are filled level by level (``node_level`` ascending), at each level mid-edge nodes first
     (from [A, B, E]), then centre nodes by the serendipity interpolation of their element's four
@@ -189,6 +225,8 @@ def fill_new_nodes(bg, Ubg, new_nodes, method: str = "dk", known=None, *, stretc
     """
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+    if centre not in CENTRE_MODES:
+        raise ValueError(f"centre must be one of {CENTRE_MODES}, got {centre!r}")
     U = np.array(Ubg, dtype=float, copy=True)
     new = np.unique(np.asarray(new_nodes, dtype=np.int64))
     valid = np.ones(len(U), bool) if known is None else np.array(known, dtype=bool, copy=True)
@@ -226,6 +264,14 @@ def fill_new_nodes(bg, Ubg, new_nodes, method: str = "dk", known=None, *, stretc
                 ki, kk = np.nonzero(todo)                    # element, edge k (corner k -> k+1)
                 Um[ki, kk] = _midedge_values(bg, U, corners[ki, kk], corners[ki, (kk + 1) % 4],
                                              corners[ki, (kk + 2) % 4], m[ki, kk], method, stretch)
-            U[cens] = serendipity_centre(U[corners], Um)
+            Uc = serendipity_centre(U[corners], Um)
+            if centre == "kirchhoff" and method == "dk":
+                Xn = np.asarray(bg.Xn)
+                lam = lambda nodes, Ux: (np.linalg.norm(Xn[nodes] + Ux[..., 3:], axis=-1)
+                                         / np.linalg.norm(Xn[nodes], axis=-1))[..., None]
+                stretch_c = serendipity_centre(lam(corners, U[corners]), lam(m, Um))[:, 0]
+                Uc[:, 3:] = kirchhoff_centre_director(np.asarray(bg.Xo)[cens], Xn[cens],
+                                                      np.asarray(bg.Xo)[m], Um, Uc, stretch_c)
+            U[cens] = Uc
             valid[cens] = True
     return U

@@ -254,7 +254,7 @@ def test_fill_new_nodes_bend_uses_dk_and_serendipity():
     exact = np.concatenate([x - X, xn - bg.Xn], 1)
     U = exact.copy()
     U[4:] = np.nan                                         # the unknown rows must not be read
-    got = fill_new_nodes(bg, U, np.arange(4, 9))
+    got = fill_new_nodes(bg, U, np.arange(4, 9), centre="serendipity")
     mids = np.arange(4, 8)
     A, B, E = bg.mid_parent[mids].T
     want = dk_midedge(X[A], X[B], X[E], X[mids], bg.Xn[A], bg.Xn[B], bg.Xn[mids], exact[A],
@@ -289,7 +289,7 @@ def test_fill_new_nodes_centre_with_inactive_mids_computed_on_the_fly():
 
 
 def test_kirchhoff_centre_director():
-    """centre="kirchhoff": rigid motions stay exact; on a cylindrical bend the centre director is
+    """centre="kirchhoff" (the default): rigid motions stay exact; on a cylindrical bend the centre director is
     the exact normal; on any state the centre's transverse shear strains x_n.x_o,xi - X_n.X_o,xi
     (serendipity tangents) vanish and the position is the serendipity one."""
     bg, _ = refine(_sheet(2, 2), levels=1)
@@ -310,8 +310,8 @@ def test_kirchhoff_centre_director():
     # a random state: zero shear at the centre, |x_n| = the interpolated stretch
     U = np.zeros_like(bend)
     U[:N0] = RNG.normal(size=(N0, 6)) * 0.1
-    ser = fill_new_nodes(bg, U, new)
-    kir = fill_new_nodes(bg, U, new, centre="kirchhoff")
+    ser = fill_new_nodes(bg, U, new, centre="serendipity")
+    kir = fill_new_nodes(bg, U, new)                       # the default
     assert np.array_equal(ser[:, :3], kir[:, :3])
     cp = bg.centre_parent[cen]
     xm = bg.Xo[cp[:, 4:]] + kir[cp[:, 4:], :3]

@@ -323,6 +323,34 @@ def test_kirchhoff_centre_director():
         fill_new_nodes(bg, U, new, centre="bilinear")
 
 
+def test_dk_refinement_of_a_bent_sheet_adds_little_energy_linear_a_lot():
+    """The study's claim in miniature (verification/adapt_transfer.py): a wool sheet whose coarse
+    nodes lie on a cylinder (kappa = 1 /cm) is refined 1-to-4; the strain energy of the fine mesh
+    above that of the exact cylinder state is tiny with DK and large with linear transfer, whose
+    chord-and-averaged-director kink loads the stiff transverse shear."""
+    kappa, excess = 1.0, {}
+    for h in (0.5, 0.25):                                   # coarse bend angle per element 0.5, 0.25
+        bg, fine = refine(_sheet(4, 4, h), levels=1)
+        X = bg.Xo
+        x = np.stack([X[:, 0], np.sin(kappa * X[:, 1]) / kappa, (1 - np.cos(kappa * X[:, 1])) / kappa], 1)
+        xn = np.stack([0 * X[:, 0], -np.sin(kappa * X[:, 1]), np.cos(kappa * X[:, 1])], 1)
+        exact = np.concatenate([x - X, xn - bg.Xn], 1)
+        model = Model(fine, Fabric.wool())
+        E = model.energy(exact)
+        new = np.flatnonzero(bg.node_level == 1)
+        for method in ("dk", "linear"):
+            U = fill_new_nodes(bg, exact, new, method=method)
+            excess[method, h] = (model.energy(U) - E) / E
+    # measured: DK +0.70 % and +0.011 %, two parts membrane to one part shear, both from the
+    # O(k^3 L^4) mid-node error: strains ~ k^4 L^3, excess energy ~ L^8 on a sheet of area ~ L^2,
+    # i.e. ~ L^6 relative (ratio 63); linear +9232 % and +2431 %, all transverse shear:
+    # C_t (kL/4)^2 over the bending energy B k^2, ~ L^2 (ratio 3.8)
+    assert 0.0 < excess["dk", 0.5] < 0.01 and excess["dk", 0.25] < 2e-4
+    assert excess["linear", 0.5] > 50.0 and excess["linear", 0.25] > 15.0
+    assert excess["dk", 0.5] / excess["dk", 0.25] > 40.0
+    assert 3.0 < excess["linear", 0.5] / excess["linear", 0.25] < 4.5
+
+
 def test_fill_new_nodes_refuses_unknown_parents_and_level0_nodes():
     bg, _ = refine(_sheet(1, 1), levels=2)
     U = np.zeros((len(bg.Xo), 6))

@@ -53,7 +53,7 @@ default from the Kirchhoff condition at the centre (:func:`kirchhoff_centre_dire
 serendipity functions as the paper words it (``centre="serendipity"``).
 
 Measured (verification/out/adapt_transfer.md, static drapes refined 1-to-4 everywhere): DK injects
-1.2-3 % of the strain energy and 0.9-3 % of the kinetic-energy peak that linear transfer does.
+1.2-3.2 % of the strain energy and 0.9-3.3 % of the kinetic-energy peak that linear transfer does.
 """
 
 from __future__ import annotations

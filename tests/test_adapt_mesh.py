@@ -178,15 +178,16 @@ def test_patterns_cover_every_mask_and_tile_the_square():
     sq = np.array([[0.0, 0], [1, 0], [1, 1], [0, 1]])
     pts = np.array([[0, 0], [1, 0], [1, 1], [0, 1], [.5, 0], [1, .5], [.5, 1], [0, .5], [.5, .5]])
     for mask in range(16):
-        pid, q, t = TABLE[mask]
-        # as few triangles as the parity of the boundary segments allows
-        assert len(t) == bin(mask).count("1") % 2
-        area = sum(0.5 * abs(cross2(pts[c] - pts[c[0]], np.roll(pts[c], -1, 0) - pts[c[0]]).sum())
-                   for c in list(q) + list(t))
-        assert area == pytest.approx(1.0, abs=1e-15)
-        used = set(np.concatenate([np.ravel(q), np.ravel(t)]).tolist())
-        assert all(4 + k in used for k in range(4) if mask >> k & 1)
-        assert not any(4 + k in used for k in range(4) if not mask >> k & 1)
+        for q, t in TABLE[mask][1]:
+            # as few triangles as the parity of the boundary segments allows
+            assert len(t) == bin(mask).count("1") % 2
+            # counter-clockwise (positive signed areas) and tiling the square exactly
+            signed = [0.5 * cross2(pts[c] - pts[c[0]], np.roll(pts[c], -1, 0) - pts[c[0]]).sum()
+                      for c in list(q) + list(t)]
+            assert min(signed) > 0 and sum(signed) == pytest.approx(1.0, abs=1e-15)
+            used = set(np.concatenate([np.ravel(q), np.ravel(t)]).tolist())
+            assert all(4 + k in used for k in range(4) if mask >> k & 1)
+            assert not any(4 + k in used for k in range(4) if not mask >> k & 1)
     quality = pattern_quality(sq)
     assert min(a for a, _ in quality.values()) >= 45.0 - 1e-9
     assert max(r for _, r in quality.values()) <= 2.0 + 1e-9

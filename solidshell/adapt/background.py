@@ -245,6 +245,27 @@ class BackgroundMesh:
             e = 4 * e + c - 1
         return len(cs), e
 
+    def transition_variants(self, level: int) -> np.ndarray:
+        """(n0*4**level, 16) int8: the transition-pattern variant each element of ``level`` takes
+        for each refined-edge mask (transition.choose_variant on its X_o; computed once per
+        level on first use, since the geometry never changes)."""
+        from .transition import TABLE, choose_variant
+
+        cache = self.__dict__.setdefault("_variants", {})
+        l = int(level)
+        if l not in cache:
+            C = self.conn[l]
+            out = np.zeros((len(C), 16), dtype=np.int8)
+            if l < self.levels:
+                ch = self.conn[l + 1].reshape(-1, 4, 4)
+                loc = np.concatenate([C, ch[:, :, 1], ch[:, :1, 2]], axis=1)
+                P = self.Xo[loc]
+                for m in range(16):
+                    if len(TABLE[m][1]) > 1:
+                        out[:, m] = choose_variant(m, P)
+            cache[l] = out
+        return cache[l]
+
     def element_nodes(self, level: int, index) -> np.ndarray:
         """Background node indices (…,4) of element(s) (level, index)."""
         return self.conn[int(level)][index]

@@ -19,7 +19,7 @@ import numpy as np
 from ..errors import InputError
 from ..mesh import ShellMesh
 from .background import BackgroundMesh
-from .transition import TABLE, PATTERN_OF_MASK
+from .transition import TABLE
 
 _STATE_VERSION = 1
 
@@ -192,25 +192,37 @@ class AdaptiveMesh:
         """The computational mesh: plain leaves as quads, leaves beside finer neighbours as hybrid
         macro-transition patches (transition.py)."""
         bg = self.bg
-        qparts, tparts = [], []          # (cells, level, index, sub, kind)
-        for l in range(bg.levels + 1):
+        L = bg.levels
+        lv, ee, mk, lc, vr = [], [], [], [], []
+        for l in range(L + 1):
             e = np.flatnonzero(self.leaf[l])
             if not e.size:
                 continue
-            mask = self.refined_mask(l, e)
-            if l < bg.levels:
+            loc = np.full((e.size, 9), -1, dtype=np.int64)
+            loc[:, :4] = bg.conn[l][e]
+            if l < L:
                 ch = bg.conn[l + 1][(4 * e[:, None] + np.arange(4)).ravel()].reshape(-1, 4, 4)
-                loc = np.concatenate([bg.conn[l][e], ch[:, :, 1], ch[:, :1, 2]], axis=1)
-            else:
-                loc = bg.conn[l][e]
-            for m in np.unique(mask):
-                sel = mask == m
-                pid, q, t = TABLE[int(m)]
+                loc[:, 4:8] = ch[:, :, 1]
+                loc[:, 8] = ch[:, 0, 2]
+            lv.append(np.full(e.size, l))
+            ee.append(e)
+            mask = self.refined_mask(l, e)
+            mk.append(mask)
+            lc.append(loc)
+            vr.append(bg.transition_variants(l)[e, mask] if mask.any() else np.zeros(e.size, np.int8))
+        lv, ee, mk, lc, vr = (np.concatenate(x) for x in (lv, ee, mk, lc, vr))
+        qparts, tparts = [], []          # (cells, level, index, sub, kind)
+        for m in np.unique(mk):
+            sel = np.flatnonzero(mk == m)
+            pid, variants = TABLE[int(m)]
+            pick = vr[sel]
+            for v, (q, t) in enumerate(variants):
+                sv = sel[pick == v]
                 for cells, parts in ((q, qparts), (t, tparts)):
-                    if len(cells):
-                        c = loc[sel][:, cells]            # (n, k, nn)
+                    if len(cells) and sv.size:
+                        c = lc[sv][:, cells]            # (n, k, nn)
                         n, k = c.shape[:2]
-                        parts.append((c.reshape(n * k, -1), np.full(n * k, l), np.repeat(e[sel], k),
+                        parts.append((c.reshape(n * k, -1), np.repeat(lv[sv], k), np.repeat(ee[sv], k),
                                       np.tile(np.arange(k), n), np.full(n * k, pid)))
 
         def gather(parts, nn):

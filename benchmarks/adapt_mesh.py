@@ -81,15 +81,9 @@ def areas():
     print("| mesh | levels | level 0 | averaged | projected | difference | exact | error averaged | error projected |")
     print("|---|---|---|---|---|---|---|---|---|")
     cases = [("square_on_disc 4x32", build_mesh("square_on_disc", "4x32"), 10.0, 50.0**2 - np.pi * 10.0**2),
-             ("disc_on_disc 10x40", build_mesh("disc_on_disc", "10x40"), 6.35, np.pi * (12.7**2 - 6.35**2))]
+             ("disc_on_disc 10x40", build_mesh("disc_on_disc", "10x40"), (6.35, 12.7), np.pi * (12.7**2 - 6.35**2))]
     for name, m, r, exact in cases:
         proj = circle_projector((0, 0), r)
-        if name.startswith("disc"):      # both rims are circles: project onto whichever is nearer
-            inner, outer = circle_projector((0, 0), 6.35), circle_projector((0, 0), 12.7)
-
-            def proj(P, inner=inner, outer=outer):
-                rr = np.linalg.norm(P[:, :2], axis=1)
-                return np.where((rr < 0.5 * (6.35 + 12.7))[:, None], inner(P), outer(P))
         for lv in (1, 3):
             a = boundary_area_report(m, lv, proj, exact)
             print(f"| {name} | {lv} | {a['level0']:.4f} | {a['averaged']:.4f} | {a['projected']:.4f} | "

@@ -151,6 +151,11 @@ def test_curved_boundary_nodes_on_the_circle_and_area():
     # the straight outer sides stay straight (|x| or |y| = 25)
     out = bg.node_sets["outer"]
     assert np.all(np.isclose(np.abs(bg.Xo[out, :2]).max(1), 25.0, rtol=1e-13))
+    # circle-pedestal: both rims are circles, each boundary node goes to its own
+    disc = build_mesh("disc_on_disc", "2x8")
+    bg = BackgroundMesh.from_level0(disc, 2, circle_projector((0, 0), (6.35, 12.7)))
+    for name, r in (("clamped", 6.35), ("outer", 12.7)):
+        np.testing.assert_allclose(np.linalg.norm(bg.Xo[bg.node_sets[name], :2], axis=1), r, rtol=1e-13)
 
 
 def test_bad_input():

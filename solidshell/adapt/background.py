@@ -50,24 +50,27 @@ def _available_bytes() -> int:
     return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
 
 
-def circle_projector(centre, radius: float):
+def circle_projector(centre, radius):
     """A ``curves`` callable for BackgroundMesh: points (K,3) moved radially (in the plane of
-    constant z through them) onto the circle of ``radius`` [length] about ``centre`` (x, y[, z]).
-    BackgroundMesh only projects mid-edge nodes of boundary edges whose two end nodes already lie
-    on the curve, so straight boundary edges (the square sheet's sides) are left alone."""
+    constant z through them) onto the circle of ``radius`` [length] about ``centre`` (x, y[, z]);
+    with several radii (concentric circles, e.g. the circular sheet's rim and the disc pedestal's
+    rim of circle-pedestal) each point goes to the nearest one.  BackgroundMesh only projects
+    mid-edge nodes of boundary edges whose two end nodes already lie on the curve, so straight
+    boundary edges (the square sheet's sides) are left alone."""
     c = np.zeros(3)
     c[:len(centre)] = np.asarray(centre, dtype=float)
-    r = float(radius)
-    if not (np.isfinite(r) and r > 0.0):
-        raise InputError(f"circle radius must be a positive length, got {radius!r}")
+    radii = np.atleast_1d(np.asarray(radius, dtype=float))
+    if radii.ndim != 1 or not radii.size or not np.all(np.isfinite(radii) & (radii > 0.0)):
+        raise InputError(f"circle radius must be a positive length (or a list of them), got {radius!r}")
 
     def project(P):
         P = np.asarray(P, dtype=float)
         d = P[:, :2] - c[:2]
-        n = np.linalg.norm(d, axis=1, keepdims=True)
+        n = np.linalg.norm(d, axis=1)
+        r = radii[np.argmin(np.abs(n[:, None] - radii[None, :]), axis=1)]
         out = P.copy()
-        ok = n[:, 0] > 0.0
-        out[ok, :2] = c[:2] + d[ok] * (r / n[ok])
+        ok = n > 0.0
+        out[ok, :2] = c[:2] + d[ok] * (r[ok] / n[ok])[:, None]
         return out
 
     return project
@@ -245,26 +248,32 @@ class BackgroundMesh:
             e = 4 * e + c - 1
         return len(cs), e
 
-    def transition_variants(self, level: int) -> np.ndarray:
-        """(n0*4**level, 16) int8: the transition-pattern variant each element of ``level`` takes
-        for each refined-edge mask (transition.choose_variant on its X_o; computed once per
-        level on first use, since the geometry never changes)."""
+    def transition_variants(self, level: int, index: np.ndarray, mask: np.ndarray) -> np.ndarray:
+        """(K,) variant of the transition pattern for refined-edge ``mask`` (K,) that each element
+        (level, index) (K,) takes (transition.choose_variant on its X_o).  Memoised per element and
+        mask, since the geometry never changes: each is computed once, on first use."""
         from .transition import TABLE, choose_variant
 
-        cache = self.__dict__.setdefault("_variants", {})
         l = int(level)
+        cache = self.__dict__.setdefault("_variants", {})
         if l not in cache:
-            C = self.conn[l]
-            out = np.zeros((len(C), 16), dtype=np.int8)
-            if l < self.levels:
-                ch = self.conn[l + 1].reshape(-1, 4, 4)
-                loc = np.concatenate([C, ch[:, :, 1], ch[:, :1, 2]], axis=1)
-                P = self.Xo[loc]
-                for m in range(16):
-                    if len(TABLE[m][1]) > 1:
-                        out[:, m] = choose_variant(m, P)
-            cache[l] = out
-        return cache[l]
+            cache[l] = np.full((self.n_elements(l), 16), -1, dtype=np.int8)
+        tab = cache[l]
+        index, mask = np.asarray(index, dtype=np.int64), np.asarray(mask, dtype=np.int64)
+        out = tab[index, mask]
+        todo = np.flatnonzero(out < 0)
+        if todo.size:
+            for m in np.unique(mask[todo]):
+                sel = todo[mask[todo] == m]
+                e = index[sel]
+                if len(TABLE[int(m)][1]) == 1:
+                    tab[e, m] = 0
+                    continue
+                ch = self.conn[l + 1][(4 * e[:, None] + np.arange(4)).ravel()].reshape(-1, 4, 4)
+                loc = np.concatenate([self.conn[l][e], ch[:, :, 1], ch[:, :1, 2]], axis=1)
+                tab[e, m] = choose_variant(int(m), self.Xo[loc])
+            out = tab[index, mask]
+        return out
 
     def element_nodes(self, level: int, index) -> np.ndarray:
         """Background node indices (…,4) of element(s) (level, index)."""

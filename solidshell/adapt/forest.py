@@ -209,7 +209,7 @@ class AdaptiveMesh:
             mask = self.refined_mask(l, e)
             mk.append(mask)
             lc.append(loc)
-            vr.append(bg.transition_variants(l)[e, mask] if mask.any() else np.zeros(e.size, np.int8))
+            vr.append(bg.transition_variants(l, e, mask) if mask.any() else np.zeros(e.size, np.int8))
         lv, ee, mk, lc, vr = (np.concatenate(x) for x in (lv, ee, mk, lc, vr))
         qparts, tparts = [], []          # (cells, level, index, sub, kind)
         for m in np.unique(mk):

@@ -176,6 +176,14 @@ def test_background_that_does_not_fit_is_refused_before_any_work(monkeypatch):
         BackgroundMesh.from_level0(PEDESTAL, 6)
     BackgroundMesh.from_level0(PEDESTAL, 2)
     assert estimate_background_bytes(48, 3) == 48 * 64 * estimate_background_bytes(1, 0)
+    am = AdaptiveMesh(BackgroundMesh.from_level0(grid(2, 1), 2))
+    with pytest.raises(InputError, match=r"no element \(1, 8\)"):
+        am.split([[1, 8]])
+    with pytest.raises(InputError, match="levels must lie in 0..2"):
+        am.merge([[3, 0]])
+    # zero levels: a valid (if static) adaptive mesh
+    am0 = AdaptiveMesh(BackgroundMesh.from_level0(grid(2, 1), 0))
+    assert am0.split([[0, 0]]) == 0 and am0.active_mesh().mesh.n_quads == 2
 
 
 # ----------------------------------------------------------------------------- patterns

@@ -57,6 +57,15 @@ def _as_items(items, levels):
     return a
 
 
+def _check_index(a, bg):
+    """(K,2) items whose index lies outside 0..n0*4**level-1 -> InputError naming the first."""
+    bad = (a[:, 1] < 0) | (a[:, 1] >= bg.n0 * 4 ** a[:, 0])
+    if bad.any():
+        l, e = a[np.argmax(bad)]
+        raise InputError(f"no element ({l}, {e}): level {l} has {bg.n_elements(l)} elements")
+    return a
+
+
 class AdaptiveMesh:
     """Active leaves of a :class:`BackgroundMesh`, starting with every level-0 element active."""
 
@@ -100,7 +109,7 @@ class AdaptiveMesh:
         of elements split."""
         bg = self.bg
         L = bg.levels
-        a = _as_items(items, L)
+        a = _check_index(_as_items(items, L), bg)
         want = [np.zeros(bg.n_elements(l), dtype=bool) for l in range(L)]
         for l in range(L):
             e = a[a[:, 0] == l, 1]
@@ -143,7 +152,7 @@ class AdaptiveMesh:
         2:1 balance, are left alone (vetoed).  Processed finest level first, so a parent and its
         grandparent can merge in one call.  Returns the number of merges done."""
         L = self.bg.levels
-        a = _as_items(parents, L)
+        a = _check_index(_as_items(parents, L), self.bg)
         n = 0
         for l in range(L - 1, -1, -1):
             e = np.unique(a[a[:, 0] == l, 1])

@@ -255,6 +255,7 @@ def test_random_split_merge_sequences_stay_conforming(m, levels, ops):
         np.testing.assert_array_equal(am.state_arrays()[k], v)
     a = am.active_mesh()
     np.testing.assert_array_equal(a.nodes, np.arange(m.n_nodes))
+    np.testing.assert_array_equal(np.flatnonzero(a.active), a.nodes)
     np.testing.assert_array_equal(a.mesh.quads, m.quads)
     np.testing.assert_array_equal(a.mesh.nodes, m.nodes)
     np.testing.assert_array_equal(a.mesh.directors, m.directors)

@@ -33,12 +33,14 @@ class ActiveMesh:
     elem_leaf : (n_elements, 2) (level, index) of the leaf each element belongs to, quads first
         then triangles (the Model's element order)
     elem_kind : (n_elements,) 0 = plain leaf quad, else the transition pattern id (transition.py)
+    active : (Nb,) bool, the paper's active-node array over the background nodes (Section 5.1)
     """
 
     mesh: ShellMesh
     nodes: np.ndarray
     elem_leaf: np.ndarray
     elem_kind: np.ndarray
+    active: np.ndarray
 
     @property
     def elem_level(self) -> np.ndarray:
@@ -238,6 +240,8 @@ class AdaptiveMesh:
             if not parts:
                 return np.zeros((0, nn), np.int64), np.zeros((0, 2), np.int64), np.zeros(0, np.int64)
             c, lv, ix, sub, kind = (np.concatenate(x) for x in zip(*parts))
+            # leaf order (level, index, sub-element), not mask-group order: the all-level-0 state
+            # then reproduces the user's element numbering, and equal states give equal meshes
             order = np.lexsort((sub, ix, lv))
             return c[order], np.column_stack([lv, ix])[order], kind[order]
 
@@ -252,7 +256,8 @@ class AdaptiveMesh:
             sets[k] = r[r >= 0]
         mesh = ShellMesh(bg.Xo[nodes], quads=remap[Q], tris=remap[T], directors=bg.Xn[nodes],
                          node_sets=sets, check=check)
-        return ActiveMesh(mesh, nodes, np.concatenate([qleaf, tleaf]), np.concatenate([qkind, tkind]))
+        return ActiveMesh(mesh, nodes, np.concatenate([qleaf, tleaf]), np.concatenate([qkind, tkind]),
+                          remap >= 0)
 
     # ------------------------------------------------------------------ checkpoint
     def state_arrays(self) -> dict[str, np.ndarray]:

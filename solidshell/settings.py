@@ -48,14 +48,17 @@ class SettingsModel(BaseModel):
 def _one_line(exc: ValidationError, where: str, model: type[SettingsModel]) -> str:
     parts = []
     for e in exc.errors():
-        key = ".".join(str(p) for p in e.get("loc", ())) or "?"
+        key = ".".join(str(p) for p in e.get("loc", ()))
+        msg = e.get("msg", "invalid").replace("Value error, ", "")
+        if not key:                 # a rule across settings (model validator): its own words
+            parts.append(msg)
+            continue
         if e.get("type") == "extra_forbidden":
             known = ", ".join(sorted(model.model_fields))
             parts.append(f"unknown setting {key!r} (known: {known})")
             continue
         got = e.get("input")
         got_s = repr(got) if not hasattr(got, "shape") else f"array of shape {got.shape}"
-        msg = e.get("msg", "invalid").replace("Value error, ", "")
         parts.append(f"setting {key} = {got_s[:60]}: {msg}")
     return f"{where}: " + "; ".join(parts)
 

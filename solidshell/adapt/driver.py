@@ -23,10 +23,10 @@ import numpy as np
 
 from ..errors import InputError
 from ..problem import SolveResult, no_progress
-from .background import BackgroundMesh, estimate_background_bytes, _available_bytes
+from .background import BackgroundMesh
 from .criteria import leaf_bending_strain, level_side_lengths, mark
 from .forest import ActiveMesh, AdaptiveMesh
-from .settings import MAX_LEVELS, AdaptSettings
+from .settings import AdaptSettings
 from .transfer import fill_new_nodes
 
 _STATE_PREFIX = "adapt_"
@@ -52,27 +52,12 @@ class AdaptiveOutput:
     active: ActiveMesh | None = None
 
 
-def check_level0(mesh, adapt: AdaptSettings) -> None:
-    """Refuse what the procedure does not support, before any work (InputError, one line)."""
-    if mesh.n_tris:
-        raise InputError(f"adaptive subdivision needs a level-0 mesh of quadrilaterals only (1-to-4 splitting, "
-                         f"§5.1); this mesh has {mesh.n_tris} triangle(s)")
-    need = estimate_background_bytes(mesh.n_quads, adapt.levels)
-    avail = _available_bytes()
-    if not adapt.allow_large and (adapt.levels > MAX_LEVELS or need > 0.5 * avail):
-        raise InputError(f"adapt.levels = {adapt.levels} on {mesh.n_quads} level-0 quads needs a background mesh "
-                         f"of {mesh.n_quads * 4 ** adapt.levels} elements, about {need / 2**20:.0f} MiB "
-                         f"({avail / 2**20:.0f} MiB available; at most {MAX_LEVELS} levels without "
-                         f"adapt.allow_large = true)")
-
-
 class AdaptiveRun:
     """One adaptive dynamic run.  ``integrator_cls`` is the explicit Integrator (its from_state
     continues a state on a new problem)."""
 
     def __init__(self, level0, make_problem, integrator_cls, settings, adapt: AdaptSettings, *, relax: bool,
                  curves=None, progress=no_progress):
-        check_level0(level0, adapt)
         self.make_problem, self.cls, self.settings, self.adapt = make_problem, integrator_cls, settings, adapt
         self.relax, self.progress = relax, progress or no_progress
         self.bg = BackgroundMesh.from_level0(level0, adapt.levels, curves if adapt.project_boundary else None)

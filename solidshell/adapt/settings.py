@@ -12,10 +12,8 @@ from typing import Literal
 from pydantic import Field, model_validator
 
 from ..settings import Finite, SettingsModel, parse
+from .background import MAX_LEVELS
 from .criteria import DEFAULT_CONST, DEFAULT_EPS
-
-MAX_LEVELS = 6
-"""Deepest background mesh accepted without ``allow_large``: 4^6 = 4096 children per level-0 quad."""
 
 
 class AdaptSettings(SettingsModel):
@@ -30,17 +28,18 @@ class AdaptSettings(SettingsModel):
                 interpolation ("linear", for comparison); centre nodes always by the 8-node serendipity
                 functions
     project_boundary : place new nodes on a curved boundary (a circular sheet or rim) on the true curve
-    allow_large : accept a background mesh past the memory guard
+
+    The background mesh itself refuses a level count whose memory estimate exceeds half of the
+    available memory (``background.estimate_background_bytes``), with the estimate.
     """
 
     enabled: bool = False
-    levels: int = Field(3, ge=1, le=12)
+    levels: int = Field(3, ge=1, le=MAX_LEVELS)
     const: Finite = Field(DEFAULT_CONST, gt=0.0)
     eps: Finite = Field(DEFAULT_EPS, gt=0.0)
     every: int = Field(200, ge=1)
     transfer: Literal["dk", "linear"] = "dk"
     project_boundary: bool = True
-    allow_large: bool = False
 
     @model_validator(mode="after")
     def _hysteresis(self):

@@ -52,8 +52,8 @@ def load(path) -> tuple[State, dict]:
     except FileNotFoundError:
         raise InputError(f"restart file {path} does not exist") from None
     except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile) as exc:
-        raise InputError(f"cannot read restart file {path} (truncated or not a checkpoint): "
-                         f"{str(exc).splitlines()[0] if str(exc) else type(exc).__name__}") from None
+        raise InputError(f"cannot read restart file {path}: truncated or not a checkpoint "
+                         f"({type(exc).__name__})") from None
     version = int(data["version"]) if "version" in data else None
     if version != VERSION:
         raise InputError(f"restart file {path} has checkpoint version {version}, this solver writes {VERSION}")
@@ -132,10 +132,8 @@ def fingerprint(problem, settings: dict, mass: np.ndarray) -> dict[str, str]:
 
 
 def check_fingerprint(saved: dict, now: dict, path) -> None:
-    """InputError naming the first item whose digest differs between a checkpoint and this run."""
-    for k in sorted(set(saved) | set(now)):
-        if saved.get(k) != now.get(k):
-            what = ("is not set in this run" if k not in now else "was not set in the checkpointed run"
-                    if k not in saved else "differs")
-            raise InputError(f"restart file {path} does not match this run: {k} {what} "
-                             f"(a checkpoint only continues the run that wrote it)")
+    """InputError naming every item whose digest differs between a checkpoint and this run."""
+    diff = [k for k in sorted(set(saved) | set(now)) if saved.get(k) != now.get(k)]
+    if diff:
+        raise InputError(f"restart file {path} does not match this run: {', '.join(diff)} differ(s) "
+                         f"(a checkpoint only continues the run that wrote it)")

@@ -443,7 +443,7 @@ class Integrator:
         state, keeping the half-step velocity: D_n-1 := D_n - dt_new/dt_old (D_n - D_n-1)."""
         st = self.state
         t_now = self.time_of(st.step)
-        if not self.relax:
+        if not self.relax and self.s.t_end > t_now:
             new = stepcontrol.landing_step(new, t_now, self.s.t_end)
         st.D_prev[:] = st.D - (new / st.dt) * (st.D - st.D_prev)
         st.t_base, st.n_base = t_now, st.step

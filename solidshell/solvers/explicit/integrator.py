@@ -543,7 +543,9 @@ class Integrator:
     def _check_sizes(self, st: State) -> None:
         n6 = 6 * self.N
         bad = [k for k, a in (("D", st.D), ("D_prev", st.D_prev)) if np.asarray(a).size != n6]
-        if np.asarray(st.anchors).shape != (self.n_fric, self.N, 3):
+        if not self.n_fric:
+            st.anchors = np.zeros((0, self.N, 3))   # nothing to remap without a frictional body
+        elif np.asarray(st.anchors).shape != (self.n_fric, self.N, 3):
             bad.append(f"anchors {np.asarray(st.anchors).shape} (want {(self.n_fric, self.N, 3)})")
         if bad:
             raise InputError(f"the state does not fit this problem ({self.N} nodes, {self.n_fric} frictional "
@@ -558,6 +560,7 @@ class Integrator:
         branch references there."""
         st = self.state
         ledger.close_segment(st)
+        st.D0 = st.D.copy()   # the new segment's external work starts here
         e = self.energies()
         ledger.open_segment(st, e["kinetic"], e["strain"], e["contact"], st.D)
         F, Es = self.forces.internal(st.D, True)

@@ -518,6 +518,18 @@ class Integrator:
         integ._adopt(state, reestimate_step, new_segment)
         return integ
 
+    @classmethod
+    def resume(cls, problem, state: State, settings, *, source="the checkpoint", progress=no_progress,
+               relax: bool = False) -> "Integrator":
+        """Continue a checkpointed ``state`` (``checkpoint.load``) bit for bit: refused (InputError
+        naming the differing items) unless it was written by a run of this very problem and these
+        settings (``state.fingerprint``)."""
+        integ = cls(problem, settings, progress, relax=relax, _start=False)
+        checkpoint.check_fingerprint(getattr(state, "fingerprint", {}), integ.fingerprint, source)
+        integ._adopt(state, reestimate_step=False, new_segment=False)
+        integ.restarted_from = state.step
+        return integ
+
     def _adopt(self, st: State, reestimate_step: bool, new_segment: bool) -> None:
         self._check_sizes(st)
         self.progress_cb(0.0, f"continuing at t = {st.t:.4g} s, step {st.step}")

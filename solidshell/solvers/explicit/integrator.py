@@ -26,7 +26,8 @@ from .kernels import central_step, coefficients, dot, norm
 from .settings import RESTART_NEUTRAL, ExplicitSettings, RelaxSettings, parse_settings
 from .state import State
 
-STOPPED = ("done", "steady", "diverged", "nonfinite", "failed", "walltime", "interrupted")
+STATUSES = ("running", "done", "steady", "diverged", "nonfinite", "failed", "walltime", "interrupted")
+"""The status words of advance() and info["status"]."""
 
 
 def scaled_mass(model, scaling: float = 1.0, mode: str = "uniform") -> np.ndarray:

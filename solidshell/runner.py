@@ -290,6 +290,27 @@ def check_solver_settings(kind: str, merged: dict):
         raise
 
 
+def check_restart_file(path) -> None:
+    """A restart file must be a complete checkpoint archive (.npz, a zip file): a truncated or
+    foreign file is refused before any work, naming it (whether it matches this run -- mesh,
+    material, settings -- is the solver's check)."""
+    import zipfile
+
+    p = Path(path)
+    try:
+        with zipfile.ZipFile(p) as z:
+            bad = z.testzip()               # reads every member and checks its CRC
+    except FileNotFoundError:
+        raise InputError(f"restart file {p} not found") from None
+    except IsADirectoryError:
+        raise InputError(f"restart file {p} is a directory") from None
+    except (OSError, zipfile.BadZipFile, EOFError, ValueError) as e:
+        raise InputError(f"restart file {p} is not a readable checkpoint ({e}); truncated or not "
+                         f"written by solidshell") from None
+    if bad is not None:
+        raise InputError(f"restart file {p} is damaged (member {bad} fails its checksum)")
+
+
 _PENDING_SETTINGS_MODULES = ("solidshell.solvers.static_settings", "solidshell.solvers.explicit.settings")
 
 
@@ -393,6 +414,8 @@ def _run(sc, kind, mesh_arg, out_dir, cb, settings, timings, t_start, overrides=
         s = sc.solver_settings(kind)
         s.update(settings)
         check_solver_settings(kind, s)
+        if isinstance(s.get("restart"), (str, Path)):     # (another type: the schema refuses it)
+            check_restart_file(s["restart"])
     folder = None
     if out_dir is not None:
         folder = RunFolder(out_dir, run_id, force=force,

@@ -11,8 +11,13 @@ A run directory holds (only the files that apply)::
     deformed.vtu               the deformed mid-surface itself (points X_o + U_o), same fields
     series.xdmf                dynamic runs: one frame per kept time (the time in the XDMF
                                ``Time`` value), fields ``displacement`` and ``director_displacement``
-    summary.json               inputs, counts, units, versions, timings and the solver's info
+    summary.json               inputs, counts, units, versions, timings, the solver's info,
+                               ``run_id``, ``warnings``, ``interrupted``, ``files``; written last
     top.png, iso.png, ...      pictures (solidshell.plotting)
+    projected_boundary.csv     draped sheets: the projected boundary on the X-Y plane
+    RUNNING                    present while a run is under way (solidshell.rundir)
+
+Every file carries the run's id (:func:`stamp_xml`, :func:`stamp_png`, :func:`read_run_id`).
 
 XDMF files are written with inline XML data (no HDF5 needed), so each is self-contained.  Every
 file is written atomically: to a temporary file in the same directory, flushed and fsync'ed, then

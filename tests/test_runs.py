@@ -143,7 +143,7 @@ def test_bad_setting_refused_before_anything_is_written(tmp_path, settings_doubl
 ])
 def test_bad_setting_cli_exit_2_nothing_written(tmp_path, args, needle):
     out = tmp_path / "out"
-    r = cli("run", *args, "--mesh", "4x1", "--out", out)
+    r = cli("run", *args, "--mesh", "4x1", "--out", out, timeout=120)   # refused in ~2 s, never a solve
     one_error_line(r.stderr, 2, r.returncode, needle)
     assert not out.exists()
 

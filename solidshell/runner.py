@@ -410,6 +410,8 @@ def _run(sc, kind, mesh_arg, out_dir, cb, settings, timings, t_start, overrides=
 
     # every check, before anything is written ---------------------------------------------------
     s = None
+    if kind == "static" and ({"checkpoint", "restart"} & set(settings)):
+        raise InputError("--checkpoint / --restart apply to the explicit and relax solvers, not static")
     if kind != "none":
         s = sc.solver_settings(kind)
         s.update(settings)
@@ -566,12 +568,16 @@ def _snapshot_plan(sc, kind, result) -> list:
         return [(None, None, f"output.snapshots ({len(snaps)} time(s)) ignored: the static solver has no time")]
     frames = result.frames or []
     times = np.array([float(tf) for tf, _ in frames]) if frames else np.zeros(0)
-    t_final = (result.info or {}).get("t_final")
+    info = result.info or {}
+    t_final = info.get("t_final")
+    said = {float(x) for x in (info.get("snapshots_after_t_end_dropped") or [])}   # the solver's warning
     out = []
     for ts in snaps:
         j = int(np.argmin(np.abs(times - ts))) if len(times) else -1
         if j >= 0 and abs(times[j] - ts) <= 1e-6 + 1e-3 * max(ts, 1.0) and np.all(np.isfinite(frames[j][1])):
             out.append((ts, j, None))
+        elif ts in said:
+            out.append((ts, None, None))
         else:
             why = (f"after the run's end t = {t_final:.6g} s" if isinstance(t_final, (int, float)) and ts > t_final
                    else "no frame kept at that time")

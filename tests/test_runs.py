@@ -268,6 +268,14 @@ def test_foreign_files_refused_or_left_with_force(tmp_path, capsys):
     assert err.strip().splitlines() == [f"solidshell: warning: {s['warnings'][0]}"]
 
 
+def test_checkpoint_refused_for_static(tmp_path, capsys):
+    from solidshell.cli import main
+
+    rc = main(["run", "strip-warp", "--checkpoint", str(tmp_path / "c.npz"), "--out", str(tmp_path / "o")])
+    one_error_line(capsys.readouterr().err, 2, rc, "--checkpoint", "not static")
+    assert names(tmp_path) == []
+
+
 def test_unwritable_output_exit_3_with_path(tmp_path, capsys):
     from solidshell.cli import main
 
@@ -399,6 +407,13 @@ def test_warnings_listed_and_logged(tmp_path, capsys, fake, monkeypatch):
     assert err == [f"solidshell: warning: {x}" for x in w]
     assert {"iso_t0.000.png", "iso_t0.100.png", "iso_t0.400.png"} <= set(s["files"])
     assert not any("2.100" in f for f in s["files"])
+    # a snapshot the solver already reported as dropped is not reported twice
+    fake["solver"] = fake_solver(warnings=["snapshot time(s) 2.1 s after t_end = 0.4 s dropped"],
+                                 info={"snapshots_after_t_end_dropped": [2.1]})
+    monkeypatch.setattr(FakeModel, "interpenetrated", 0)
+    assert main(["run", "hang-20", "--mesh", "4x4", "--out", str(out), "--set", "output.pictures=[]"]) == 0
+    s = json.loads((out / "summary.json").read_text())
+    assert s["warnings"] == ["snapshot time(s) 2.1 s after t_end = 0.4 s dropped"]
 
 
 def test_library_user_can_silence_warnings(tmp_path, fake, monkeypatch, capsys):

@@ -1,27 +1,59 @@
 """Command line: ``solidshell scenes | mesh | run`` (also ``python -m solidshell ...``).
 
     solidshell scenes
-    solidshell mesh SCENE [--mesh 48x16x4] [--out DIR]
+    solidshell mesh SCENE [--mesh 48x16x4] [--out DIR] [--force] [--allow-large]
     solidshell run  SCENE [--mesh M] [--solver static|explicit|relax] [--set key=value ...] [--out DIR]
+                          [--checkpoint FILE] [--restart FILE] [--force] [--allow-large]
 
 SCENE is a packaged scene name (``solidshell scenes`` lists them) or the path of a .toml scene
 file.  ``--set`` overrides any scene key by its dotted name (``--set solver.static.c=2e-3``,
 ``--set material.warp_angle=90``, ``--set solver.explicit.t_end=0.4``); the value is read as a TOML
 value when it is one (numbers, true/false, [arrays], "strings"), else as a bare string.
 
+Everything is checked before a file is written: a bad setting, scene key, mesh size (estimated
+memory against the available memory; ``--allow-large`` to try anyway) or a sheet starting inside a
+contact body stops the command with one line on stderr and nothing written.  An output folder
+holding files solidshell did not write is refused unless ``--force``; an earlier run's files there
+are replaced once the new run has a result (every file carries the run's ``run_id``).  Warnings
+go to stderr, one line each (logger ``solidshell``), and to summary.json ``warnings``.
+
 Exit status: 0 done (``run``: converged), 1 the solver did not converge or stopped (the last state
-is written), 2 bad input (one line on stderr, no traceback), 130 interrupted.
+is written), 2 bad input (one line on stderr, no traceback, nothing written), 3 an I/O failure
+(the path named), 130 interrupted (Ctrl-C: the last state is written with a summary marked
+``"interrupted": true`` when the solver returned one).
 """
 
 from __future__ import annotations
 
 import argparse
+import logging
 import sys
 import tomllib
 
-from .errors import InputError, SolverError
+from .errors import InputError, IOFailure, SolverError
 
-EXIT_OK, EXIT_NOT_CONVERGED, EXIT_INPUT = 0, 1, 2
+EXIT_OK, EXIT_NOT_CONVERGED, EXIT_INPUT, EXIT_IO, EXIT_INTERRUPTED = 0, 1, 2, 3, 130
+
+
+class _StderrLines(logging.Handler):
+    """Log records of the "solidshell" logger as ``solidshell: warning: ...`` lines on the stderr of
+    the moment (sys.stderr looked up at each record, so a redirected stderr is honoured)."""
+
+    def emit(self, record):
+        try:
+            _say(f"solidshell: {record.levelname.lower()}: {record.getMessage()}")
+        except Exception:  # pragma: no cover - logging must never break a run
+            self.handleError(record)
+
+
+_HANDLER = _StderrLines(logging.WARNING)
+
+
+def _install_log_handler() -> None:
+    log = logging.getLogger("solidshell")
+    if _HANDLER not in log.handlers:
+        log.addHandler(_HANDLER)
+    log.propagate = False        # one line per warning (not a second one from a root handler)
 
 
 class _Parser(argparse.ArgumentParser):
@@ -46,6 +78,7 @@ def _parser() -> argparse.ArgumentParser:
     m.add_argument("--mesh", metavar="DENSITY", help="mesh density, e.g. 48x16x4 (default: the scene's)")
     m.add_argument("--set", metavar="KEY=VALUE", action="append", default=[], help="override a scene key")
     m.add_argument("--out", metavar="DIR", help="output directory (default: runs/<scene>-mesh)")
+    _common(m)
 
     r = sub.add_parser("run", help="run a scene and write the results")
     r.add_argument("scene", help="scene name or path of a .toml scene file")
@@ -55,8 +88,20 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("--set", metavar="KEY=VALUE", action="append", default=[],
                    help="override a scene key, e.g. solver.static.c=2e-3 (repeatable)")
     r.add_argument("--out", metavar="DIR", help="output directory (default: runs/<scene>)")
+    r.add_argument("--checkpoint", metavar="FILE",
+                   help="explicit/relax: save the state to FILE while running (solver.<kind>.checkpoint)")
+    r.add_argument("--restart", metavar="FILE",
+                   help="explicit/relax: continue from the checkpoint FILE (solver.<kind>.restart)")
     r.add_argument("--no-progress", action="store_true", help="no progress bar")
+    _common(r)
     return p
+
+
+def _common(p):
+    p.add_argument("--force", action="store_true",
+                   help="write into an output folder that holds files solidshell did not write")
+    p.add_argument("--allow-large", action="store_true",
+                   help="skip the size guard (estimated memory against the available memory)")
 
 
 def _cmd_scenes(args) -> int:
@@ -85,7 +130,7 @@ def _cmd_mesh(args) -> int:
 
     out_dir = args.out or _default_out(args.scene, "-mesh")
     res = run_scene(args.scene, mesh=args.mesh, solver="none", out_dir=out_dir, progress=True,
-                    overrides=parse_overrides(args.set))
+                    overrides=parse_overrides(args.set), force=args.force, allow_large=args.allow_large)
     c = res.summary["counts"]
     print(f"{res.summary['scene']}: mesh {res.summary['mesh']}: {c['nodes']} nodes, {c['quads']} quads, "
           f"{c['triangles']} triangles; node sets: "
@@ -99,11 +144,14 @@ def _cmd_run(args) -> int:
     from .scenes import parse_overrides
 
     out_dir = args.out or _default_out(args.scene)
+    extra = {k: getattr(args, k) for k in ("checkpoint", "restart") if getattr(args, k)}
     res = run_scene(args.scene, mesh=args.mesh, solver=args.solver, out_dir=out_dir,
-                    progress=not args.no_progress, overrides=parse_overrides(args.set))
+                    progress=not args.no_progress, overrides=parse_overrides(args.set),
+                    force=args.force, allow_large=args.allow_large, **extra)
     s = res.summary
     c = s["counts"]
-    status = "converged" if s.get("converged") else "NOT converged"
+    status = ("INTERRUPTED" if s.get("interrupted") else "converged" if s.get("converged")
+              else "NOT converged")
     line = f"{s['scene']}: {s['solver']} on mesh {s['mesh']} ({c['nodes']} nodes, {c['elements']} elements): {status}"
     if s.get("message"):
         line += f" -- {s['message']}"
@@ -114,6 +162,8 @@ def _cmd_run(args) -> int:
     if extras:
         print("  " + ", ".join(extras))
     print(f"  {s['timings'].get('total', 0.0):.1f} s; wrote {res.out_dir}/: " + ", ".join(s["files"]))
+    if s.get("interrupted"):
+        return EXIT_INTERRUPTED
     return EXIT_OK if s.get("converged") else EXIT_NOT_CONVERGED
 
 
@@ -124,6 +174,7 @@ def main(argv=None) -> int:
     for i in range(len(argv) - 2, -1, -1):
         if argv[i] == "--mesh" and argv[i + 1].startswith("-") and argv[i + 1][1:2].isdigit():
             argv[i:i + 2] = [f"--mesh={argv[i + 1]}"]
+    _install_log_handler()
     try:
         args = _parser().parse_args(argv)
         if args.command == "scenes":
@@ -137,16 +188,19 @@ def main(argv=None) -> int:
     except tomllib.TOMLDecodeError as e:
         _say(f"solidshell: error: not valid TOML: {e}")
         return EXIT_INPUT
+    except IOFailure as e:
+        _say(f"solidshell: I/O error: {e}")
+        return EXIT_IO
     except OSError as e:
-        where = f" {e.filename}" if getattr(e, "filename", None) else ""
-        _say(f"solidshell: error:{where}: {e.strerror or e}")
-        return EXIT_INPUT
+        where = f" {e.filename}:" if getattr(e, "filename", None) else ""
+        _say(f"solidshell: I/O error:{where} {e.strerror or e}")
+        return EXIT_IO
     except SolverError as e:
         _say(f"solidshell: solver stopped: {e}")
         return EXIT_NOT_CONVERGED
     except KeyboardInterrupt:
-        _say("solidshell: interrupted")
-        return 130
+        _say("solidshell: interrupted; this run's summary.json was not written")
+        return EXIT_INTERRUPTED
 
 
 def _say(msg: str) -> None:

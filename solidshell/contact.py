@@ -347,3 +347,36 @@ def combined_critical_time_step(omega_max, k, node_mass) -> float:
     """Bound on the critical step of sheet + contact: 2 / sqrt(omega_max^2 + max k_i/m_i)
     (Weyl: the largest eigenvalue of M^-1 (K + K_c) is at most the sum of the largest ones)."""
     return 2.0 / math.sqrt(float(omega_max) ** 2 + contact_omega2(k, node_mass))
+
+
+# ---------------------------------------------------------------------- the starting configuration
+def initial_penetration(bodies, x, free=None, tol=None) -> list:
+    """Nodes that start inside a body: for each body with any, ``(index, body, count, depth)``.
+
+    x : (N,3) starting mid-surface positions X_o (+ U_o of a given initial state);
+    free : (N,) bool, the nodes to check (default all).  Nodes whose translations are all
+        prescribed cannot be pushed out, and a clamped edge on a pedestal's rim sits exactly on the
+        body, so callers pass ``~fixed[:, :3].all(1)`` here;
+    tol : how far inside [length] still counts as touching (default 1e-9 × the diagonal of x's
+        bounding box: a sheet laid exactly on a body -- the sphere scene's lower face on the sphere
+        top -- has gaps of round-off size, ~1e-16 × its coordinates).
+
+    depth is the deepest penetration max(offset - g(x)) over the body's nodes [length].  A node
+    that starts inside a body meets the full penalty force k p at once: the explicit integrator
+    then sees energy appear from nowhere and stops ("creating energy"), and the static solver
+    grinds through line-search cut-backs; neither says why, hence this check before any work.
+    """
+    x = np.asarray(x, dtype=float).reshape(-1, 3)
+    if not bodies or len(x) == 0:
+        return []
+    sel = np.ones(len(x), dtype=bool) if free is None else np.asarray(free, dtype=bool).reshape(len(x))
+    if tol is None:
+        tol = 1e-9 * float(np.linalg.norm(np.ptp(x, axis=0))) if len(x) > 1 else 0.0
+    out = []
+    for i, b in enumerate(bodies):
+        gap, _ = b.penetration(x[sel])
+        inside = gap < -tol
+        n = int(np.count_nonzero(inside))
+        if n:
+            out.append((i, b, n, float(-gap[inside].min())))
+    return out

@@ -11,8 +11,13 @@ A run directory holds (only the files that apply)::
     deformed.vtu               the deformed mid-surface itself (points X_o + U_o), same fields
     series.xdmf                dynamic runs: one frame per kept time (the time in the XDMF
                                ``Time`` value), fields ``displacement`` and ``director_displacement``
-    summary.json               inputs, counts, units, versions, timings and the solver's info
+    summary.json               inputs, counts, units, versions, timings, the solver's info,
+                               ``run_id``, ``warnings``, ``interrupted``, ``files``; written last
     top.png, iso.png, ...      pictures (solidshell.plotting)
+    projected_boundary.csv     draped sheets: the projected boundary on the X-Y plane
+    RUNNING                    present while a run is under way (solidshell.rundir)
+
+Every file carries the run's id (:func:`stamp_xml`, :func:`stamp_png`, :func:`read_run_id`).
 
 XDMF files are written with inline XML data (no HDF5 needed), so each is self-contained.  Every
 file is written atomically: to a temporary file in the same directory, flushed and fsync'ed, then
@@ -26,6 +31,7 @@ import contextlib
 import json
 import math
 import os
+import re
 import tempfile
 from pathlib import Path
 
@@ -163,9 +169,10 @@ def _fields(mesh, U=None) -> dict:
             "position": mesh.nodes + U[:, :3]}
 
 
-def write_mesh_file(path, mesh, U=None, deformed: bool = False) -> Path:
+def write_mesh_file(path, mesh, U=None, deformed: bool = False, run_id: str | None = None) -> Path:
     """Write the mesh (and the state U, if given) with meshio; the format comes from the suffix
-    (.xdmf -> XDMF with inline XML data, .vtu -> VTU).  ``deformed`` puts the points at X_o + U_o."""
+    (.xdmf -> XDMF with inline XML data, .vtu -> VTU).  ``deformed`` puts the points at X_o + U_o;
+    ``run_id`` is stamped into the file (:func:`stamp_xml`)."""
     import meshio
 
     path = Path(path)
@@ -181,10 +188,12 @@ def write_mesh_file(path, mesh, U=None, deformed: bool = False) -> Path:
             meshio.vtu.write(str(tmp), m, binary=True, compression="zlib")
         else:
             meshio.write(str(tmp), m)
+        if run_id is not None and path.suffix.lower() in (".xdmf", ".vtu"):
+            stamp_xml(tmp, run_id)
     return path
 
 
-def write_time_series(path, mesh, frames) -> Path:
+def write_time_series(path, mesh, frames, run_id: str | None = None) -> Path:
     """XDMF time series (meshio TimeSeriesWriter, inline XML data) of ``frames`` = [(t, U (N,6)), ...]
     on the undeformed mesh: fields ``displacement`` and ``director_displacement`` per frame."""
     import meshio
@@ -202,6 +211,8 @@ def write_time_series(path, mesh, frames) -> Path:
                 U = np.asarray(U, dtype=float).reshape(mesh.n_nodes, 6)
                 w.write_data(float(t), point_data={"displacement": U[:, :3].copy(),
                                                    "director_displacement": U[:, 3:].copy()})
+        if run_id is not None:
+            stamp_xml(tmp, run_id)
     return path
 
 
@@ -222,6 +233,84 @@ def read_state(path):
     if "director_displacement" in pd:
         U[:, 3:] = np.asarray(pd["director_displacement"], float)[: mesh.n_nodes]
     return mesh, U
+
+
+# --------------------------------------------------------------------------- run ids
+# Every file of a run carries the run's id (uuid4 hex, also in summary.json "run_id"), so files of
+# two runs can never be mistaken for one: XML files (VTU, XDMF) as a comment before the root
+# element's content, PNG pictures as a tEXt chunk (keyword "solidshell:run_id"), CSV files as a
+# "# run_id" line.  :func:`read_run_id` reads it back from any of them.
+_RUN_ID_RE = re.compile(rb"solidshell run_id=([0-9a-f]{32})")
+_PNG_SIG = b"\x89PNG\r\n\x1a\n"
+PNG_RUN_ID_KEY = b"solidshell:run_id"
+
+
+def _check_run_id(run_id: str) -> bytes:
+    b = str(run_id).encode("ascii")
+    if not re.fullmatch(rb"[0-9a-f]{32}", b):
+        raise ValueError(f"run_id must be 32 lowercase hex digits (uuid4().hex), got {run_id!r}")
+    return b
+
+
+def stamp_xml(path, run_id: str) -> None:
+    """Put ``<!-- solidshell run_id=... -->`` into an XML file in place: after the XML
+    declaration if there is one, else first (a comment before the root element is valid XML, and
+    ParaView and meshio ignore it).  Used on the temporary file before its atomic rename."""
+    tag = b"<!-- solidshell run_id=" + _check_run_id(run_id) + b" -->\n"
+    path = Path(path)
+    data = path.read_bytes()
+    at = data.index(b"?>") + 2 if data.startswith(b"<?xml") else 0
+    if at and data[at:at + 1] == b"\n":
+        at += 1
+    path.write_bytes(data[:at] + tag + data[at:])
+
+
+def _png_chunk(kind: bytes, body: bytes) -> bytes:
+    import struct
+    import zlib
+
+    return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", zlib.crc32(kind + body) & 0xFFFFFFFF)
+
+
+def stamp_png(path, run_id: str) -> Path:
+    """Add a tEXt chunk ``solidshell:run_id`` = ``run_id`` to a PNG (before its IEND chunk),
+    rewriting the file atomically."""
+    path = Path(path)
+    data = path.read_bytes()
+    if not data.startswith(_PNG_SIG) or data[-8:-4] != b"IEND":
+        raise ValueError(f"{path} is not a complete PNG file")
+    chunk = _png_chunk(b"tEXt", PNG_RUN_ID_KEY + b"\0" + _check_run_id(run_id))
+    with atomic_write(path, "wb") as f:
+        f.write(data[:-12] + chunk + data[-12:])
+    return path
+
+
+def _png_text(data: bytes) -> dict:
+    import struct
+
+    out, i = {}, 8
+    while i + 8 <= len(data):
+        (n,) = struct.unpack(">I", data[i:i + 4])
+        kind = data[i + 4:i + 8]
+        if kind == b"tEXt":
+            k, _, v = data[i + 8:i + 8 + n].partition(b"\0")
+            out[k] = v
+        i += 12 + n
+    return out
+
+
+def read_run_id(path) -> str | None:
+    """The run id stamped into an output file (VTU, XDMF, CSV, JSON summary, PNG), or None."""
+    path = Path(path)
+    data = path.read_bytes()
+    if data.startswith(_PNG_SIG):
+        v = _png_text(data).get(PNG_RUN_ID_KEY)
+        return v.decode("ascii") if v else None
+    if path.suffix.lower() == ".json":
+        v = json.loads(data.decode("utf-8")).get("run_id")
+        return str(v) if v else None
+    m = _RUN_ID_RE.search(data[:4096])
+    return m.group(1).decode("ascii") if m else None
 
 
 # --------------------------------------------------------------------------- summaries

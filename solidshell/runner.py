@@ -9,8 +9,11 @@ so building and writing a mesh (``solver="none"``, what ``solidshell mesh`` does
 
 from __future__ import annotations
 
+import logging
 import sys
+import threading
 import time
+import uuid
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -18,8 +21,13 @@ from typing import Any
 import numpy as np
 
 from . import io as sio
+from . import settings as ssettings
+from . import sizing
 from .errors import InputError, SolverError
+from .rundir import RunFolder
 from .scenes import Scene, check_density, load
+
+log = logging.getLogger("solidshell")
 
 MESH_SUFFIXES = (".msh", ".geo", ".vtu", ".vtk", ".xdmf", ".inp", ".med")
 
@@ -35,38 +43,70 @@ class RunOutput:
     scene: Scene | None = None
     result: Any = None                      # the solver's SolveResult (None for a mesh-only run)
     files: list = field(default_factory=list)
+    run_id: str = ""                        # uuid4 hex, also in summary.json and every file
 
     @property
     def converged(self):
         return self.summary.get("converged")
 
+    @property
+    def interrupted(self) -> bool:
+        return bool(self.summary.get("interrupted"))
+
+    @property
+    def warnings(self) -> list:
+        return list(self.summary.get("warnings", []))
+
 
 # --------------------------------------------------------------------------- progress
 class _Bar:
-    """progress(fraction, text) drawn as a tqdm bar on stderr, shown only after one second and
-    only when stderr is a terminal (logs and pipes stay clean)."""
+    """progress(fraction, text) drawn as a tqdm bar on stderr, only when stderr is a terminal (logs
+    and pipes stay clean).  A ticker thread redraws it every quarter second, so the bar appears
+    half a second after the start and its elapsed time and ETA keep moving even while a solver is
+    busy between two progress calls (a numba compile, a factorisation)."""
+
+    SHOW_AFTER = 0.5    # s: short runs finish without a bar flashing by
+    TICK = 0.25         # s between redraws
 
     def __init__(self, label: str):
+        self.bar = None
+        tty = hasattr(sys.stderr, "isatty") and sys.stderr.isatty()
+        if not tty:
+            return
         from tqdm import tqdm
 
-        tty = hasattr(sys.stderr, "isatty") and sys.stderr.isatty()
-        self.bar = tqdm(total=1000, desc=label, file=sys.stderr, delay=1.0, leave=False, disable=not tty,
-                        bar_format="{desc}: {percentage:3.0f}%|{bar}| {elapsed}<{remaining} {postfix}")
+        # ETA from the average rate since the start (smoothing 0): solver fractions are uneven
+        self.bar = tqdm(total=1000, desc=label, file=sys.stderr, delay=self.SHOW_AFTER, leave=False,
+                        smoothing=0.0, mininterval=self.TICK,
+                        bar_format="{desc}: {percentage:3.0f}%|{bar}| {elapsed}<{remaining}{postfix}")
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._tick, name="solidshell-progress", daemon=True)
+        self._thread.start()
+
+    def _tick(self):
+        if self._stop.wait(self.SHOW_AFTER):
+            return
+        while not self._stop.is_set():
+            self.bar.refresh()
+            self._stop.wait(self.TICK)
 
     def __call__(self, fraction: float, text: str = "") -> None:
+        if self.bar is None:
+            return
         try:
             n = int(round(1000 * min(max(float(fraction), 0.0), 1.0)))
         except (TypeError, ValueError):
             return
-        if self.bar.disable:
-            return
         if text:
-            self.bar.set_postfix_str(str(text)[:60], refresh=False)
-        if n != self.bar.n:
-            self.bar.update(n - self.bar.n)     # update() honours the 1 s delay
+            self.bar.set_postfix_str(" ".join(str(text).split())[:60], refresh=False)
+        if n > self.bar.n:
+            self.bar.update(n - self.bar.n)
 
     def close(self):
-        self.bar.close()
+        if self.bar is not None:
+            self._stop.set()
+            self._thread.join(1.0)
+            self.bar.close()
 
 
 def _phase(cb, lo, hi):
@@ -75,21 +115,26 @@ def _phase(cb, lo, hi):
 
 
 # --------------------------------------------------------------------------- building blocks
-def build_scene_mesh(scene: Scene, mesh=None):
+def build_scene_mesh(scene: Scene, mesh=None, kind: str = "none", allow_large: bool = False):
     """(ShellMesh, mesh name) for a scene: ``mesh`` None (the scene's density), a density string,
-    a mesh/geometry file path or a ShellMesh."""
+    a mesh/geometry file path or a ShellMesh.
+
+    Size guard (solidshell.sizing): a density is refused *before meshing* when the memory a run of
+    ``kind`` needs on it exceeds the machine's available memory; a mesh read from a file is checked
+    once read (its size is not known before).  ``allow_large`` skips the guard."""
     from .mesh import ShellMesh
 
     if isinstance(mesh, ShellMesh):
-        return mesh, "user ShellMesh"
+        return _guard(mesh, "the given mesh", kind, allow_large), "user ShellMesh"
     from . import meshing
 
     def read(p: Path):
         try:
-            return meshing.from_file(p), str(p)
+            m = meshing.from_file(p)
         except InputError as e:
             msg = str(e)
             raise InputError(msg if p.name in msg else f"mesh file {p}: {msg}") from None
+        return _guard(m, f"mesh file {p}", kind, allow_large), str(p)
 
     if mesh is not None and (isinstance(mesh, Path) or str(mesh).lower().endswith(MESH_SUFFIXES)):
         return read(Path(mesh))
@@ -98,9 +143,17 @@ def build_scene_mesh(scene: Scene, mesh=None):
             raise InputError(f"scene {scene.name!r} reads its mesh from {scene.geometry['file']}; "
                              f"a density ({mesh!r}) applies to recipe geometries only")
         return read(Path(scene.geometry["file"]))
+    where = "--mesh" if mesh is not None else f"{scene.source}: mesh.density"
     density = scene.density if mesh is None else check_density(str(mesh), scene.recipe, "--mesh")
+    if density is not None:
+        sizing.check(sizing.elements_of_density(density), kind, f"{where} {density}", allow_large)
     params = {k: v for k, v in scene.geometry.items() if k != "recipe"}
     return meshing.build_mesh(scene.recipe, density, **params), density
+
+
+def _guard(mesh, what, kind, allow_large):
+    sizing.check(mesh.n_elements, kind, what, allow_large)
+    return mesh
 
 
 def support_mask(scene: Scene, mesh) -> np.ndarray:
@@ -175,6 +228,92 @@ def contact_bodies(scene: Scene) -> list:
     return out
 
 
+def _body_label(scene: Scene, i: int) -> str:
+    c = scene.contact[i]
+    where = {"sphere": "centre", "plane": "point", "pedestal": "centre"}[c["type"]]
+    return f"contact[{i}] ({c['type']} at {list(c[where])})"
+
+
+def check_initial_contact(scene: Scene, mesh, fixed, bodies=None, U0=None) -> None:
+    """InputError when a node of the sheet starts inside a contact body (solidshell.contact.
+    initial_penetration): names the body, the node count and the deepest penetration [cm].
+    Nodes with all translations fixed are not checked (they cannot be pushed out, and a clamped
+    rim on a pedestal's edge sits exactly on it)."""
+    bodies = contact_bodies(scene) if bodies is None else bodies
+    if not bodies:
+        return
+    from .contact import initial_penetration
+
+    x = np.asarray(mesh.nodes, float)
+    if U0 is not None:
+        u = np.asarray(U0, dtype=float)
+        if u.size == 6 * mesh.n_nodes:          # (a wrong shape is the solver's settings' to refuse)
+            x = x + u.reshape(-1, 6)[:, :3]
+    free = ~np.asarray(fixed, bool)[:, :3].all(axis=1)
+    hits = initial_penetration(bodies, x, free=free)
+    if hits:
+        i, body, n, depth = hits[0]
+        more = f"; {len(hits) - 1} more bod{'y' if len(hits) == 2 else 'ies'} too" if len(hits) > 1 else ""
+        off = f" (its offset {body.offset:g} cm included)" if body.offset else ""
+        raise InputError(f"{scene.source}: {_body_label(scene, i)}: {n} node(s) of the sheet start inside "
+                         f"the body, deepest {depth:.4g} cm{off}; move the body or the sheet so that "
+                         f"they start apart or just touching{more}")
+
+
+def build_problem(scene: Scene, mesh, fixed=None):
+    """The solidshell.problem.Problem of a scene on a mesh: the Model (section, thickness-strain
+    model), supports, loads (self-weight, point, line, surface) and contact bodies -- everything a
+    solver needs.  Unknown or empty node sets raise InputError.  The adaptive driver calls this for
+    every new mesh."""
+    from .model import Model
+    from .problem import Problem
+
+    sc = load(scene)
+    if fixed is None:
+        fixed = support_mask(sc, mesh)
+    check_load_sets(sc, mesh)
+    model = Model(mesh, sc.material_object(), thickness_strain=sc.model["thickness_strain"],
+                  mu=sc.model["mu"], membrane=sc.model.get("membrane", "full"))
+    return Problem(model, fixed, scene_loads(sc, model), contact=contact_bodies(sc), name=sc.name)
+
+
+def check_solver_settings(kind: str, merged: dict):
+    """The solver's typed settings (solidshell.settings.validate) before any work: one-line
+    InputError naming the key.  Returns the parsed settings model."""
+    try:
+        return ssettings.validate(kind, merged)
+    except ModuleNotFoundError as e:
+        # TRANSITIONAL (until the explicit/static settings models are merged into main): the
+        # solver checks its own settings when it starts.  Remove this except clause at the merge.
+        if e.name in _PENDING_SETTINGS_MODULES:
+            return None
+        raise
+
+
+def check_restart_file(path) -> None:
+    """A restart file must be a complete checkpoint archive (.npz, a zip file): a truncated or
+    foreign file is refused before any work, naming it (whether it matches this run -- mesh,
+    material, settings -- is the solver's check)."""
+    import zipfile
+
+    p = Path(path)
+    try:
+        with zipfile.ZipFile(p) as z:
+            bad = z.testzip()               # reads every member and checks its CRC
+    except FileNotFoundError:
+        raise InputError(f"restart file {p} not found") from None
+    except IsADirectoryError:
+        raise InputError(f"restart file {p} is a directory") from None
+    except (OSError, zipfile.BadZipFile, EOFError, ValueError) as e:
+        raise InputError(f"restart file {p} is not a readable checkpoint ({e}); truncated or not "
+                         f"written by solidshell") from None
+    if bad is not None:
+        raise InputError(f"restart file {p} is damaged (member {bad} fails its checksum)")
+
+
+_PENDING_SETTINGS_MODULES = ("solidshell.solvers.static_settings", "solidshell.solvers.explicit.settings")
+
+
 def _peak_memory_mb() -> float:
     """Peak resident memory of this process so far [MiB] (Linux reports ru_maxrss in KiB)."""
     import resource
@@ -214,17 +353,28 @@ def _analyse(scene: Scene, mesh, U, model=None) -> dict:
 
 
 # --------------------------------------------------------------------------- the run
-def run_scene(scene, mesh=None, solver=None, out_dir=None, progress=True, overrides=None,
-              **settings) -> RunOutput:
+def run_scene(scene, mesh=None, solver=None, out_dir=None, progress=True, overrides=None, *,
+              force=False, allow_large=False, **settings) -> RunOutput:
     """Run a scene (a name, a .toml path or a Scene).
 
-    mesh      : None (the scene's density), a density like "24x8x4", a mesh file, or a ShellMesh
-    solver    : None (the scene's [solver] kind), "static" | "explicit" | "relax", or "none"
-                (build and write the mesh only)
-    out_dir   : directory for the files (created); None writes nothing
-    progress  : True (a tqdm bar on stderr after 1 s), False, or a callback(fraction, text)
-    overrides : dotted scene keys, e.g. {"solver.static.c": 2e-3, "material.warp_angle": 90}
-    settings  : overrides of the chosen solver's settings (e.g. t_end=0.4, alpha=1.0)
+    mesh        : None (the scene's density), a density like "24x8x4", a mesh file, or a ShellMesh
+    solver      : None (the scene's [solver] kind), "static" | "explicit" | "relax", or "none"
+                  (build and write the mesh only)
+    out_dir     : directory for the files (created); None writes nothing
+    progress    : True (a tqdm bar on stderr when it is a terminal), False, or a callback(fraction, text)
+    overrides   : dotted scene keys, e.g. {"solver.static.c": 2e-3, "material.warp_angle": 90}
+    force       : write into a folder that holds files solidshell did not write (left untouched)
+    allow_large : skip the size guard (estimated memory against the machine's available memory)
+    settings    : overrides of the chosen solver's settings (e.g. t_end=0.4, alpha=1.0)
+
+    Everything is checked before any file is written (InputError): the scene and its overrides,
+    the solver settings (their typed schema), the mesh size, node sets, loads and the initial
+    contact.  Files of an earlier run in ``out_dir`` are replaced only once the solver has returned
+    (solidshell.rundir); every file carries the run's ``run_id``.  I/O failures raise
+    solidshell.errors.IOFailure naming the path.  A solver stopped by Ctrl-C returns its last state
+    (info["status"] == "interrupted"): it is written, with ``summary["interrupted"] = True``.
+    Warnings (the solver's info["warnings"] and the runner's own) are logged on the "solidshell"
+    logger and listed in ``summary["warnings"]``.
     """
     t_start = time.perf_counter()
     timings = {}
@@ -244,90 +394,109 @@ def run_scene(scene, mesh=None, solver=None, out_dir=None, progress=True, overri
         from .problem import no_progress
         cb = no_progress
     try:
-        return _run(sc, kind, mesh, out_dir, cb, settings, timings, t_start, overrides)
+        out = _run(sc, kind, mesh, out_dir, cb, settings, timings, t_start, overrides, force, allow_large)
     finally:
         if bar is not None:
             bar.close()
+    for w in out.summary["warnings"]:      # after the bar is gone: one clean line each
+        log.warning(w)
+    return out
 
 
-def _run(sc, kind, mesh_arg, out_dir, cb, settings, timings, t_start, overrides=None) -> RunOutput:
-    files = []
-    out = Path(out_dir) if out_dir is not None else None
-    if out is not None:
-        if out.exists() and not out.is_dir():
-            raise InputError(f"output path {out} exists and is not a directory")
-        try:
-            out.mkdir(parents=True, exist_ok=True)
-        except OSError as e:
-            raise InputError(f"cannot create output directory {out}: {e.strerror or e}") from None
+def _run(sc, kind, mesh_arg, out_dir, cb, settings, timings, t_start, overrides=None, force=False,
+         allow_large=False) -> RunOutput:
+    run_id = uuid.uuid4().hex
+    warnings: list[str] = []
 
-    # mesh -----------------------------------------------------------------------------------
+    # every check, before anything is written ---------------------------------------------------
+    s = None
+    if kind == "static" and ({"checkpoint", "restart"} & set(settings)):
+        raise InputError("--checkpoint / --restart apply to the explicit and relax solvers, not static")
+    if kind != "none":
+        s = sc.solver_settings(kind)
+        s.update(settings)
+        check_solver_settings(kind, s)
+        if isinstance(s.get("restart"), (str, Path)):     # (another type: the schema refuses it)
+            check_restart_file(s["restart"])
+    folder = None
+    if out_dir is not None:
+        folder = RunFolder(out_dir, run_id, force=force,
+                           keep=[s.get(k) for k in ("checkpoint", "restart")] if s else ())
+        folder.check()
     cb(0.0, "meshing")
     t = time.perf_counter()
-    mesh, mesh_name = build_scene_mesh(sc, mesh_arg)
+    mesh, mesh_name = build_scene_mesh(sc, mesh_arg, kind, allow_large)
     fixed = support_mask(sc, mesh)            # unknown / empty node sets fail here, before solving
     material = sc.material_object()
     check_load_sets(sc, mesh)
+    bodies = contact_bodies(sc)
+    if kind != "none":
+        check_initial_contact(sc, mesh, fixed, bodies, U0=s.get("U0"))
     timings["mesh"] = time.perf_counter() - t
+    if folder is not None and folder.foreign:
+        warnings.append(f"output folder {folder.path} holds {len(folder.foreign)} file(s) solidshell did "
+                        f"not write, left untouched (--force): {', '.join(folder.foreign[:5])}")
 
     summary = {
-        "scene": sc.name, "title": sc.title, "paper_section": sc.paper_section,
+        "run_id": run_id, "scene": sc.name, "title": sc.title, "paper_section": sc.paper_section,
         "scene_file": sc.source, "mesh": mesh_name, "recipe": sc.recipe,
         "geometry": {k: (str(v) if isinstance(v, Path) else v) for k, v in sc.geometry.items()},
-        "solver": kind, "settings": None, "counts": sio.mesh_counts(mesh, fixed),
+        "solver": kind, "settings": s, "counts": sio.mesh_counts(mesh, fixed),
         "area": float(mesh.area()), "pedestal_area": _pedestal_area(sc),
         "material": _material_summary(material), "model": dict(sc.model),
         "supports": {k: list(v) for k, v in sc.supports.items()},
         "contact": [dict(c) for c in sc.contact],
         "units": dict(sio.UNITS), "versions": sio.package_versions(),
-        "converged": None, "message": "mesh only" if kind == "none" else "",
+        "converged": None, "interrupted": False, "message": "mesh only" if kind == "none" else "",
     }
     summary["total_weight"] = float(material.weight_per_area * summary["area"])
     summary["overrides"] = dict(overrides or {})
     summary["scene_inputs"] = sc.summary()          # the resolved scene, to reproduce the run
+    if s and s.get("checkpoint"):
+        summary["checkpoint"] = str(s["checkpoint"])
+    if s and s.get("restart"):
+        summary["restart"] = str(s["restart"])
 
-    if out is not None:
-        cb(0.03, "writing mesh")
-        t = time.perf_counter()
-        for name in ("mesh.xdmf", "mesh.vtu"):
-            files.append(sio.write_mesh_file(out / name, mesh))
-        timings["write_mesh"] = time.perf_counter() - t
+    if folder is not None:
+        folder.open()                              # the folder and its RUNNING marker
 
     U = np.zeros((mesh.n_nodes, 6))
     result = None
     model = None
     if kind != "none":
-        cb(0.05, "setting up")
-        t = time.perf_counter()
         try:
-            from . import solvers
-            from .model import Model
-            from .problem import Problem
-            fn = solvers.get(kind)
-        except ImportError as e:
-            raise SolverError(f"solver {kind!r} is not available in this installation ({e}); "
-                              f"the mesh is written") from None
-
-        model = Model(mesh, material, thickness_strain=sc.model["thickness_strain"], mu=sc.model["mu"],
-                      membrane=sc.model.get("membrane", "full"))
-        problem = Problem(model, fixed, scene_loads(sc, model), contact=contact_bodies(sc), name=sc.name)
-        s = sc.solver_settings(kind)
-        s.update(settings)
-        summary["settings"] = s
-        timings["setup"] = time.perf_counter() - t
-        t = time.perf_counter()
-        result = fn(problem, dict(s), _phase(cb, 0.08, 0.9))
-        timings["solve"] = time.perf_counter() - t
+            cb(0.05, "setting up")
+            t = time.perf_counter()
+            try:
+                from . import solvers
+                fn = solvers.get(kind)
+            except ImportError as e:
+                raise SolverError(f"solver {kind!r} is not available in this installation ({e})") from None
+            problem = build_problem(sc, mesh, fixed)
+            model = problem.model
+            timings["setup"] = time.perf_counter() - t
+            t = time.perf_counter()
+            result = fn(problem, dict(s), _phase(cb, 0.08, 0.9))
+            timings["solve"] = time.perf_counter() - t
+        except BaseException:
+            # bad input found by the solver, a solver error before any state, Ctrl-C with no state
+            # returned: nothing of this run is written and the earlier run's files stay as they were
+            if folder is not None:
+                folder.abandon()
+            raise
         summary["peak_memory_mb"] = _peak_memory_mb()
         U = np.asarray(result.U, float).reshape(mesh.n_nodes, 6)
+        info = dict(result.info or {})
         summary["converged"] = bool(result.converged)
         summary["message"] = str(result.message or "")
+        summary["interrupted"] = info.get("status") == "interrupted"
         finite = bool(np.all(np.isfinite(U)))
         summary["finite"] = finite
         if finite:
             summary["max_displacement"] = float(np.max(np.linalg.norm(U[:, :3], axis=1)))
             summary["min_z"] = float(np.min(mesh.nodes[:, 2] + U[:, 2]))
-        for k, v in (result.info or {}).items():
+        warnings.extend(str(w) for w in (info.pop("warnings", None) or []))
+        for k, v in info.items():
             if k in summary and (summary[k] == v or k in ("solver", "converged")):
                 continue                        # already said (the info repeats it)
             summary[k if k not in summary else f"solver_{k}"] = v
@@ -338,56 +507,125 @@ def _run(sc, kind, mesh_arg, out_dir, cb, settings, timings, t_start, overrides=
             except Exception as e:      # analysis must never lose a solved state
                 summary["analysis_error"] = f"{type(e).__name__}: {e}"
             else:
-                boundary = a.pop("projected_boundary", None)
                 for k, v in a.items():
                     summary.setdefault(k, v)
-                if boundary is not None and out is not None:
-                    p = out / "projected_boundary.csv"
-                    with sio.atomic_write(p) as f:
-                        f.write("# projected boundary of the draped sheet on the X-Y plane [cm]\nx,y\n")
-                        f.writelines(f"{x:.6g},{y:.6g}\n" for x, y in boundary)
-                    files.append(p)
+        warnings.extend(_state_warnings(summary, info))
 
-    # files ----------------------------------------------------------------------------------
-    if out is not None:
+    # files: the earlier run's go first (its summary before the rest), then this run's ----------
+    snaps = _snapshot_plan(sc, kind, result)
+    warnings.extend(w for _, _, w in snaps if w)
+    files = []
+    if folder is not None:
         cb(0.9, "writing results")
         t = time.perf_counter()
-        if result is not None:
-            files.append(sio.write_mesh_file(out / "result.xdmf", mesh, U))
-            files.append(sio.write_mesh_file(out / "result.vtu", mesh, U))
-            if np.all(np.isfinite(U)):
-                files.append(sio.write_mesh_file(out / "deformed.vtu", mesh, U, deformed=True))
-            frames = [(float(tf), Uf) for tf, Uf in (result.frames or [])]
-            if len(frames) > 1:
-                files.append(sio.write_time_series(out / "series.xdmf", mesh, frames))
-                summary["series_parameter"] = "time [s]" if kind in ("explicit", "relax") else "load factor"
-        state = U if (result is not None and np.all(np.isfinite(U))) else None
-        sub = _subtitle(sc, mesh_name, mesh, kind, summary)
-        from .plotting import render
-        for i, view in enumerate(sc.output["pictures"]):
-            cb(0.92 + 0.08 * i / max(1, len(sc.output["pictures"])), f"{view} picture")
-            files.append(render(out / f"{view}.png", mesh, state, view=view, title=sc.title, scene=sc,
-                                subtitle=sub))
-        if result is not None and kind in ("explicit", "relax") and sc.output["snapshots"] and result.frames:
-            times = np.array([float(tf) for tf, _ in result.frames])
-            for ts in sc.output["snapshots"]:
-                j = int(np.argmin(np.abs(times - ts)))
-                if abs(times[j] - ts) <= 1e-6 + 1e-3 * max(ts, 1.0) and np.all(np.isfinite(result.frames[j][1])):
-                    files.append(render(out / f"iso_t{ts:.3f}.png", mesh, result.frames[j][1], view="iso",
-                                        title=sc.title, scene=sc, subtitle=f"t = {times[j]:.3f} s"))
+        replaced = folder.clear_stale()
+        if replaced:
+            summary["replaced_files"] = replaced
+        files += _write_outputs(folder, sc, kind, mesh, mesh_name, U, result, summary, snaps, cb)
         timings["write_results"] = time.perf_counter() - t
-        timings["total"] = time.perf_counter() - t_start
-        summary["timings"] = {k: round(v, 4) for k, v in timings.items()}
+    timings["total"] = time.perf_counter() - t_start
+    summary["timings"] = {k: round(v, 4) for k, v in timings.items()}
+    summary["warnings"] = list(dict.fromkeys(warnings))      # in order, each once
+    summary.pop("projected_boundary", None)
+    if folder is not None:
         summary["files"] = sorted({Path(f).name for f in files} | {"summary.json"})
-        sio.write_json(out / "summary.json", summary)
-        files.append(out / "summary.json")
-    else:
-        timings["total"] = time.perf_counter() - t_start
-        summary["timings"] = {k: round(v, 4) for k, v in timings.items()}
-    cb(1.0, "done")
+        files.append(folder.finish(summary))
+    cb(1.0, "interrupted" if summary["interrupted"] else "done")
     summary = sio.to_jsonable(summary)
-    return RunOutput(summary=summary, U=U, mesh=mesh, out_dir=out, scene=sc, result=result,
-                     files=[Path(f) for f in files])
+    return RunOutput(summary=summary, U=U, mesh=mesh, out_dir=folder.path if folder else None, scene=sc,
+                     result=result, files=[Path(f) for f in files], run_id=run_id)
+
+
+def _state_warnings(summary: dict, info: dict) -> list[str]:
+    """The runner's own warnings about a solved state (one line each)."""
+    out = []
+    n_end = summary.get("interpenetrated_nodes")
+    if n_end:
+        out.append(f"{n_end} node(s) interpenetrated at the end (n_p . d_p < 0, Section 4.3): the "
+                   f"sheet passes through itself there; refine the mesh or check the result")
+    n_max = info.get("max_interpenetrated_nodes")
+    if n_max and not n_end:
+        t = info.get("max_interpenetration_time")
+        at = f" (at t = {t:.4g} s)" if isinstance(t, (int, float)) else ""
+        out.append(f"up to {n_max} node(s) were interpenetrated during the run{at}, none at the end")
+    if info.get("positive_definite") is False:
+        lmin = info.get("min_tangent_eigenvalue")
+        ev = f" (smallest tangent eigenvalue {lmin:.3g})" if isinstance(lmin, (int, float)) else ""
+        out.append(f"the final state is not a stable equilibrium{ev}: a saddle, not a drape at rest")
+    if summary.get("finite") is False:
+        out.append("the final state is not finite; the files hold it as written by the solver")
+    return out
+
+
+def _snapshot_plan(sc, kind, result) -> list:
+    """[(time, frame index or None, warning or None)] for the scene's output snapshots: a picture
+    iso_t<time>.png for each snapshot with a kept frame, a warning for each without one (a time
+    past the run's end, or frames not kept)."""
+    snaps = sc.output["snapshots"]
+    if not snaps or kind == "none" or result is None:
+        return []
+    if kind == "static":
+        return [(None, None, f"output.snapshots ({len(snaps)} time(s)) ignored: the static solver has no time")]
+    frames = result.frames or []
+    times = np.array([float(tf) for tf, _ in frames]) if frames else np.zeros(0)
+    info = result.info or {}
+    t_final = info.get("t_final")
+    said = {float(x) for x in (info.get("snapshots_after_t_end_dropped") or [])}   # the solver's warning
+    out = []
+    for ts in snaps:
+        j = int(np.argmin(np.abs(times - ts))) if len(times) else -1
+        if j >= 0 and abs(times[j] - ts) <= 1e-6 + 1e-3 * max(ts, 1.0) and np.all(np.isfinite(frames[j][1])):
+            out.append((ts, j, None))
+        elif ts in said:
+            out.append((ts, None, None))
+        else:
+            why = (f"after the run's end t = {t_final:.6g} s" if isinstance(t_final, (int, float)) and ts > t_final
+                   else "no frame kept at that time")
+            out.append((ts, None, f"snapshot t = {ts:g} s dropped: {why}"))
+    return out
+
+
+def _write_outputs(folder, sc, kind, mesh, mesh_name, U, result, summary, snaps, cb) -> list:
+    """Write a run's files (each stamped with the run id) into its folder; returns their paths."""
+    rid = folder.run_id
+    files = [folder.write(name, sio.write_mesh_file, mesh, run_id=rid) for name in ("mesh.xdmf", "mesh.vtu")]
+    finite = result is not None and bool(np.all(np.isfinite(U)))
+    if result is not None:
+        files.append(folder.write("result.xdmf", sio.write_mesh_file, mesh, U, run_id=rid))
+        files.append(folder.write("result.vtu", sio.write_mesh_file, mesh, U, run_id=rid))
+        if finite:
+            files.append(folder.write("deformed.vtu", sio.write_mesh_file, mesh, U, deformed=True, run_id=rid))
+        frames = [(float(tf), Uf) for tf, Uf in (result.frames or [])]
+        if len(frames) > 1:
+            files.append(folder.write("series.xdmf", sio.write_time_series, mesh, frames, run_id=rid))
+            summary["series_parameter"] = "time [s]" if kind in ("explicit", "relax") else "load factor"
+    boundary = summary.get("projected_boundary")
+    if boundary is not None:
+        def csv(p):
+            with sio.atomic_write(p) as f:
+                f.write(f"# projected boundary of the draped sheet on the X-Y plane [cm]\n"
+                        f"# solidshell run_id={rid}\nx,y\n")
+                f.writelines(f"{x:.6g},{y:.6g}\n" for x, y in boundary)
+            return p
+        files.append(folder.write("projected_boundary.csv", csv))
+    from .plotting import render
+
+    def picture(p, *a, **kw):
+        return sio.stamp_png(render(p, *a, **kw), rid)
+
+    state = U if finite else None
+    sub = _subtitle(sc, mesh_name, mesh, kind, summary)
+    views = sc.output["pictures"]
+    for i, view in enumerate(views):
+        cb(0.92 + 0.08 * i / max(1, len(views)), f"{view} picture")
+        files.append(folder.write(f"{view}.png", picture, mesh, state, view=view, title=sc.title, scene=sc,
+                                  subtitle=sub))
+    for ts, j, _ in snaps:
+        if j is not None:
+            tj = float(result.frames[j][0])
+            files.append(folder.write(f"iso_t{ts:.3f}.png", picture, mesh, result.frames[j][1], view="iso",
+                                      title=sc.title, scene=sc, subtitle=f"t = {tj:.3f} s"))
+    return files
 
 
 def _subtitle(sc, mesh_name, mesh, kind, summary) -> str:

@@ -14,10 +14,8 @@ from solidshell.contact import Plane, Sphere
 from solidshell.problem import Problem
 from solidshell.solvers import explicit, get
 from solidshell.solvers.timestep import critical_time_step, estimate_omega_max
+from solidshell.model import Model
 from solidshell.units import G0
-
-model_mod = pytest.importorskip("solidshell.model")
-Model = model_mod.Model
 
 
 def plate(nx, ny, Lx, Ly, z=0.0):

@@ -1,0 +1,89 @@
+"""Explicit dynamics (Section 4): central differences with mass-proportional Rayleigh damping,
+Eq. (23), and dynamic relaxation (Section 4.2).  The scheme, the critical step, the energy ledger,
+friction, Eq. (24) jumps and mass scaling are described, with their measurements, in
+docs/explicit.md.
+
+Modules: ``settings`` (typed settings), ``state`` (the integrator state), ``kernels`` (the compiled
+step), ``forces`` (internal, contact, friction), ``stepcontrol`` (critical step), ``ledger`` (energy
+balance), ``observers`` (frames, checkpoints, progress, steady state), ``checkpoint`` (files and
+the run's fingerprint), ``integrator`` (``Integrator``).  ``run`` and ``run_relax`` below are the
+drivers the solver registry calls.
+"""
+
+from __future__ import annotations
+
+from contextlib import contextmanager
+
+from ...problem import Problem, SolveResult, no_progress
+from ..blas import single_threaded_blas
+from . import checkpoint
+from .integrator import Integrator, scaled_mass
+from .kernels import central_step as _central_step  # noqa: F401  (the hot loop's compiled step)
+from .settings import RELAX_KEYS as _RELAX_KEYS, RUN_KEYS as _RUN_KEYS, ExplicitSettings, RelaxSettings, parse_settings
+from .state import State
+
+__all__ = ["run", "run_relax", "scaled_mass", "SMALL_MESH_ELEMENTS", "Integrator", "State", "checkpoint",
+           "ExplicitSettings", "RelaxSettings"]
+
+SMALL_MESH_ELEMENTS = 1000
+"""Below this many elements the loop runs the force kernel on one thread by default: a step then
+takes microseconds and starting/joining the kernel's worker threads every step costs more than it
+saves.  Measured on the quiet 2-core machine (benchmarks/explicit_throughput.py --threads 1|2, two
+passes, load ~1): 400 quads 1.18/1.20 M element-steps/s on 1 thread vs 0.45/1.83 M on 2; 900 quads
+1.27/1.23 M vs 1.87/1.48 M; 1600 quads 1.30/1.21 M vs 2.09/1.56 M; 2500 quads 1.18/1.19 M vs
+1.98/2.31 M (benchmarks/dynamic_speed.py).  The results are bitwise the same on any number of
+threads (element forces in parallel, one serial scatter).  On a machine whose cores are busy with
+other jobs, two threads are much slower (a worker waits a whole time slice for a core: 0.31 M vs
+1.76 M at 2500 quads under load 5); pass ``threads=1`` there."""
+
+
+@contextmanager
+def threads_for(problem, threads):
+    """Numba threads for the force kernel during the block: ``threads`` (capped at the machine's),
+    or 1 below SMALL_MESH_ELEMENTS elements and the current count otherwise; yields the count."""
+    import numba
+
+    n_elem = int(getattr(getattr(problem.model, "mesh", None), "n_elements", 0))
+    old = numba.get_num_threads()
+    new = (1 if n_elem < SMALL_MESH_ELEMENTS else old) if threads is None else \
+        min(int(threads), numba.config.NUMBA_NUM_THREADS)
+    numba.set_num_threads(new)
+    try:
+        yield new
+    finally:
+        numba.set_num_threads(old)
+
+
+def _drive(problem, settings, progress, relax) -> SolveResult:
+    s = parse_settings(settings, relax)
+    with threads_for(problem, s.threads) as n_threads:
+        if s.restart:
+            integ = Integrator(problem, s, progress, _start=False)
+            st, _ = checkpoint.load(s.restart)
+            checkpoint.check_fingerprint(getattr(st, "fingerprint", {}), integ.fingerprint, s.restart)
+            integ._adopt(st, reestimate_step=False, new_segment=False)
+            integ.restarted_from = st.step
+        else:
+            integ = Integrator(problem, s, progress)
+        integ.advance()
+        res = integ.result()
+    res.info["threads"] = int(n_threads)
+    return res
+
+
+@single_threaded_blas
+def run(problem: Problem, settings: dict | None = None, progress=no_progress) -> SolveResult:
+    """Dynamic drape (Section 4.1): integrate Eq. (23) from t = 0 to ``settings["t_end"]``.
+    converged = True when t_end was reached with a finite state.  A Ctrl-C returns the last
+    completed step with converged = False and info["status"] = "interrupted"."""
+    return _drive(problem, settings, progress, relax=False)
+
+
+@single_threaded_blas
+def run_relax(problem: Problem, settings: dict | None = None, progress=no_progress) -> SolveResult:
+    """Dynamic relaxation (Section 4.2): damped explicit dynamics with scaled masses (default α = 5 1/s,
+    masses ×100) that stops itself once E_kin / W_ext < tol_kinetic and the relative residual force
+    |P - F + C|_free / |P|_free < tol_residual.  ``damping="kinetic"`` uses Cundall's kinetic damping
+    (all velocities zeroed at each kinetic-energy peak; ``alpha`` is then ignored: no viscous damping).
+    converged = steady_state_reached."""
+    return _drive(problem, settings, progress, relax=True)

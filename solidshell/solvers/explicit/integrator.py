@@ -1,0 +1,618 @@
+"""The explicit integrator: central differences, Eq. (23), with Rayleigh or kinetic damping.
+
+``Integrator(problem, settings)`` estimates the critical step and sets up the start state;
+``advance(n)`` takes up to n steps (all remaining when None) and returns the status word;
+``state`` is everything that changes (``state.State``); ``result()`` is the SolveResult.
+``Integrator.from_state(problem, state, settings)`` continues a state, possibly on another mesh of
+the same sheet (the caller transfers D, D_prev and the friction anchors to the new dofs).
+
+Statuses: running (more steps to go), done (t_end reached), steady (relaxation converged),
+diverged (the energy balance error exceeded max_energy_error), nonfinite, failed (the force
+kernel raised), walltime, interrupted (Ctrl-C).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from ...errors import InputError, SolverError
+from ...problem import SolveResult, no_progress
+from . import checkpoint, ledger, observers, stepcontrol
+from .forces import Forces
+from .kernels import central_step, coefficients, dot, norm
+from .settings import RESTART_NEUTRAL, ExplicitSettings, RelaxSettings, parse_settings
+from .state import State
+
+STOPPED = ("done", "steady", "diverged", "nonfinite", "failed", "walltime", "interrupted")
+
+
+def scaled_mass(model, scaling: float = 1.0, mode: str = "uniform") -> np.ndarray:
+    """(N,6) lumped mass after mass scaling (Section 4.2): "uniform" multiplies every mass by
+    ``scaling``; "director" only the U_n masses."""
+    M = np.asarray(model.lumped_mass(), dtype=float).copy()
+    if mode == "uniform":
+        M *= scaling
+    elif mode == "director":
+        M[:, 3:] *= scaling
+    else:
+        raise InputError(f"mass_scaling_mode must be 'uniform' or 'director', got {mode!r}")
+    return M
+
+
+class Integrator:
+    """See the module docstring.  ``settings``: an ExplicitSettings / RelaxSettings, or a dict
+    (``relax`` says which); ``progress(fraction, text)`` is called within a second and then at least
+    every 0.5 s while stepping."""
+
+    def __init__(self, problem, settings, progress=no_progress, *, relax: bool = False, _start=True):
+        self.s = s = parse_settings(settings, relax) if not isinstance(settings, (ExplicitSettings, RelaxSettings)) \
+            else settings
+        self.relax = s.relax
+        self.progress_cb = progress or no_progress
+        self.wall0 = time.perf_counter()
+        self.status, self.message, self.warnings, self.info_dt = "running", "", [], {}
+        self.restarted_from, self.steps_done, self.t_loop = None, 0, 0.0
+        self.checkpoint_extra = None   # callable -> dict of arrays saved with each checkpoint
+        self._setup(problem)
+        if _start:
+            self.progress_cb(0.0, "estimating the critical time step")
+            lim = stepcontrol.estimate(self.model, self.M, self.free_mask, self._D0(), self.bodies,
+                                       self.n_fric, s, self.alpha)
+            self._bind(lim)
+            self.state = self._initial_state(self._first_step(lim), lim)
+            self._prepare(fresh=True)
+
+    # ------------------------------------------------------------------ set-up
+    def _setup(self, problem) -> None:
+        """Everything fixed for one problem: masses, loads, supports, contact bodies."""
+        s = self.s
+        self.problem, self.model = problem, problem.model
+        self.N = self.model.n_nodes
+        self.shape = (self.N, 6)
+        self.n_elem = int(getattr(getattr(self.model, "mesh", None), "n_elements", 0))
+        self.damping = s.damping if self.relax else "rayleigh"
+        # Cundall's kinetic damping replaces the viscous damping: a scene file's alpha is meant for
+        # damping="rayleigh" (with both, the relaxation measured 4x more steps on the wool strip)
+        self.alpha = 0.0 if self.damping == "kinetic" else s.alpha
+        self.M = M = scaled_mass(self.model, s.mass_scaling, s.mass_scaling_mode)
+        self.free_mask = ~problem.fixed
+        if np.any(M[self.free_mask] <= 0.0):
+            raise InputError(f"{int(np.sum(M[self.free_mask] <= 0))} free dof(s) have zero mass: the explicit "
+                             f"scheme needs M > 0")
+        self.P = problem.loads.ravel().copy()
+        self.fixed_idx = np.flatnonzero(problem.fixed.ravel())
+        self.free_idx = np.flatnonzero(self.free_mask.ravel())
+        self.presc = problem.prescribed.ravel()[self.fixed_idx].copy()
+        self.bodies = list(problem.contact or [])
+        self.fric_of = [float(getattr(b, "friction", 0.0)) for b in self.bodies]
+        self.n_fric = sum(1 for mu in self.fric_of if mu > 0.0)   # 0: the frictionless path
+        self.Mf = M.ravel()
+        self.invM = np.zeros_like(self.Mf)
+        self.invM[self.free_idx] = 1.0 / self.Mf[self.free_idx]
+        self.Pn = norm(self.P[self.free_idx])
+        shaping = {k: v for k, v in s.as_dict().items() if k not in RESTART_NEUTRAL}
+        self.fingerprint = checkpoint.fingerprint(problem, shaping, M)
+
+    def _bind(self, lim) -> None:
+        """Attach a critical-step estimate: penalty stiffness, forces, the energy floor."""
+        self.lim = lim
+        self.forces = Forces(self.problem, lim.k_pen, lim.k_t, self.fric_of)
+        self.quasi = self.forces.quasi
+        self.E_floor = ledger.energy_floor(self.P, self.Mf, self.free_idx, self.forces.X0, lim.omega_el)
+
+    def _state_array(self, a, name):
+        if a is None:
+            return np.zeros(self.shape)
+        if a.size != 6 * self.N:
+            raise InputError(f"setting {name} has {a.shape[0]} rows, the mesh has {self.N} nodes ((N, 6) dofs)")
+        return np.array(a, dtype=float).reshape(self.shape)
+
+    def _D0(self):
+        D0 = self._state_array(self.s.U0, "U0").ravel().copy()
+        D0[self.fixed_idx] = self.presc
+        return D0
+
+    def _first_step(self, lim) -> float:
+        """The start step [s]; an explicit run lands an integer number of steps on t_end."""
+        dt = stepcontrol.initial_step(lim, self.s, self.alpha, self.info_dt)
+        if not self.relax:
+            dt = self.s.t_end / int(math.ceil(self.s.t_end / dt * (1.0 - 1e-12)))
+        return dt
+
+    def _initial_state(self, dt, lim) -> State:
+        """D_0 from U0 and D_-1 = D_0 - dt V_0 + dt^2/2 A_0, A_0 = M^-1 (P - F_0 + C_0) - alpha V_0."""
+        D0 = self._D0()
+        V0 = self._state_array(self.s.V0, "V0").ravel().copy()
+        V0[self.fixed_idx] = 0.0
+        F0, Es0 = self.forces.internal(D0, True)
+        anchors0 = np.full((self.n_fric, self.N, 3), np.nan)
+        C0, Ec0, _ = self.forces.contact_energy(D0, anchors0)
+        Ek0 = 0.5 * dot(self.Mf * V0, V0)
+        A0 = self.invM * (self.P - F0 + C0) - self.alpha * V0
+        A0[self.fixed_idx] = 0.0
+        Dm = D0 - dt * V0 + 0.5 * dt * dt * A0
+        Dm[self.fixed_idx] = self.presc
+        mi0, qf0 = self.forces.interp_flags(D0)
+        quasi = self.quasi
+        st = State(
+            D=D0.copy(), D_prev=Dm, step=0, dt=dt, n_base=0, t_base=0.0, omega_el=lim.omega_el, method=lim.method,
+            dt_initial=dt, mode=(lim.mode if lim.mode is not None else np.zeros(6 * self.N)), rechecks=0,
+            reductions=0, dtc_min=lim.dt_crit, D0=D0, Ek0=Ek0, Es0=Es0, Ec0=Ec0, E_init=Ek0 + Es0,
+            closed_change=0.0, w_ext_closed=0.0, remesh_energy_jump=0.0, segments=0, close_E=Ek0 + Es0 + Ec0,
+            close_W=0.0, damp_sum=0.0, ekin_max=Ek0, balance_err=0.0, contact_work=0.0, w_int=0.0,
+            w_int_prev=0.0, es_prev=Es0, qflags=qf0, q_jump=0.0, q_samples=0, q_corners=0,
+            q_F=(F0.copy() if quasi else np.zeros(0)), q_D=(D0.copy() if quasi else np.zeros(0)),
+            anchors=anchors0, fric_work=0.0, max_slip=0, max_interp=mi0, t_max_interp=0.0, max_contact=0,
+            max_pen=0.0, ek_prev_half=0.0, resets=0, last_ekin=Ek0,
+            last_rel_res=(norm((self.P - F0 + C0)[self.free_idx]) / self.Pn if self.Pn > 0 else 0.0),
+            frame_dt=self._frame_interval())
+        st.fingerprint = self.fingerprint
+        return st
+
+    def _frame_interval(self) -> float:
+        # a relaxation keeps a frame every 0.05 s of simulated time by default (a time series to
+        # watch it settle); max_frames bounds the memory (thinning, observers.keep_frame)
+        fi = self.s.frame_interval
+        return fi if fi is not None else (0.05 if (self.relax and self.s.frame_every is None) else 0.0)
+
+    def _prepare(self, fresh: bool) -> None:
+        """Derived per-run counts and buffers (after the state is set)."""
+        s, st = self.s, self.state
+        self.fresh = fresh
+        n_steps = self._n_steps(st.dt_initial)
+        self.sample_every = s.sample_every or max(1, min(100, n_steps // 100))
+        self.check_every = s.check_every if self.relax else max(1, n_steps // 100)
+        self.frame_every = s.frame_every
+        prog_every = s.progress_every or max(1, n_steps // 100)
+        self.progress = observers.Progress(self.progress_cb, prog_every, s)
+        self.ckpt = observers.Checkpointer(s.checkpoint, s.checkpoint_every, s.checkpoint_wall,
+                                           lambda: self.checkpoint_extra() if self.checkpoint_extra else {})
+        self.recheck_margin = 0.5 * (1.0 + s.safety)
+        self._set_step(st.dt)
+        self._snap_filter()
+        if fresh and (0 in self.snap_steps or self.relax or not self.snap_steps):
+            self._keep(0.0, st.D, -1)
+        self.frame_next_t = observers.next_frame_time(st)
+        self._Dn1, self._R = np.empty_like(st.D), np.empty_like(st.D)
+        if st.good_D is None or st.good_D.size != st.D.size:
+            st.good_D, st.good_t = st.D.copy(), st.t
+
+    def _n_steps(self, dt) -> int:
+        if self.relax:
+            return self.s.max_steps if self.s.max_steps is not None else int(math.ceil(self.s.t_max / dt))
+        return int(math.ceil(self.s.t_end / dt * (1.0 - 1e-12)))
+
+    def _snap_filter(self) -> None:
+        """Snapshot times after t_end are dropped with a warning (e.g. a scene's times with a shorter
+        t_end from the command line)."""
+        snaps = sorted(self.s.snapshots or []) if not self.relax else []
+        late = [x for x in snaps if x > self.s.t_end * (1 + 1e-9)]
+        self.snaps = [x for x in snaps if x <= self.s.t_end * (1 + 1e-9)] if late else snaps
+        if late and "snapshots_after_t_end_dropped" not in self.info_dt:
+            self.info_dt["snapshots_after_t_end_dropped"] = late
+            self.warnings.append(f"snapshot time(s) {', '.join(f'{x:g}' for x in late)} s after t_end = "
+                                 f"{self.s.t_end:g} s dropped")
+        self.end_step, self.snap_steps = self._schedule()
+
+    def _schedule(self):
+        """(end step, {step: snapshot time}) for the current step dt from step n_base at time t_base."""
+        st, s = self.state, self.s
+        if self.relax:
+            if s.max_steps is not None:
+                return s.max_steps, {}
+            return st.n_base + int(math.ceil((s.t_max - st.t_base) / st.dt * (1.0 - 1e-12))), {}
+        return (st.n_base + int(round((s.t_end - st.t_base) / st.dt)),
+                {st.n_base + int(round((x - st.t_base) / st.dt)): x for x in self.snaps
+                 if x >= st.t_base - 0.5 * st.dt})
+
+    def _set_step(self, dt) -> None:
+        self.state.dt = dt
+        self.cF, self.cD, self.cDp = coefficients(self.invM, dt, self.alpha)
+        if hasattr(self, "snaps"):
+            self.end_step, self.snap_steps = self._schedule()
+
+    def _keep(self, t, D, k) -> None:
+        observers.keep_frame(self.state, t, D, k, self.shape, self.s.max_frames)
+
+    def time_of(self, n: int) -> float:
+        st = self.state
+        return st.t_base + (n - st.n_base) * st.dt
+
+    # ------------------------------------------------------------------ stepping
+    def advance(self, n_steps: int | None = None) -> str:
+        """Take up to ``n_steps`` steps (None: to the end); the status word.  A split run
+        (advance(a), advance(b)) is bit for bit the run advance(a + b)."""
+        if self.status != "running":
+            return self.status
+        st = self.state
+        stop_at = math.inf if n_steps is None else st.step + int(n_steps)   # end_step may move (re-checks)
+        t0 = time.perf_counter()
+        with np.errstate(over="ignore", invalid="ignore"), observers.deferred_interrupt() as sigint:
+            try:
+                status = self._loop(stop_at, sigint)
+            except KeyboardInterrupt:   # raised outside the loop's own handler (e.g. a callback)
+                status = "interrupted"
+        self.t_loop += time.perf_counter() - t0
+        if status == "running" and st.step >= self.end_step:
+            status = "done"
+        self.status = status
+        self._on_stop(status)
+        return status
+
+    def _loop(self, stop_at: int, sigint) -> str:
+        st, relax = self.state, self.relax
+        D, Dp, Dn1, R = st.D, st.D_prev, self._Dn1, self._R
+        while st.step < stop_at and st.step < self.end_step:
+            n = st.step
+            sample = (n % self.sample_every == 0) or n == self.end_step - 1
+            check = relax and (n % self.check_every == 0)
+            f = self._forces(n, D, sample, R)
+            if f is None:
+                return "failed"
+            vMv, finite = central_step(Dn1, D, Dp, R, self.cF, self.cD, self.cDp, self.fixed_idx, self.presc,
+                                       self.Mf, 0.5 / st.dt)
+            if not finite:
+                return self._nonfinite(n)
+            self._work(n, vMv, f, Dn1, Dp)
+            if sample and self._sample(n, D, vMv, f):
+                return "diverged"
+            if check or (not relax and n == self.end_step - 1):
+                # relative to the loads; without loads (prescribed displacements only) relative to
+                # the internal forces including the reactions
+                st.last_rel_res = norm(R[self.free_idx]) / (self.Pn if self.Pn > 0 else max(norm(f["F"]), 1e-300))
+            self._frames(n, D)
+            if check and n > 0 and self._steady(n, vMv):
+                return "steady"
+            if self.damping == "kinetic":
+                self._kinetic(Dn1, D, R, vMv)
+            if self.n_fric:
+                self._friction_work(f, Dn1, Dp)
+            Dp, D, Dn1 = D, Dn1, Dp
+            st.D, st.D_prev, st.step = D, Dp, n + 1
+            self._Dn1 = Dn1
+            self.steps_done += 1
+            status = self._after_step(sigint)
+            if status != "running":
+                return status
+        return "running"
+
+    def _forces(self, n, D, sample, R):
+        """P - F + C at D_n into R; a dict of what the step's books need, None if the kernel failed."""
+        st = self.state
+        try:
+            F, Es = self.forces.internal(D, sample)
+        except (FloatingPointError, ZeroDivisionError, SolverError) as exc:
+            self.message = f"internal force failed at step {n} (t = {self.time_of(n):.6g} s): {exc}"
+            return None
+        np.subtract(self.P, F, out=R)
+        f = {"F": F, "Es": Es}
+        if self.quasi and n > 0:
+            # work of the internal forces along the path actually taken, trapezoidal rule per
+            # step: sum 1/2 (F_m-1 + F_m).(D_m - D_m-1) up to D_n (the same end points as
+            # E(D_n) - E(D_0), so that it differs from them only where the energy jumps)
+            st.w_int += 0.5 * float(np.add.reduce((F + st.q_F) * (D - st.q_D)))
+            st.q_F[:] = F
+            st.q_D[:] = D
+        if self.n_fric:
+            C, f["Ec"], f["nact"], pen, f["fr"], f["Et"], f["anchors"], f["nslip"] = \
+                self.forces.contact_friction(D, st.anchors)
+        elif self.bodies:
+            C, f["Ec"], f["nact"], pen = self.forces.contact(D)
+        else:
+            return f
+        R += C
+        f["C"] = C
+        if pen > st.max_pen:
+            st.max_pen = pen
+        return f
+
+    def _nonfinite(self, n) -> str:
+        st = self.state
+        self.message = (f"the solution became non-finite at step {n + 1} (t = {self.time_of(n + 1):.6g} s) with "
+                        f"dt = {st.dt:.6g} s, critical step {self.lim.dt_crit:.6g} s; returning the last good "
+                        f"(finite, energy-balanced) state, t = {st.good_t:.6g} s")
+        return "nonfinite"
+
+    def _work(self, n, vMv, f, Dn1, Dp) -> None:
+        """Damping dissipation (trapezoidal in time) and contact work of step n."""
+        st = self.state
+        dd = self.alpha * st.dt * vMv
+        if n == 0 and self.fresh:
+            dd *= 0.5  # trapezoidal rule: the first and last samples weigh half
+        st.damp_sum += dd
+        if self.bodies:
+            st.contact_work += 0.5 * dot(f["C"], Dn1 - Dp)
+
+    def _sample(self, n, D, vMv, f) -> bool:
+        """The energy balance at t_n (ledger.py); True when it exceeds max_energy_error."""
+        st, t = self.state, self.time_of(n)
+        Ek, Es = 0.5 * vMv, f["Es"]
+        st.ekin_max = max(st.ekin_max, Ek)
+        Wext = ledger.external_work(st, self.P, D)
+        Edamp = st.damp_sum - (0.5 * self.alpha * st.dt * vMv if n > 0 else 0.0)
+        Ecn = f["Ec"] if self.bodies else 0.0
+        if self.quasi:
+            n_int, qf = self.forces.interp_and_branches(D)
+            ledger.book_jumps(st, Es, qf)
+        Efric = -st.fric_work if self.n_fric else 0.0   # work done against friction (>= 0 in slip)
+        err = ledger.balance_error(st, Ek, Es, Wext, Edamp, Ecn, Efric, self.E_floor)
+        if err > self.s.max_energy_error:
+            self.message = (f"energy balance error {err:.3g} > {self.s.max_energy_error:g} at step {n} (t = {t:.6g} "
+                            f"s): the run is creating energy (unstable step {st.dt:.6g} s vs critical "
+                            f"{self.lim.dt_crit:.6g} s, or a non-physical state); returning the last good state, "
+                            f"t = {st.good_t:.6g} s")
+            return True
+        st.good_t = t
+        st.good_D[:] = D
+        ni = n_int if self.quasi else self.forces.interp_count(D)
+        if ni > st.max_interp:
+            st.max_interp, st.t_max_interp = ni, t
+        if self.bodies:
+            st.max_contact = max(st.max_contact, f["nact"])
+        if self.n_fric:
+            st.max_slip = max(st.max_slip, f["nslip"])
+        st.last_ekin = Ek
+        st.last = dict(Ek=Ek, Es=Es - st.Es0, Wext=Wext, Edamp=Edamp, Ec=Ecn - st.Ec0, t=t, Efric=Efric,
+                       Et=(f["Et"] if self.n_fric else 0.0), interp=ni)
+        return False
+
+    def _frames(self, n, D) -> None:
+        t = self.time_of(n)
+        if n in self.snap_steps and n > 0:
+            self._keep(t, D, -1)
+        elif self.frame_every and n > 0 and n % self.frame_every == 0:
+            self._keep(t, D, -1)
+        elif t >= self.frame_next_t:   # inf without interval frames; >= the interval > 0 else
+            self._keep(t, D, int(t / self.state.frame_dt))
+            self.frame_next_t = observers.next_frame_time(self.state)
+
+    def _steady(self, n, vMv) -> bool:
+        st = self.state
+        rel_ke = observers.steady(st, self.s, self.P, vMv, self.E_floor)
+        if rel_ke is None:
+            return False
+        self.message = (f"steady state at t = {self.time_of(n):.6g} s after {n} steps: E_kin/W_ext = {rel_ke:.3g} "
+                        f"< {self.s.tol_kinetic:g}, residual {st.last_rel_res:.3g} < {self.s.tol_residual:g}")
+        return True
+
+    def _kinetic(self, Dn1, D, R, vMv) -> None:
+        """Cundall's kinetic damping: at a kinetic-energy peak (between v_n-1/2 and v_n+1/2, i.e. at
+        D_n) restart from D_n at rest with the start rule, D_n+1 = D_n + dt^2/2 M^-1 R_n.  (Simply
+        zeroing v_n+1/2 at D_n+1 turns repeated resets near equilibrium into steepest descent with
+        step dt^2 M^-1, unstable above omega dt = sqrt(2); the half-step restart is stable up to
+        omega dt = 2 like the scheme itself.)"""
+        st, dt = self.state, self.state.dt
+        dh = Dn1 - D
+        ek_half = 0.5 * dot(self.Mf * dh, dh) / dt**2
+        if ek_half < st.ek_prev_half:
+            st.damp_sum += 0.5 * vMv
+            np.multiply(self.invM, R, out=Dn1)
+            Dn1 *= 0.5 * dt * dt
+            Dn1 += D
+            Dn1[self.fixed_idx] = self.presc
+            dh = Dn1 - D
+            ek_half = 0.5 * dot(self.Mf * dh, dh) / dt**2
+            st.resets += 1
+        st.ek_prev_half = ek_half
+
+    def _friction_work(self, f, Dn1, Dp) -> None:
+        """Friction work by the scheme's own central rule f_t,n.(x_n+1 - x_n-1)/2; new anchors."""
+        st = self.state
+        D6, Dp6 = Dn1.reshape(self.shape), Dp.reshape(self.shape)
+        for idx, ft in f["fr"]:
+            if idx.size:
+                st.fric_work += 0.5 * float(np.add.reduce((ft * (D6[idx, :3] - Dp6[idx, :3])).ravel()))
+        st.anchors = f["anchors"]
+
+    def _after_step(self, sigint) -> str:
+        """Re-check, checkpoint, progress, wall time and Ctrl-C after step n -> n + 1."""
+        st, s = self.state, self.s
+        n = st.step
+        if s.recheck_every and n % s.recheck_every == 0 and not s.allow_unstable and n < self.end_step:
+            self._recheck()
+        if self.ckpt.due(n):
+            self.ckpt.write(st)
+        if self.progress.due(n):
+            self.progress.report(st, n, self.end_step, self.time_of(n))
+        if s.max_wall_time is not None and n % 100 == 0 and time.perf_counter() - self.wall0 > s.max_wall_time:
+            self.message = f"stopped at t = {self.time_of(n):.6g} s: wall-time limit {s.max_wall_time:g} s reached"
+            return "walltime"
+        if sigint[0]:
+            return "interrupted"
+        return "running"
+
+    def _recheck(self) -> None:
+        """Re-estimate the critical step at the current state; when dt exceeds (1 + safety)/2 of it,
+        shorten the step to safety x it, keeping the velocity v_n-1/2."""
+        st = self.state
+        dtc_now, mode = stepcontrol.recheck(self.model, self.M, self.free_mask, st.D, st.mode, self.lim, self.alpha)
+        if dtc_now is None:
+            return
+        st.rechecks += 1
+        st.mode = mode
+        st.dtc_min = min(st.dtc_min, dtc_now)
+        if st.dt > self.recheck_margin * dtc_now:
+            self._change_step(self.s.safety * dtc_now)
+            st.reductions += 1
+
+    def _change_step(self, new: float) -> None:
+        """Continue with step ``new`` (an explicit run re-spaced to land on t_end) from the current
+        state, keeping the half-step velocity: D_n-1 := D_n - dt_new/dt_old (D_n - D_n-1)."""
+        st = self.state
+        t_now = self.time_of(st.step)
+        if not self.relax and self.s.t_end > t_now:
+            new = stepcontrol.landing_step(new, t_now, self.s.t_end)
+        st.D_prev[:] = st.D - (new / st.dt) * (st.D - st.D_prev)
+        st.t_base, st.n_base = t_now, st.step
+        self._set_step(new)
+
+    # ------------------------------------------------------------------ ends
+    def _on_stop(self, status: str) -> None:
+        """End-of-run bookkeeping: messages, the last frame, the final checkpoint, the books."""
+        st = self.state
+        if status == "done":
+            if self.relax:
+                self.message = (f"no steady state within {self.end_step} steps (t = {self.time_of(self.end_step):.6g} "
+                                f"s): last residual {st.last_rel_res:.3g} (tol {self.s.tol_residual:g})")
+            else:
+                self.message = (f"reached t_end = {self.time_of(self.end_step):.6g} s in {self.end_step} steps of "
+                                f"{st.dt:.6g} s" + (f" ({st.reductions} step reduction(s) after re-checking the "
+                                                    f"critical step)" if st.reductions else ""))
+                self._keep(self.time_of(self.end_step), st.D, -1)
+                self.ckpt.write(st)
+        elif status == "steady":
+            if not st.frame_t or st.frame_t[-1] != self.time_of(st.step):
+                self._keep(self.time_of(st.step), st.D, -1)
+        elif status == "interrupted":
+            self.message = (f"interrupted at t = {self.time_of(st.step):.6g} s after {st.step} steps; returning "
+                            f"the last completed step")
+            self.ckpt.write(st)
+        if status in ("running", "done", "steady", "walltime", "interrupted"):
+            self._read_books()
+
+    def _read_books(self) -> None:
+        """The energies now (close_E = E_kin + E_strain + E_contact) and the run's external work, the
+        end readings of the ledger segment should the next advance happen on another mesh."""
+        try:
+            e = self.energies()
+        except (FloatingPointError, ZeroDivisionError, SolverError, ValueError):
+            return
+        self.state.close_E = e["kinetic"] + e["strain"] + e["contact"]
+        self.state.close_W = e["external_work"]
+
+    def energies(self) -> dict:
+        """Energies at the current state D_n: kinetic 1/2 v.M.v with the half-step velocity
+        v_n-1/2 = (D_n - D_n-1)/dt, strain, contact (penalty, incl. friction stick springs), the
+        run's external work and damping dissipation so far."""
+        st = self.state
+        v = (st.D - st.D_prev) / st.dt
+        _, Es = self.forces.internal(st.D, True)
+        _, Ec, _ = self.forces.contact_energy(st.D, st.anchors)
+        return {"kinetic": 0.5 * dot(self.Mf * v, v), "strain": float(Es), "contact": float(Ec),
+                "external_work": ledger.external_work(st, self.P, st.D), "damping_dissipation": float(st.damp_sum)}
+
+    def result(self) -> SolveResult:
+        """The SolveResult of the run so far (U, converged, message, info, frames)."""
+        st, status = self.state, self.status
+        D = st.good_D if status in ("nonfinite", "diverged") else st.D
+        ok = (status == "done" and not self.relax) or status == "steady"
+        info = self._info(ok)
+        self.progress_cb(1.0, self.message.replace("\n", " "))
+        return SolveResult(U=D.reshape(self.shape).copy(), converged=bool(ok), message=self.message, info=info,
+                           frames=list(zip(st.frame_t, st.frame_U)))
+
+    def _info(self, ok: bool) -> dict:
+        """summary.json's solver keys (public: never rename one)."""
+        st, lim, last = self.state, self.lim, self.state.last
+        info = {
+            "steps": int(st.step), "dt": float(st.dt), "dt_initial": float(st.dt_initial),
+            "critical_time_step": float(lim.dt_crit), "critical_time_step_min": float(st.dtc_min),
+            "time_step_rechecks": int(st.rechecks), "time_step_reductions": int(st.reductions),
+            "critical_time_step_sheet": float(stepcontrol.critical_time_step(lim.omega_el, self.alpha)),
+            "critical_step_method": lim.method, "omega_max": float(lim.omega),
+            "time_step_estimate_s": float(lim.seconds), "time_step_force_evals": int(lim.n_evals),
+            "safety": float(self.s.safety), "t_final": float(self.time_of(st.step)), "alpha": float(self.alpha),
+            "damping": self.damping, "mass_scaling": float(self.s.mass_scaling),
+            "mass_scaling_mode": self.s.mass_scaling_mode, "energy_balance_error": float(st.balance_err),
+            "max_interpenetrated_nodes": int(st.max_interp),
+            "wall_time_s": float(time.perf_counter() - self.wall0),
+            "element_steps_per_second": (float(self.n_elem * self.steps_done / self.t_loop)
+                                         if self.t_loop > 0 and self.steps_done else 0.0),
+            "converged": bool(ok), "steady_state_reached": self.status == "steady",
+            "final_kinetic_energy": float(st.last_ekin), "final_relative_residual": float(st.last_rel_res),
+            "kinetic_energy": float(last.get("Ek", 0.0)), "strain_energy": float(last.get("Es", 0.0)),
+            "external_work": float(last.get("Wext", 0.0)), "damping_dissipation": float(last.get("Edamp", 0.0)),
+            "contact_energy": float(last.get("Ec", 0.0)), "contact_work": float(st.contact_work),
+            "max_contact_nodes": int(st.max_contact),
+            "max_contact_penetration": float(st.max_pen),  # deepest, over every step (p = |f|/k)
+            "kinetic_resets": int(st.resets), "max_interpenetration_time": float(st.t_max_interp),
+            "interpenetrated_nodes_last_sample": int(last.get("interp", 0)), "status": self.status,
+        }
+        if self.n_fric:
+            info.update({
+                "friction": [float(m) for m in self.fric_of],
+                "friction_stiffness_ratio": float(self.s.friction_stiffness),
+                "friction_work": float(-st.fric_work),               # energy taken out by friction
+                "friction_stick_energy": float(last.get("Et", 0.0)),  # of it, still in the stick springs
+                "friction_dissipation": float(-st.fric_work - last.get("Et", 0.0)),
+                "max_slipping_nodes": int(st.max_slip),
+            })
+        if self.quasi:
+            info.update({"thickness_strain_energy_jump": float(st.q_jump),
+                         "thickness_strain_switch_samples": int(st.q_samples),
+                         "thickness_strain_corner_switches": int(st.q_corners)})
+        if st.segments:
+            info.update({"ledger_segments": int(st.segments) + 1, "remesh_energy_jump": float(st.remesh_energy_jump)})
+        info.update(self.info_dt)
+        if self.restarted_from is not None:
+            info["restarted_from_step"] = int(self.restarted_from)
+        if self.warnings:
+            info["warnings"] = list(self.warnings)
+        return info
+
+    # ------------------------------------------------------------------ continuing a state
+    @classmethod
+    def from_state(cls, problem, state: State, settings, *, reestimate_step: bool = True, new_segment: bool = True,
+                   progress=no_progress, relax: bool = False) -> "Integrator":
+        """Continue ``state`` on ``problem`` (possibly another mesh: D, D_prev and anchors already on
+        its dofs).  reestimate_step: the critical step is estimated anew at the state (Lanczos) and,
+        when dt changes, the velocity kept; else state.dt is reused exactly.  new_segment: the ledger
+        references are taken at the state (totals carry over; the energy change since the last
+        reading is booked as remesh_energy_jump); False only to continue the very same run (a
+        restart).  ``state`` is taken over, not copied."""
+        integ = cls(problem, settings, progress, relax=relax, _start=False)
+        integ._adopt(state, reestimate_step, new_segment)
+        return integ
+
+    def _adopt(self, st: State, reestimate_step: bool, new_segment: bool) -> None:
+        self._check_sizes(st)
+        self.state = st
+        if reestimate_step:
+            self.progress_cb(0.0, "estimating the critical time step")
+            lim = stepcontrol.estimate(self.model, self.M, self.free_mask, st.D, self.bodies, self.n_fric,
+                                       self.s, self.alpha)
+        else:
+            lim = stepcontrol.limit(st.omega_el, st.method, self.M, self.bodies, self.n_fric, self.s, self.alpha)
+        self._bind(lim)
+        if reestimate_step:
+            st.omega_el, st.method, st.dtc_min = lim.omega_el, lim.method, min(st.dtc_min, lim.dt_crit)
+            st.mode = lim.mode if lim.mode is not None else np.zeros(6 * self.N)
+        self._prepare(fresh=False)
+        if reestimate_step:
+            new = stepcontrol.initial_step(lim, self.s, self.alpha, self.info_dt)
+            if new != st.dt:
+                self._change_step(new)
+        if new_segment:
+            self._open_segment()
+        st.fingerprint = self.fingerprint
+
+    def _check_sizes(self, st: State) -> None:
+        n6 = 6 * self.N
+        bad = [k for k, a in (("D", st.D), ("D_prev", st.D_prev)) if np.asarray(a).size != n6]
+        if np.asarray(st.anchors).shape != (self.n_fric, self.N, 3):
+            bad.append(f"anchors {np.asarray(st.anchors).shape} (want {(self.n_fric, self.N, 3)})")
+        if bad:
+            raise InputError(f"the state does not fit this problem ({self.N} nodes, {self.n_fric} frictional "
+                             f"bodies): {', '.join(bad)}")
+        st.D = np.array(st.D, dtype=float).ravel()
+        st.D_prev = np.array(st.D_prev, dtype=float).ravel()
+        if np.asarray(st.mode).size != n6:
+            st.mode = np.zeros(n6)
+
+    def _open_segment(self) -> None:
+        """A new ledger segment at the current state (ledger.py), and the quasi-strain work and
+        branch references there."""
+        st = self.state
+        ledger.close_segment(st)
+        e = self.energies()
+        ledger.open_segment(st, e["kinetic"], e["strain"], e["contact"], st.D)
+        F, Es = self.forces.internal(st.D, True)
+        st.es_prev, st.w_int_prev = Es, st.w_int
+        st.q_F = F.copy() if self.quasi else np.zeros(0)
+        st.q_D = st.D.copy() if self.quasi else np.zeros(0)
+        n_int, st.qflags = self.forces.interp_flags(st.D)
+        st.good_D, st.good_t = st.D.copy(), st.t
+        self._read_books()

@@ -1,0 +1,107 @@
+"""Critical step of Eq. (23): the start estimate, the re-check at the current state, the reduction.
+
+omega_max of the sheet comes from matrix-free Lanczos on M^-1 K (``..timestep``), after mass scaling;
+the penalty springs (normal k and, with friction, tangential k_t) are combined with it
+(``contact.combined_critical_time_step``), and dt_crit = (2/omega)(sqrt(1 + xi^2) - xi), xi =
+alpha / (2 omega).  Times in seconds, frequencies in rad/s.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from ...contact import combined_critical_time_step, penalty_stiffness
+from ...errors import InputError
+from ..timestep import critical_time_step, estimate_omega_max
+
+
+@dataclass
+class StepLimit:
+    """The critical step of one problem at one state."""
+
+    omega_el: float            # highest frequency of the sheet alone [rad/s]
+    omega: float               # with the penalty springs
+    dt_crit: float             # [s]
+    method: str                # lanczos | power | tangent | given
+    k_pen: np.ndarray | None   # (N,) normal penalty stiffness, None without contact
+    k_max: np.ndarray | None   # (N,) largest contact Hessian eigenvalue per node
+    k_t: np.ndarray | None     # (N,) tangential stick stiffness, None without friction
+    n_evals: int = 0           # force evaluations spent on the estimate
+    seconds: float = 0.0       # wall time of the estimate
+    mode: np.ndarray | None = None   # the top mode (warm start of the re-checks)
+
+
+def omega_sheet(model, M, free_mask, D, s):
+    """(omega_el, method, force evaluations, mode) at the flat state D: Lanczos (or the method
+    asked), or 2 / critical_time_step when the user gave it."""
+    if s.critical_time_step is not None:
+        return 2.0 / s.critical_time_step, "given", 0, None
+    try:
+        est = estimate_omega_max(model.internal_force, M, free_mask, D.reshape(M.shape),
+                                 method=s.critical_step_method, tol=s.critical_step_tol,
+                                 tangent=getattr(model, "tangent", None))
+    except ValueError as exc:
+        raise InputError(f"cannot estimate the critical time step: {exc}") from None
+    return est.omega_max, s.critical_step_method, est.n_force_evals, est.mode
+
+
+def limit(omega_el, method, M, bodies, n_fric, s, alpha, n_evals=0, seconds=0.0, mode=None) -> StepLimit:
+    """Combine the sheet's omega_el with the penalty springs of ``bodies`` into a StepLimit."""
+    k_pen = k_max = k_t = None
+    omega = omega_el
+    if bodies:
+        k_pen = penalty_stiffness(M[:, 0], omega_el, s.contact_penalty_factor)
+        # the contact Hessian of a node has eigenvalues k (normal) and k_t (tangential, friction)
+        k_max = k_pen * max(1.0, s.friction_stiffness) if n_fric else k_pen
+        omega = 2.0 / combined_critical_time_step(omega_el, k_max, M[:, 0])
+        if n_fric:
+            k_t = s.friction_stiffness * k_pen
+    return StepLimit(omega_el, omega, critical_time_step(omega, alpha), method, k_pen, k_max, k_t,
+                     n_evals, seconds, mode)
+
+
+def estimate(model, M, free_mask, D, bodies, n_fric, s, alpha) -> StepLimit:
+    """The critical step at the flat state D (the start estimate)."""
+    t0 = time.perf_counter()
+    w, method, n_ev, mode = omega_sheet(model, M, free_mask, D, s)
+    return limit(w, method, M, bodies, n_fric, s, alpha, n_ev, time.perf_counter() - t0, mode)
+
+
+def initial_step(lim: StepLimit, s, alpha, info: dict) -> float:
+    """The step [s] of a new run: safety x dt_crit, or the user's dt if stable; a dt above dt_crit is
+    refused (InputError with the numbers) or reduced when allow_reduce (noted in ``info``)."""
+    dt_crit = lim.dt_crit
+    if s.dt is None:
+        return s.safety * dt_crit
+    if s.dt > dt_crit and not s.allow_unstable:
+        if not s.allow_reduce:
+            raise InputError(
+                f"dt = {s.dt:.6g} s exceeds the critical time step {dt_crit:.6g} s "
+                f"(omega_max = {lim.omega:.6g} rad/s, alpha = {alpha:g} 1/s, mass scaling {s.mass_scaling:g} "
+                f"{s.mass_scaling_mode}); use dt <= {s.safety * dt_crit:.6g} s, mass scaling, or allow_reduce=True")
+        info["dt_requested"] = s.dt
+        return s.safety * dt_crit
+    return s.dt
+
+
+def landing_step(dt: float, t_now: float, t_end: float) -> float:
+    """The largest step <= dt that lands an integer number of steps from t_now exactly on t_end."""
+    return (t_end - t_now) / int(math.ceil((t_end - t_now) / dt * (1.0 - 1e-12)))
+
+
+def recheck(model, M, free_mask, D, mode, lim: StepLimit, alpha):
+    """(dt_crit now, top mode) at the flat state D, warm-started from ``mode``; (None, mode) when the
+    estimate fails (e.g. an indefinite state: keep the step, the energy check still watches)."""
+    try:
+        est = estimate_omega_max(model.internal_force, M, free_mask, D.reshape(M.shape), tol=1e-4,
+                                 v0=mode if np.any(mode) else None)
+    except ValueError:
+        return None, mode
+    w = est.omega_max
+    if lim.k_max is not None:
+        w = 2.0 / combined_critical_time_step(w, lim.k_max, M[:, 0])
+    return critical_time_step(w, alpha), est.mode

@@ -121,7 +121,7 @@ class RigidBody:
         gap, n = self.penetration(x)
         p = np.maximum(-gap, 0.0)
         kp = np.asarray(k, dtype=float) * p
-        return kp[:, None] * n, 0.5 * float(np.add.reduce(kp * p))  # no BLAS: see explicit._dot
+        return kp[:, None] * n, 0.5 * float(np.add.reduce(kp * p))  # no BLAS: see explicit.kernels.dot
 
     def active(self, x) -> np.ndarray:
         """(N,) bool: points in contact (gap < 0)."""

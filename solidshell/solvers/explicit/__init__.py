@@ -58,11 +58,7 @@ def _drive(problem, settings, progress, relax) -> SolveResult:
     s = parse_settings(settings, relax)
     with threads_for(problem, s.threads) as n_threads:
         if s.restart:
-            integ = Integrator(problem, s, progress, _start=False)
-            st, _ = checkpoint.load(s.restart)
-            checkpoint.check_fingerprint(getattr(st, "fingerprint", {}), integ.fingerprint, s.restart)
-            integ._adopt(st, reestimate_step=False, new_segment=False)
-            integ.restarted_from = st.step
+            integ = Integrator.resume(problem, checkpoint.load(s.restart)[0], s, source=s.restart, progress=progress)
         else:
             integ = Integrator(problem, s, progress)
         integ.advance()

@@ -20,13 +20,14 @@ import numpy as np
 
 from ...errors import InputError, SolverError
 from ...problem import SolveResult, no_progress
-from . import checkpoint, ledger, observers, stepcontrol
+from . import checkpoint, ledger, observers, report, stepcontrol
 from .forces import Forces
 from .kernels import central_step, coefficients, dot, norm
 from .settings import RESTART_NEUTRAL, ExplicitSettings, RelaxSettings, parse_settings
 from .state import State
 
-STOPPED = ("done", "steady", "diverged", "nonfinite", "failed", "walltime", "interrupted")
+STATUSES = ("running", "done", "steady", "diverged", "nonfinite", "failed", "walltime", "interrupted")
+"""The status words of advance() and info["status"]."""
 
 
 def scaled_mass(model, scaling: float = 1.0, mode: str = "uniform") -> np.ndarray:
@@ -499,59 +500,10 @@ class Integrator:
         st, status = self.state, self.status
         D = st.good_D if status in ("nonfinite", "diverged") else st.D
         ok = (status == "done" and not self.relax) or status == "steady"
-        info = self._info(ok)
+        info = report.info(self, ok)
         self.progress_cb(1.0, self.message.replace("\n", " "))
         return SolveResult(U=D.reshape(self.shape).copy(), converged=bool(ok), message=self.message, info=info,
                            frames=list(zip(st.frame_t, st.frame_U)))
-
-    def _info(self, ok: bool) -> dict:
-        """summary.json's solver keys (public: never rename one)."""
-        st, lim, last = self.state, self.lim, self.state.last
-        info = {
-            "steps": int(st.step), "dt": float(st.dt), "dt_initial": float(st.dt_initial),
-            "critical_time_step": float(lim.dt_crit), "critical_time_step_min": float(st.dtc_min),
-            "time_step_rechecks": int(st.rechecks), "time_step_reductions": int(st.reductions),
-            "critical_time_step_sheet": float(stepcontrol.critical_time_step(lim.omega_el, self.alpha)),
-            "critical_step_method": lim.method, "omega_max": float(lim.omega),
-            "time_step_estimate_s": float(lim.seconds), "time_step_force_evals": int(lim.n_evals),
-            "safety": float(self.s.safety), "t_final": float(self.time_of(st.step)), "alpha": float(self.alpha),
-            "damping": self.damping, "mass_scaling": float(self.s.mass_scaling),
-            "mass_scaling_mode": self.s.mass_scaling_mode, "energy_balance_error": float(st.balance_err),
-            "max_interpenetrated_nodes": int(st.max_interp),
-            "wall_time_s": float(time.perf_counter() - self.wall0),
-            "element_steps_per_second": (float(self.n_elem * self.steps_done / self.t_loop)
-                                         if self.t_loop > 0 and self.steps_done else 0.0),
-            "converged": bool(ok), "steady_state_reached": self.status == "steady",
-            "final_kinetic_energy": float(st.last_ekin), "final_relative_residual": float(st.last_rel_res),
-            "kinetic_energy": float(last.get("Ek", 0.0)), "strain_energy": float(last.get("Es", 0.0)),
-            "external_work": float(last.get("Wext", 0.0)), "damping_dissipation": float(last.get("Edamp", 0.0)),
-            "contact_energy": float(last.get("Ec", 0.0)), "contact_work": float(st.contact_work),
-            "max_contact_nodes": int(st.max_contact),
-            "max_contact_penetration": float(st.max_pen),  # deepest, over every step (p = |f|/k)
-            "kinetic_resets": int(st.resets), "max_interpenetration_time": float(st.t_max_interp),
-            "interpenetrated_nodes_last_sample": int(last.get("interp", 0)), "status": self.status,
-        }
-        if self.n_fric:
-            info.update({
-                "friction": [float(m) for m in self.fric_of],
-                "friction_stiffness_ratio": float(self.s.friction_stiffness),
-                "friction_work": float(-st.fric_work),               # energy taken out by friction
-                "friction_stick_energy": float(last.get("Et", 0.0)),  # of it, still in the stick springs
-                "friction_dissipation": float(-st.fric_work - last.get("Et", 0.0)),
-                "max_slipping_nodes": int(st.max_slip),
-            })
-        if self.quasi:
-            info.update({"thickness_strain_energy_jump": float(st.q_jump),
-                         "thickness_strain_switch_samples": int(st.q_samples),
-                         "thickness_strain_corner_switches": int(st.q_corners)})
-        if st.segments:
-            info.update({"ledger_segments": int(st.segments) + 1, "remesh_energy_jump": float(st.remesh_energy_jump)})
-        info.update(self.info_dt)
-        if self.restarted_from is not None:
-            info["restarted_from_step"] = int(self.restarted_from)
-        if self.warnings:
-            info["warnings"] = list(self.warnings)
-        return info
 
     # ------------------------------------------------------------------ continuing a state
     @classmethod
@@ -567,11 +519,23 @@ class Integrator:
         integ._adopt(state, reestimate_step, new_segment)
         return integ
 
+    @classmethod
+    def resume(cls, problem, state: State, settings, *, source="the checkpoint", progress=no_progress,
+               relax: bool = False) -> "Integrator":
+        """Continue a checkpointed ``state`` (``checkpoint.load``) bit for bit: refused (InputError
+        naming the differing items) unless it was written by a run of this very problem and these
+        settings (``state.fingerprint``)."""
+        integ = cls(problem, settings, progress, relax=relax, _start=False)
+        checkpoint.check_fingerprint(getattr(state, "fingerprint", {}), integ.fingerprint, source)
+        integ._adopt(state, reestimate_step=False, new_segment=False)
+        integ.restarted_from = state.step
+        return integ
+
     def _adopt(self, st: State, reestimate_step: bool, new_segment: bool) -> None:
         self._check_sizes(st)
+        self.progress_cb(0.0, f"continuing at t = {st.t:.4g} s, step {st.step}")
         self.state = st
         if reestimate_step:
-            self.progress_cb(0.0, "estimating the critical time step")
             lim = stepcontrol.estimate(self.model, self.M, self.free_mask, st.D, self.bodies, self.n_fric,
                                        self.s, self.alpha)
         else:
@@ -592,7 +556,9 @@ class Integrator:
     def _check_sizes(self, st: State) -> None:
         n6 = 6 * self.N
         bad = [k for k, a in (("D", st.D), ("D_prev", st.D_prev)) if np.asarray(a).size != n6]
-        if np.asarray(st.anchors).shape != (self.n_fric, self.N, 3):
+        if not self.n_fric:
+            st.anchors = np.zeros((0, self.N, 3))   # nothing to remap without a frictional body
+        elif np.asarray(st.anchors).shape != (self.n_fric, self.N, 3):
             bad.append(f"anchors {np.asarray(st.anchors).shape} (want {(self.n_fric, self.N, 3)})")
         if bad:
             raise InputError(f"the state does not fit this problem ({self.N} nodes, {self.n_fric} frictional "
@@ -607,6 +573,7 @@ class Integrator:
         branch references there."""
         st = self.state
         ledger.close_segment(st)
+        st.D0 = st.D.copy()   # the new segment's external work starts here
         e = self.energies()
         ledger.open_segment(st, e["kinetic"], e["strain"], e["contact"], st.D)
         F, Es = self.forces.internal(st.D, True)

@@ -8,7 +8,6 @@ defaults are those of the solver since its first version (docs/explicit.md lists
 
 from __future__ import annotations
 
-import math
 import os
 from typing import Annotated, Any, Literal, Optional
 

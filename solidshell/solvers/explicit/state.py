@@ -7,6 +7,7 @@ the central-difference scheme, Eq. (23).  Times in seconds, energies in the mode
 from __future__ import annotations
 
 import copy
+import math
 
 import numpy as np
 
@@ -41,7 +42,7 @@ class State:
 
     def __init__(self, **kw):
         self.frame_t, self.frame_U, self.frame_k = [], [], []
-        self.good_D, self.good_t, self.last, self.last_rel_ke = None, 0.0, {}, math_inf()
+        self.good_D, self.good_t, self.last, self.last_rel_ke = None, 0.0, {}, math.inf
         self.__dict__.update(kw)
         missing = [k for k in FIELDS if k not in self.__dict__]
         if missing:
@@ -69,6 +70,3 @@ class State:
         self.frame_U = [np.array(u) for u in self.frame_U]
         return self
 
-
-def math_inf() -> float:
-    return float("inf")

@@ -113,10 +113,6 @@ def test_rigid_translation_decays_by_the_schemes_factor(sheet, alpha, dt, n_step
     assert r.info["kinetic_energy"] == pytest.approx(ek, rel=1e-9)
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "explicit.py books alpha dt E_kin,0 of damping work at the first sample (n = 0, "
-    "Edamp = damp_sum with its half-weight first term, not 0), so energy_balance_error is alpha dt "
-    "for any damped run started with a velocity (measured 2.5e-3 and 1.0e-2 here, exactly alpha dt)"))
 @pytest.mark.parametrize("alpha, dt, n_steps, ms, mode", TRANSLATION_CASES)
 def test_rigid_translation_energy_balance(sheet, alpha, dt, n_steps, ms, mode):
     """E_kin + E_damp is conserved: with the trapezoidal E_damp of the central velocities the exact

@@ -333,7 +333,8 @@ class Integrator:
         Ek, Es = 0.5 * vMv, f["Es"]
         st.ekin_max = max(st.ekin_max, Ek)
         Wext = ledger.external_work(st, self.P, D)
-        Edamp = st.damp_sum - (0.5 * self.alpha * st.dt * vMv if n > 0 else 0.0)
+        # the trapezoidal sum up to t_n: the n-th term weighs half (at n = 0 too: E_damp(0) = 0)
+        Edamp = st.damp_sum - 0.5 * self.alpha * st.dt * vMv
         Ecn = f["Ec"] if self.bodies else 0.0
         if self.quasi:
             n_int, qf = self.forces.interp_and_branches(D)

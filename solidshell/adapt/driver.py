@@ -28,6 +28,8 @@ from .criteria import leaf_bending_strain, level_side_lengths, mark
 from .forest import ActiveMesh, AdaptiveMesh
 from .settings import AdaptSettings
 from .transfer import fill_new_nodes
+from ..solvers.blas import single_threaded_blas
+from ..solvers.explicit import Integrator, checkpoint, parse_settings, threads_for
 
 _STATE_PREFIX = "adapt_"
 _REMESH_KEYS = ("t", "step", "splits", "merges", "nodes_in", "nodes_out", "active_nodes", "energy_jump",
@@ -82,8 +84,6 @@ class AdaptiveRun:
     def restart(self, path) -> None:
         """Continue from a checkpoint written by this driver (bit for bit: the saved step, no new
         ledger segment); the meshes of the kept frames are rebuilt from their saved leaf states."""
-        from ..solvers.explicit import checkpoint
-
         state, extra = checkpoint.load(path)
         if _STATE_PREFIX + "segments" not in extra:
             raise InputError(f"restart file {path} was not written by an adaptive run")
@@ -132,7 +132,8 @@ class AdaptiveRun:
         if self.integ is None:
             self.start()
         while True:
-            status = self.integ.advance(self.adapt.every)
+            with threads_for(self.integ, self.settings.threads):   # 1 thread on small meshes
+                status = self.integ.advance(self.adapt.every)
             if status != "running":
                 break
             t0 = time.perf_counter()
@@ -268,13 +269,12 @@ def _remap_anchors(anchors, old_nodes, new_nodes, Nb):
     return full[:, new_nodes]
 
 
+@single_threaded_blas
 def run_adaptive(level0, make_problem, settings, adapt: AdaptSettings, *, relax: bool, curves=None,
                  progress=no_progress, restart=None) -> AdaptiveOutput:
     """Run an adaptive explicit (``relax=False``) or relaxation (``relax=True``) drape from the
     level-0 mesh ``level0``; ``make_problem(mesh) -> Problem`` poses the scene on any active mesh."""
-    from ..solvers.explicit import Integrator
-
-    run = AdaptiveRun(level0, make_problem, Integrator, settings, adapt, relax=relax, curves=curves,
+    run = AdaptiveRun(level0, make_problem, Integrator, parse_settings(settings, relax), adapt, relax=relax, curves=curves,
                       progress=progress)
     if restart:
         run.restart(restart)

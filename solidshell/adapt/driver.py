@@ -28,17 +28,23 @@ from .criteria import leaf_bending_strain, level_side_lengths, mark
 from .forest import ActiveMesh, AdaptiveMesh
 from .settings import AdaptSettings
 from .transfer import fill_new_nodes
+from ..solvers.blas import single_threaded_blas
+from ..solvers.explicit import Integrator, checkpoint, parse_settings, threads_for
 
 _STATE_PREFIX = "adapt_"
+_REMESH_KEYS = ("t", "step", "splits", "merges", "nodes_in", "nodes_out", "active_nodes", "energy_jump",
+                "kinetic_before")
 
 
 @dataclass
 class Segment:
-    """One mesh of the run: valid from simulated time t0 [s] (step0) until the next remesh."""
+    """One mesh of the run: valid from simulated time t0 [s] (step0) until the next remesh; ``leaves``
+    is the leaf state that rebuilds it (kept in checkpoints while a kept frame lies on this mesh)."""
 
     t0: float
     step0: int
     active: ActiveMesh
+    leaves: dict
 
 
 @dataclass
@@ -59,7 +65,7 @@ class AdaptiveRun:
     def __init__(self, level0, make_problem, integrator_cls, settings, adapt: AdaptSettings, *, relax: bool,
                  curves=None, progress=no_progress):
         self.make_problem, self.cls, self.settings, self.adapt = make_problem, integrator_cls, settings, adapt
-        self.relax, self.progress = relax, progress or no_progress
+        self.relax, self.progress = relax, _monotone(progress or no_progress)
         self.bg = BackgroundMesh.from_level0(level0, adapt.levels, curves if adapt.project_boundary else None)
         self.L = level_side_lengths(self.bg)
         self.forest = AdaptiveMesh(self.bg)
@@ -77,36 +83,57 @@ class AdaptiveRun:
 
     def restart(self, path) -> None:
         """Continue from a checkpoint written by this driver (bit for bit: the saved step, no new
-        ledger segment)."""
-        from ..solvers.explicit import checkpoint
-
+        ledger segment); the meshes of the kept frames are rebuilt from their saved leaf states."""
         state, extra = checkpoint.load(path)
-        arrays = {k[len(_STATE_PREFIX):]: v for k, v in extra.items() if k.startswith(_STATE_PREFIX)}
-        if not arrays:
+        if _STATE_PREFIX + "segments" not in extra:
             raise InputError(f"restart file {path} was not written by an adaptive run")
-        self.forest = AdaptiveMesh.from_state_arrays(self.bg, arrays)
-        act = self.forest.active_mesh()
+        for i, (t0, step0) in enumerate(np.asarray(extra[_STATE_PREFIX + "segments"]).reshape(-1, 2)):
+            pre = f"{_STATE_PREFIX}s{i}_"
+            leaves = {k[len(pre):]: v for k, v in extra.items() if k.startswith(pre)}
+            forest = AdaptiveMesh.from_state_arrays(self.bg, leaves)
+            self.segments.append(Segment(float(t0), int(step0), forest.active_mesh(), leaves))
+        self.history = [(float(t), int(n), int(m)) for t, n, m in extra[_STATE_PREFIX + "history"]]
+        self.remeshes = [dict(zip(_REMESH_KEYS, (float(x) if k in ("t", "energy_jump", "kinetic_before") else int(x)
+                                                  for k, x in zip(_REMESH_KEYS, row))))
+                         for row in extra[_STATE_PREFIX + "remeshes"]]
+        self.remesh_seconds = float(extra[_STATE_PREFIX + "remesh_seconds"])
+        self.forest = AdaptiveMesh.from_state_arrays(self.bg, self.segments[-1].leaves)
+        act = self.segments[-1].active
         integ = self.cls.from_state(self.make_problem(act.mesh), state, self.settings, reestimate_step=False,
                                     new_segment=False, progress=self.progress, relax=self.relax)
         integ.restarted_from = state.step
-        self._enter(integ, act)
+        self._enter(integ, act, new_segment=False)
 
-    def _enter(self, integ, act: ActiveMesh) -> None:
+    def _enter(self, integ, act: ActiveMesh, new_segment: bool = True) -> None:
         self.integ, self.active = integ, act
         st = integ.state
-        self.segments.append(Segment(st.t, st.step, act))
-        self.history.append((float(st.t), int(act.mesh.n_nodes), int(act.mesh.n_elements)))
+        if new_segment:
+            self.segments.append(Segment(st.t, st.step, act, self.forest.state_arrays()))
+            self.history.append((float(st.t), int(act.mesh.n_nodes), int(act.mesh.n_elements)))
         integ.checkpoint_extra = self._checkpoint_arrays
 
     def _checkpoint_arrays(self) -> dict:
-        return {_STATE_PREFIX + k: v for k, v in self.forest.state_arrays().items()}
+        """The segments that kept frames lie on (and the current one), each with its leaf state."""
+        frames = self.integ.state
+        used = {self._segment_of(t, U) for t, U in zip(frames.frame_t, frames.frame_U)}
+        used.add(len(self.segments) - 1)
+        keep = sorted(used)
+        out = {_STATE_PREFIX + "segments": np.array([[self.segments[i].t0, self.segments[i].step0] for i in keep]),
+               _STATE_PREFIX + "history": np.array(self.history, dtype=float).reshape(-1, 3),
+               _STATE_PREFIX + "remeshes": np.array([[r[k] for k in _REMESH_KEYS] for r in self.remeshes],
+                                                    dtype=float).reshape(-1, len(_REMESH_KEYS)),
+               _STATE_PREFIX + "remesh_seconds": np.asarray(self.remesh_seconds)}
+        for j, i in enumerate(keep):
+            out.update({f"{_STATE_PREFIX}s{j}_{k}": v for k, v in self.segments[i].leaves.items()})
+        return out
 
     # ------------------------------------------------------------------ the loop (§5.5 c-g)
     def run(self) -> AdaptiveOutput:
         if self.integ is None:
             self.start()
         while True:
-            status = self.integ.advance(self.adapt.every)
+            with threads_for(self.integ, self.settings.threads):   # 1 thread on small meshes
+                status = self.integ.advance(self.adapt.every)
             if status != "running":
                 break
             t0 = time.perf_counter()
@@ -141,6 +168,7 @@ class AdaptiveRun:
     def _switch(self, new: ActiveMesh, n_split: int, n_merge: int) -> None:
         old, integ = self.active, self.integ
         st = integ.state
+        e_before = integ.energies()
         Nb = len(self.bg.Xo)
         inserted = np.setdiff1d(new.nodes, old.nodes, assume_unique=True)
         known = np.zeros(Nb, dtype=bool)
@@ -154,7 +182,6 @@ class AdaptiveRun:
         st.D, st.D_prev = moved
         st.anchors = _remap_anchors(st.anchors, old.nodes, new.nodes, Nb)
         problem = self.make_problem(new.mesh)
-        e_before = integ.energies()
         jump0 = st.remesh_energy_jump
         self.integ = self.cls.from_state(problem, st, self.settings, reestimate_step=self._needs_new_step(old, new),
                                          progress=self.progress, relax=self.relax)
@@ -183,15 +210,19 @@ class AdaptiveRun:
         series = self._series(res.frames)
         return AdaptiveOutput(result=res, mesh=self.active.mesh, series=series, active=self.active)
 
+    def _segment_of(self, t: float, U) -> int:
+        """Index of the segment a kept frame (t, U) lies on: the last one started at or before t
+        whose mesh has U's node count (a frame at a remesh time was kept on the mesh before it)."""
+        n = np.asarray(U).size // 6
+        for i in range(len(self.segments) - 1, -1, -1):
+            s = self.segments[i]
+            if s.t0 <= t + 1e-12 and s.active.mesh.n_nodes == n:
+                return i
+        raise RuntimeError(f"no mesh of this run has {n} nodes at t = {t} s")   # a bug, not user input
+
     def _series(self, frames) -> list:
-        out = []
-        for t, U in frames:
-            n = np.asarray(U).reshape(-1, 6).shape[0]
-            seg = next((s for s in reversed(self.segments) if s.t0 <= t + 1e-12 and s.active.mesh.n_nodes == n), None)
-            if seg is None:
-                seg = next(s for s in reversed(self.segments) if s.active.mesh.n_nodes == n)
-            out.append((float(t), seg.active.mesh, np.asarray(U).reshape(-1, 6)))
-        return out
+        return [(float(t), self.segments[self._segment_of(t, U)].active.mesh, np.asarray(U).reshape(-1, 6))
+                for t, U in frames]
 
     def summary_info(self) -> dict:
         counts = [h[1] for h in self.history]
@@ -212,6 +243,17 @@ class AdaptiveRun:
         }
 
 
+def _monotone(cb):
+    """A progress callback whose fraction never goes back (each new mesh's integrator starts its
+    own estimate from zero)."""
+    best = [0.0]
+
+    def call(fraction, text=""):
+        best[0] = max(best[0], float(fraction))
+        cb(best[0], text)
+    return call
+
+
 def _same_leaves(a: dict, b: dict) -> bool:
     return a.keys() == b.keys() and all(np.array_equal(a[k], b[k]) for k in a)
 
@@ -227,13 +269,12 @@ def _remap_anchors(anchors, old_nodes, new_nodes, Nb):
     return full[:, new_nodes]
 
 
+@single_threaded_blas
 def run_adaptive(level0, make_problem, settings, adapt: AdaptSettings, *, relax: bool, curves=None,
                  progress=no_progress, restart=None) -> AdaptiveOutput:
     """Run an adaptive explicit (``relax=False``) or relaxation (``relax=True``) drape from the
     level-0 mesh ``level0``; ``make_problem(mesh) -> Problem`` poses the scene on any active mesh."""
-    from ..solvers.explicit import Integrator
-
-    run = AdaptiveRun(level0, make_problem, Integrator, settings, adapt, relax=relax, curves=curves,
+    run = AdaptiveRun(level0, make_problem, Integrator, parse_settings(settings, relax), adapt, relax=relax, curves=curves,
                       progress=progress)
     if restart:
         run.restart(restart)

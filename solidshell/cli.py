@@ -92,6 +92,9 @@ def _parser() -> argparse.ArgumentParser:
                    help="explicit/relax: save the state to FILE while running (solver.<kind>.checkpoint)")
     r.add_argument("--restart", metavar="FILE",
                    help="explicit/relax: continue from the checkpoint FILE (solver.<kind>.restart)")
+    r.add_argument("--adaptive", action="store_true",
+                   help="reversible adaptive 1-to-4 subdivision (paper §5; explicit/relax only), from the "
+                        "scene's mesh.adaptive_level0 or --mesh; settings: --set adapt.KEY=VALUE")
     r.add_argument("--no-progress", action="store_true", help="no progress bar")
     _common(r)
     return p
@@ -147,7 +150,8 @@ def _cmd_run(args) -> int:
     extra = {k: getattr(args, k) for k in ("checkpoint", "restart") if getattr(args, k)}
     res = run_scene(args.scene, mesh=args.mesh, solver=args.solver, out_dir=out_dir,
                     progress=not args.no_progress, overrides=parse_overrides(args.set),
-                    force=args.force, allow_large=args.allow_large, **extra)
+                    force=args.force, allow_large=args.allow_large,
+                    adaptive=True if args.adaptive else None, **extra)
     s = res.summary
     c = s["counts"]
     status = ("INTERRUPTED" if s.get("interrupted") else "converged" if s.get("converged")
@@ -157,7 +161,8 @@ def _cmd_run(args) -> int:
         line += f" -- {s['message']}"
     print(line)
     extras = [f"{k} = {s[k]:.4g}" if isinstance(s[k], float) else f"{k} = {s[k]}"
-              for k in ("drape_coefficient", "fold_count", "interpenetrated_nodes", "max_displacement")
+              for k in ("drape_coefficient", "fold_count", "interpenetrated_nodes", "max_displacement",
+                        "max_active_nodes", "remesh_count", "max_interpenetrated_nodes")
               if s.get(k) is not None]
     if extras:
         print("  " + ", ".join(extras))

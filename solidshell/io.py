@@ -337,3 +337,33 @@ def mesh_counts(mesh, fixed=None) -> dict:
         c["fixed_dofs"] = nf
         c["free_dofs"] = c["dofs"] - nf
     return c
+
+
+
+def series_frame_paths(path, n: int) -> list[Path]:
+    """The VTU files of an n-frame :func:`write_mesh_series` collection ``path`` (beside it)."""
+    path = Path(path)
+    return [path.with_name(f"{path.stem}_{i:05d}.vtu") for i in range(n)]
+
+
+def write_mesh_series(path, frames, run_id: str | None = None) -> Path:
+    """ParaView collection (``.pvd``) of ``frames`` = [(t, ShellMesh, U (N,6)), ...] whose meshes may
+    differ from frame to frame (an adaptive run): one VTU per frame beside the .pvd
+    (:func:`series_frame_paths`), each with its undeformed mesh and the ``displacement`` /
+    ``director_displacement`` fields (in ParaView, Warp By Vector on ``displacement`` shows the
+    drape); the .pvd is written last, atomically."""
+    from xml.sax.saxutils import quoteattr
+
+    path = Path(path)
+    rows = []
+    for p, (t, mesh, U) in zip(series_frame_paths(path, len(frames)), frames):
+        write_mesh_file(p, mesh, U, run_id=run_id)
+        rows.append(f'    <DataSet timestep="{float(t)!r}" part="0" file={quoteattr(p.name)}/>\n')
+    with atomic_path(path) as tmp:
+        with open(tmp, "w", encoding="utf-8") as f:
+            f.write('<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n  <Collection>\n')
+            f.writelines(rows)
+            f.write("  </Collection>\n</VTKFile>\n")
+        if run_id is not None:
+            stamp_xml(tmp, run_id)
+    return path

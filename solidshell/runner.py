@@ -354,7 +354,7 @@ def _analyse(scene: Scene, mesh, U, model=None) -> dict:
 
 # --------------------------------------------------------------------------- the run
 def run_scene(scene, mesh=None, solver=None, out_dir=None, progress=True, overrides=None, *,
-              force=False, allow_large=False, **settings) -> RunOutput:
+              force=False, allow_large=False, adaptive=None, **settings) -> RunOutput:
     """Run a scene (a name, a .toml path or a Scene).
 
     mesh        : None (the scene's density), a density like "24x8x4", a mesh file, or a ShellMesh
@@ -365,6 +365,9 @@ def run_scene(scene, mesh=None, solver=None, out_dir=None, progress=True, overri
     overrides   : dotted scene keys, e.g. {"solver.static.c": 2e-3, "material.warp_angle": 90}
     force       : write into a folder that holds files solidshell did not write (left untouched)
     allow_large : skip the size guard (estimated memory against the machine's available memory)
+    adaptive    : True/False switch the scene's adaptive subdivision (§5) on/off (None: the scene's
+                  ``adapt.enabled``); an adaptive run starts from ``mesh`` or the scene's
+                  ``mesh.adaptive_level0`` and needs the explicit or relax solver
     settings    : overrides of the chosen solver's settings (e.g. t_end=0.4, alpha=1.0)
 
     Everything is checked before any file is written (InputError): the scene and its overrides,
@@ -379,6 +382,8 @@ def run_scene(scene, mesh=None, solver=None, out_dir=None, progress=True, overri
     t_start = time.perf_counter()
     timings = {}
     sc = load(scene)
+    if adaptive is not None:
+        overrides = {**(overrides or {}), "adapt.enabled": bool(adaptive)}
     sc = sc.with_overrides(overrides)
     kind = sc.solver["kind"] if solver is None else str(solver)
     if kind not in ("none", "static", "explicit", "relax"):
@@ -423,8 +428,11 @@ def _run(sc, kind, mesh_arg, out_dir, cb, settings, timings, t_start, overrides=
         folder = RunFolder(out_dir, run_id, force=force,
                            keep=[s.get(k) for k in ("checkpoint", "restart")] if s else ())
         folder.check()
+    adapt = adapt_settings(sc, kind)
     cb(0.0, "meshing")
     t = time.perf_counter()
+    if adapt is not None and mesh_arg is None:
+        mesh_arg = sc.mesh["adaptive_level0"] or sc.density
     mesh, mesh_name = build_scene_mesh(sc, mesh_arg, kind, allow_large)
     fixed = support_mask(sc, mesh)            # unknown / empty node sets fail here, before solving
     material = sc.material_object()
@@ -432,6 +440,10 @@ def _run(sc, kind, mesh_arg, out_dir, cb, settings, timings, t_start, overrides=
     bodies = contact_bodies(sc)
     if kind != "none":
         check_initial_contact(sc, mesh, fixed, bodies, U0=s.get("U0"))
+    adaptive_run = None
+    if adapt is not None:       # builds the background mesh: its checks (quads only, memory) come now
+        adaptive_run = _adaptive_run(sc, mesh, s, adapt, kind, cb)
+        mesh_name = f"{mesh_name} adaptive ({adapt.levels} levels)"
     timings["mesh"] = time.perf_counter() - t
     if folder is not None and folder.foreign:
         warnings.append(f"output folder {folder.path} holds {len(folder.foreign)} file(s) solidshell did "
@@ -463,6 +475,7 @@ def _run(sc, kind, mesh_arg, out_dir, cb, settings, timings, t_start, overrides=
     U = np.zeros((mesh.n_nodes, 6))
     result = None
     model = None
+    series = None                                  # adaptive: [(t, mesh, U)] on each frame's own mesh
     if kind != "none":
         try:
             cb(0.05, "setting up")
@@ -472,11 +485,22 @@ def _run(sc, kind, mesh_arg, out_dir, cb, settings, timings, t_start, overrides=
                 fn = solvers.get(kind)
             except ImportError as e:
                 raise SolverError(f"solver {kind!r} is not available in this installation ({e})") from None
-            problem = build_problem(sc, mesh, fixed)
-            model = problem.model
-            timings["setup"] = time.perf_counter() - t
-            t = time.perf_counter()
-            result = fn(problem, dict(s), _phase(cb, 0.08, 0.9))
+            if adaptive_run is None:
+                problem = build_problem(sc, mesh, fixed)
+                model = problem.model
+                timings["setup"] = time.perf_counter() - t
+                t = time.perf_counter()
+                result = fn(problem, dict(s), _phase(cb, 0.08, 0.9))
+            else:
+                timings["setup"] = time.perf_counter() - t
+                t = time.perf_counter()
+                adaptive_out = adaptive_run.run()
+                result, mesh = adaptive_out.result, adaptive_out.mesh
+                series = adaptive_out.series
+                fixed = support_mask(sc, mesh)
+                model = adaptive_run.integ.model
+                summary["counts"] = sio.mesh_counts(mesh, fixed)
+                summary["area"] = float(mesh.area())
             timings["solve"] = time.perf_counter() - t
         except BaseException:
             # bad input found by the solver, a solver error before any state, Ctrl-C with no state
@@ -521,7 +545,7 @@ def _run(sc, kind, mesh_arg, out_dir, cb, settings, timings, t_start, overrides=
         replaced = folder.clear_stale()
         if replaced:
             summary["replaced_files"] = replaced
-        files += _write_outputs(folder, sc, kind, mesh, mesh_name, U, result, summary, snaps, cb)
+        files += _write_outputs(folder, sc, kind, mesh, mesh_name, U, result, summary, snaps, cb, series)
         timings["write_results"] = time.perf_counter() - t
     timings["total"] = time.perf_counter() - t_start
     summary["timings"] = {k: round(v, 4) for k, v in timings.items()}
@@ -534,6 +558,46 @@ def _run(sc, kind, mesh_arg, out_dir, cb, settings, timings, t_start, overrides=
     summary = sio.to_jsonable(summary)
     return RunOutput(summary=summary, U=U, mesh=mesh, out_dir=folder.path if folder else None, scene=sc,
                      result=result, files=[Path(f) for f in files], run_id=run_id)
+
+
+def adapt_settings(scene: Scene, kind: str):
+    """The scene's AdaptSettings when adaptivity is on (None when off); InputError when it is asked
+    of a solver that cannot host it (§5.5: remeshing happens between the steps of a dynamic run)."""
+    if not scene.adapt.get("enabled", False):
+        return None
+    from .adapt.settings import parse_adapt
+
+    adapt = parse_adapt(scene.adapt, f"{scene.source}: adapt")
+    if kind not in ("explicit", "relax"):
+        raise InputError(f"adaptive subdivision runs inside a dynamic run (--solver explicit or relax, "
+                         f"paper §5.5); the {kind} solver is not adaptive")
+    return adapt
+
+
+def boundary_curves(scene: Scene):
+    """The true curves of a recipe's curved boundaries (circles about the origin), for placing new
+    boundary nodes on them (§5.1); None for straight-sided sheets."""
+    from .adapt import circle_projector
+
+    g = scene.geometry
+    if scene.recipe == "disc_on_disc":
+        return circle_projector((0.0, 0.0), (g["pedestal_diameter"] / 2.0, g["diameter"] / 2.0))
+    if scene.recipe == "square_on_disc":
+        return circle_projector((0.0, 0.0), g["pedestal_diameter"] / 2.0)
+    return None
+
+
+def _adaptive_run(sc: Scene, level0, settings: dict, adapt, kind: str, cb):
+    """The §5.5 driver for this scene, built (background mesh and all) but not started."""
+    from .adapt.driver import AdaptiveRun
+    from .solvers.explicit import Integrator, parse_settings
+
+    s = dict(settings)
+    restart = s.pop("restart", None)
+    run = AdaptiveRun(level0, lambda m: build_problem(sc, m), Integrator, parse_settings(s, kind == "relax"),
+                      adapt, relax=kind == "relax", curves=boundary_curves(sc), progress=_phase(cb, 0.08, 0.9),
+                      restart=restart)
+    return run
 
 
 def _state_warnings(summary: dict, info: dict) -> list[str]:
@@ -585,8 +649,9 @@ def _snapshot_plan(sc, kind, result) -> list:
     return out
 
 
-def _write_outputs(folder, sc, kind, mesh, mesh_name, U, result, summary, snaps, cb) -> list:
-    """Write a run's files (each stamped with the run id) into its folder; returns their paths."""
+def _write_outputs(folder, sc, kind, mesh, mesh_name, U, result, summary, snaps, cb, series=None) -> list:
+    """Write a run's files (each stamped with the run id) into its folder; returns their paths.
+    ``series`` (an adaptive run): [(t, mesh, U)], each frame on its own mesh -> series.pvd of VTUs."""
     rid = folder.run_id
     files = [folder.write(name, sio.write_mesh_file, mesh, run_id=rid) for name in ("mesh.xdmf", "mesh.vtu")]
     finite = result is not None and bool(np.all(np.isfinite(U)))
@@ -596,7 +661,11 @@ def _write_outputs(folder, sc, kind, mesh, mesh_name, U, result, summary, snaps,
         if finite:
             files.append(folder.write("deformed.vtu", sio.write_mesh_file, mesh, U, deformed=True, run_id=rid))
         frames = [(float(tf), Uf) for tf, Uf in (result.frames or [])]
-        if len(frames) > 1:
+        if series is not None and len(series) > 1:
+            files.append(folder.write("series.pvd", sio.write_mesh_series, series, run_id=rid))
+            files += sio.series_frame_paths(folder.path / "series.pvd", len(series))
+            summary["series_parameter"] = "time [s]"
+        elif len(frames) > 1:
             files.append(folder.write("series.xdmf", sio.write_time_series, mesh, frames, run_id=rid))
             summary["series_parameter"] = "time [s]" if kind in ("explicit", "relax") else "load factor"
     boundary = summary.get("projected_boundary")
@@ -623,8 +692,11 @@ def _write_outputs(folder, sc, kind, mesh, mesh_name, U, result, summary, snaps,
     for ts, j, _ in snaps:
         if j is not None:
             tj = float(result.frames[j][0])
-            files.append(folder.write(f"iso_t{ts:.3f}.png", picture, mesh, result.frames[j][1], view="iso",
-                                      title=sc.title, scene=sc, subtitle=f"t = {tj:.3f} s"))
+            mj = mesh if series is None else series[j][1]
+            sub_j = f"t = {tj:.3f} s" + ("" if series is None else f", {mj.n_nodes} active nodes")
+            for view in ("iso", "top") if series is not None else ("iso",):
+                files.append(folder.write(f"{view}_t{ts:.3f}.png", picture, mj, result.frames[j][1], view=view,
+                                          title=sc.title, scene=sc, subtitle=sub_j))
     return files
 
 

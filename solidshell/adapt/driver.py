@@ -63,7 +63,7 @@ class AdaptiveRun:
     continues a state on a new problem)."""
 
     def __init__(self, level0, make_problem, integrator_cls, settings, adapt: AdaptSettings, *, relax: bool,
-                 curves=None, progress=no_progress):
+                 curves=None, progress=no_progress, restart=None):
         self.make_problem, self.cls, self.settings, self.adapt = make_problem, integrator_cls, settings, adapt
         self.relax, self.progress = relax, _monotone(progress or no_progress)
         self.bg = BackgroundMesh.from_level0(level0, adapt.levels, curves if adapt.project_boundary else None)
@@ -74,6 +74,7 @@ class AdaptiveRun:
         self.remeshes = []         # per remesh: t, splits, merges, nodes in/out, energy jump
         self.remesh_seconds = 0.0
         self.integ = None
+        self.restart_path = restart
 
     # ------------------------------------------------------------------ start / restart
     def start(self) -> None:
@@ -128,9 +129,12 @@ class AdaptiveRun:
         return out
 
     # ------------------------------------------------------------------ the loop (§5.5 c-g)
+    @single_threaded_blas
     def run(self) -> AdaptiveOutput:
+        """Steps c-g of §5.5 until the integrator stops (t_end, steady state, a failure, Ctrl-C)."""
+        wall0 = time.perf_counter()
         if self.integ is None:
-            self.start()
+            self.restart(self.restart_path) if self.restart_path else self.start()
         while True:
             with threads_for(self.integ, self.settings.threads):   # 1 thread on small meshes
                 status = self.integ.advance(self.adapt.every)
@@ -139,7 +143,11 @@ class AdaptiveRun:
             t0 = time.perf_counter()
             self._adapt_pass()
             self.remesh_seconds += time.perf_counter() - t0
-        return self._output()
+        out = self._output()
+        wall = time.perf_counter() - wall0
+        out.result.info["adaptive_wall_time_s"] = float(wall)
+        out.result.info["remesh_share"] = float(self.remesh_seconds / wall) if wall > 0 else 0.0
+        return out
 
     def _marks(self):
         st = self.integ.state
@@ -269,13 +277,9 @@ def _remap_anchors(anchors, old_nodes, new_nodes, Nb):
     return full[:, new_nodes]
 
 
-@single_threaded_blas
 def run_adaptive(level0, make_problem, settings, adapt: AdaptSettings, *, relax: bool, curves=None,
                  progress=no_progress, restart=None) -> AdaptiveOutput:
     """Run an adaptive explicit (``relax=False``) or relaxation (``relax=True``) drape from the
     level-0 mesh ``level0``; ``make_problem(mesh) -> Problem`` poses the scene on any active mesh."""
-    run = AdaptiveRun(level0, make_problem, Integrator, parse_settings(settings, relax), adapt, relax=relax, curves=curves,
-                      progress=progress)
-    if restart:
-        run.restart(restart)
-    return run.run()
+    return AdaptiveRun(level0, make_problem, Integrator, parse_settings(settings, relax), adapt, relax=relax,
+                       curves=curves, progress=progress, restart=restart).run()

@@ -139,6 +139,18 @@ class _System:
         self.factorization = factorization
         self.chol = Cholesky() if factorization == "cholmod" else SuperLUDefinite()
         self._has_ef = hasattr(model, "energy_and_force")
+        # step sizes are measured in length: a director dof (unit-free, Eq. 1) counts as the motion
+        # h/2 |dU_n| of the shell's faces, so that every step control is the same in any unit
+        # system (a max over raw dofs would mix cm and 1 and change with the length unit)
+        h = float(getattr(model.material, "thickness", 1.0))
+        w = np.ones((n, 6))
+        w[:, 3:] = 0.5 * h
+        self.w = w.ravel()
+        self.w_free = self.w[self.free]
+
+    def maxnorm(self, v, free=False):
+        """max |w v| [length]: translations as they are, director dofs times h/2."""
+        return float(np.abs((self.w_free if free else self.w) * v).max(initial=0.0))
 
     # -- vectors
     def _presc_at(self, lam):
@@ -372,8 +384,8 @@ def _newton_level(sys, D, lam, o, stats):
                 stats["criterion"] = "residual"
                 return D, True, f"converged in {it} iterations", rel
             return D, False, "no descent direction (non-finite or uphill Newton step)", rel
-        pmax = float(np.abs(p).max())
-        dmax = float(np.abs(D).max())
+        pmax = sys.maxnorm(p)
+        dmax = sys.maxnorm(D)
         if fresh and sigma == 0.0 and pmax <= o.disp_tol * dmax:
             # scale-free test: with a positive-definite (unshifted) K_t the Newton correction p is
             # the error of D to first order, and it is below disp_tol of the displacement
@@ -518,7 +530,7 @@ def _paper_level(sys, D, lam, o, stats):
         sys.n_factor += 1
         if not np.all(np.isfinite(dD)):
             return D, False, f"singular tangent K_t at iteration {it} (non-finite increment)", rel
-        m = float(np.abs(dD).max())
+        m = sys.maxnorm(dD, free=True)
         mult = min(1.0, o.c * o.L_f / m) if m > 0 else 1.0
         stats["min_multiplier"] = min(stats["min_multiplier"], mult)
         D = D.copy()
@@ -829,7 +841,7 @@ def _leave_saddle(sys, D, lam, o, stats, step_frac):
     diag = float(np.abs(A.diagonal()).max())
     if lmin >= -1e-13 * diag:
         return None, lmin                  # singular, not indefinite: nothing to leave along
-    v = v / float(np.abs(v).max())
+    v = v / sys.maxnorm(v, free=True)
     Pi0, _ = sys.potential_and_gradient(D, lam)
     best, Dbest = Pi0, None
     for t in step_frac * o.L_f * 0.25 ** np.arange(5):
@@ -862,6 +874,7 @@ def _seek_minimum(sys, D, lam, o, stats, max_escapes, step_frac, info_w):
         info_w.append(f"static: left a saddle at load factor {lam:.4g} (tangent eigenvalue "
                       f"{lmin:.3g}) along its negative-curvature direction")
         stats.pop("rel0", None)
+        stats["on_iter"] = None
         D, ok, msg, _ = _newton_level(sys, Dn, lam, o, stats)
         if not ok:
             return D, False, f"after leaving a saddle (eigenvalue {lmin:.3g}) Newton failed: {msg}"
@@ -928,7 +941,14 @@ def solve_static(model, fixed, loads, load_factors=None, method="newton", prescr
     the last Newton loop ("residual", "displacement", "round-off" or "zero load").
     """
     t0 = time.perf_counter()
-    progress = progress or no_progress
+    user_progress = progress or no_progress
+    shown = [0.0]
+
+    def progress(fraction, text=""):
+        # the bar never moves back (a cut-back or a saddle escape restarts a load step's count)
+        shown[0] = max(shown[0], min(float(fraction), 1.0))
+        user_progress(shown[0], text)
+
     progress(0.0, "static: setting up")
     if method not in METHODS:
         raise InputError(f"unknown static method {method!r}; choose one of: {', '.join(METHODS)}")

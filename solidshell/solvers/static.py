@@ -42,12 +42,32 @@ Methods (``method=``)
     second eigenvalue crosses zero the path may turn onto another branch
     (``max_negative_eigenvalues_on_path`` > 1 in info flags this).
 
-Convergence (all methods): relative residual |P - F|_free / max(|P|, |reactions|) <= ``tol``
-(default 1e-8) and energy norm |dD . (P - F)| of the last update <= ``energy_tol`` (1e-12) times that
-of the first iteration of the step.  The final state is checked for stability: ``positive_definite``
+Convergence (all methods): relative residual |P - F|_free / max(|P|, |reactions|, |F_free|) <=
+``tol`` (default 1e-8) and energy norm |dD . (P - F)| of the last update <= ``energy_tol`` (1e-12)
+times that of the first iteration of the step.  Newton also stops (``info["criterion"]``) when
+- "displacement": the Newton correction of a positive-definite, unshifted K_t is below ``disp_tol``
+  (1e-10) of max|D| -- to first order it *is* the error of D, so this test is free of any force or
+  length scale;
+- "round-off": neither the potential nor the residual can be lowered any more because the predicted
+  decrease is below the round-off of Pi (1e-11 of |Pi| + |lam P.D|), K_t is positive definite and
+  the Newton correction is below 1e-6 of max|D|.
+Step sizes (trust radius, max_step, the paper's max|dD|, the tests above) are measured in length:
+a director dof (unit-free) counts as the face motion h/2 |dU_n|.  With the strains formed in the
+displacement form of Eq. (3) (elements/core.py), the iteration is then the same in any consistent
+unit system and at any load level (verification/static_units.py: identical iteration counts in
+gf-cm, N-m and N-mm from 1e-8 to 1 of the working load; <= 3 iterations in the linear regime).
+
+Stability (``check_stability``): the final state must be a minimum of Pi.  If the Cholesky
+factorisation of the free-dof K_t fails, the state is a saddle: the solver leaves it along the
+eigenvector of the most negative eigenvalue (ARPACK shift-invert, LOBPCG fallback; both signs and
+five step lengths up to ``saddle_step`` L_f tried, the lowest potential kept) and continues Newton,
+at most ``max_saddle_escapes`` times; each escape is recorded (``saddles_left``,
+``saddle_eigenvalues``, a line in ``warnings``), and a run that cannot reach a minimum returns
+converged=False with status "saddle".  The report of the final state: ``positive_definite``
 (inertia of K_t on the free dofs) and ``min_tangent_eigenvalue`` (eigsh, shift-invert, when the
 problem has at most ``eig_max_dofs`` free dofs).  Solvers never raise on non-convergence: they return
-``converged=False``, the last state and a one-line message.
+``converged=False``, the last state and a one-line message; Ctrl-C returns the last iterate with
+status "interrupted".  No load and nothing prescribed: the unloaded state, converged, 0 iterations.
 
 Displacement control: the fixed dofs take ``load_factor * prescribed``; dead loads are
 ``load_factor * loads``.  ``prescribed`` may also be a function ``load_factor -> (N,6)`` for

@@ -1048,6 +1048,8 @@ def solve_static(model, fixed, loads, load_factors=None, method="newton", prescr
                f"{stats['load_steps']} step(s), {stats['iterations']} iterations")
         if stats.get("saddle_eigenvalues"):
             msg += f", {len(stats['saddle_eigenvalues'])} saddle(s) left"
+        if stats.get("criterion") == "zero load":
+            msg = f"{method}: no load and nothing prescribed: the unloaded state, 0 iterations"
         status = "converged"
     else:
         msg = f"{method}: {msg}"

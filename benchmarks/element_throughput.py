@@ -58,18 +58,18 @@ def main(argv=None):
         U = 0.05 * np.random.default_rng(0).standard_normal((mesh.n_nodes, 6))
         b = model.blocks[0]
         M = len(b.conn)
-        xo, xn = model._current(U)
+        xo, xn, Uc = model._current(U)
         fe = np.empty((M, b.nn, 6))
         we = np.empty(M)
         Ke = np.empty((M, 6 * b.nn, 6 * b.nn))
         nth = get_num_threads()
         t0 = time.perf_counter()
-        core.energy_force(*b.args(xo, xn, False, 0.5), fe, we, nth)
-        core.force_tangent(*b.args(xo, xn, False, 0.5), b.gp_membrane, fe, we, Ke, nth)
+        core.energy_force(*b.args(xo, xn, Uc, False, 0.5), fe, we, nth)
+        core.force_tangent(*b.args(xo, xn, Uc, False, 0.5), b.gp_membrane, fe, we, Ke, nth)
         model.force_and_tangent(U)
         first = time.perf_counter() - t0
-        tf = median_time(lambda: core.energy_force(*b.args(xo, xn, False, 0.5), fe, we, nth), args.repeats)
-        tk = median_time(lambda: core.force_tangent(*b.args(xo, xn, False, 0.5), b.gp_membrane, fe, we, Ke, nth), args.repeats)
+        tf = median_time(lambda: core.energy_force(*b.args(xo, xn, Uc, False, 0.5), fe, we, nth), args.repeats)
+        tk = median_time(lambda: core.force_tangent(*b.args(xo, xn, Uc, False, 0.5), b.gp_membrane, fe, we, Ke, nth), args.repeats)
         tF = median_time(lambda: model.internal_force(U), args.repeats)
         tA = median_time(lambda: model.force_and_tangent(U), args.repeats)
         name = "tri3 " if tri else f"quad4 membrane={membrane}"

@@ -37,10 +37,12 @@ class _Block:
         self.tie = np.ascontiguousarray(c["tie"], dtype=float)
         self.gp_membrane = bool(np.any(c["Cmb"][:, :, 0]))
 
-    def args(self, xo, xn, quasi, mu):
+    def args(self, xo, xn, U, quasi, mu):
+        """Kernel arguments: current positions/directors xo, xn (N,3) and the displacements U (N,6)
+        from which the strains are formed (displacement form, elements/core.py)."""
         c = self.c
-        return (xo, xn, self.conn, self.dN, self.alpha, self.beta, self.tie, c["Cmb"], c["Cs"],
-                c["Cz"], c["r_mb"], c["r_s"], c["r_zq"] if quasi else c["r_z"], quasi, mu)
+        return (xo, xn, U, self.conn, self.dN, self.alpha, self.beta, self.tie, c["Cmb"], c["Cs"],
+                c["Cz"], c["r_zq"], quasi, mu)
 
 
 class Model:
@@ -80,22 +82,23 @@ class Model:
 
     # ------------------------------------------------------------- kinematics
     def _current(self, U):
-        U = np.asarray(U, dtype=float)
+        """(x_o, x_n, U): current positions and directors (N,3) and U itself as a contiguous (N,6)."""
+        U = np.ascontiguousarray(U, dtype=float)
         if U.shape != (self.n_nodes, 6):
             U = U.reshape(self.n_nodes, 6)
         xo = np.ascontiguousarray(self.mesh.nodes + U[:, :3])
         xn = np.ascontiguousarray(self.mesh.directors + U[:, 3:])
-        return xo, xn
+        return xo, xn, U
 
     # ------------------------------------------------------------- energy & force
     def _element_forces(self, U):
         """Yield (block, element forces (M,nn,6), element energies (M,)) for each element block."""
-        xo, xn = self._current(U)
+        xo, xn, Uc = self._current(U)
         for b in self.blocks:
             M = len(b.conn)
             fe = np.empty((M, b.nn, 6))
             we = np.empty(M)
-            core.energy_force(*b.args(xo, xn, self.quasi, self.mu), fe, we, get_num_threads())
+            core.energy_force(*b.args(xo, xn, Uc, self.quasi, self.mu), fe, we, get_num_threads())
             yield b, fe, we
 
     def energy_and_force(self, U):
@@ -128,7 +131,7 @@ class Model:
 
     def force_and_tangent(self, U):
         """(internal force (N,6), tangent K_t (6N,6N) CSR) at U, Eq. (9)."""
-        xo, xn = self._current(U)
+        xo, xn, Uc = self._current(U)
         F = np.zeros(self.n_dofs)
         Ks = []
         for b in self.blocks:
@@ -137,7 +140,7 @@ class Model:
             fe = np.empty((M, b.nn, 6))
             we = np.empty(M)
             Ke = np.empty((M, nd, nd))
-            core.force_tangent(*b.args(xo, xn, self.quasi, self.mu), b.gp_membrane, fe, we, Ke,
+            core.force_tangent(*b.args(xo, xn, Uc, self.quasi, self.mu), b.gp_membrane, fe, we, Ke,
                                get_num_threads())
             scatter_add_vec(b.dofs, fe.reshape(M, -1), F)
             Ks.append(Ke)
@@ -172,7 +175,7 @@ class Model:
         """||eps_b|| per element (quads first, then triangles) [1/length], the curvature measure of
         the adaptivity criterion Eq. (25): the Euclidean norm of the local bending strain vector of
         Eq. (6), root-mean-square over the element's integration points."""
-        xo, xn = self._current(U)
+        xo, xn, _ = self._current(U)
         out = []
         for b in self.blocks:
             mb, _, _ = b.module.raw_strains(xo[b.conn], xn[b.conn])
@@ -185,7 +188,7 @@ class Model:
         """n_p . d_p per element corner (Section 4.3), one (M,nn) array per element block:
         n_p the unit normal of the deformed corner p (edges to its two neighbours), d_p the unit
         deformed director; negative where the top and bottom surfaces interpenetrate."""
-        xo, xn = self._current(U)
+        xo, xn, _ = self._current(U)
         out = []
         for b in self.blocks:
             P = xo[b.conn]

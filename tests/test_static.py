@@ -148,11 +148,19 @@ def test_unstable_equilibrium_is_reported_and_imperfection_buckles():
     fixed = clamp(mesh, "clamped")
     P = np.zeros((mesh.n_nodes, 6))
     P[tip, 0] = -1.5 * Pcr / len(tip)          # axial compression 1.5 x Euler, perfectly straight
-    r = solve_static(model, fixed, P)
+    # without saddle escapes (issue 11 part 2 made them the default) Newton stops on the straight
+    # state, and the stability report says it is a saddle
+    r = solve_static(model, fixed, P, max_saddle_escapes=0)
     assert r.converged, r.message
     assert np.abs(r.U[:, 2]).max() < 1e-8       # stays straight: an equilibrium ...
     assert r.info["positive_definite"] is False  # ... but an unstable one
     assert r.info["min_tangent_eigenvalue"] < 0
+    # by default the solver leaves that saddle along its buckling mode and ends on the elastica
+    s = solve_static(model, fixed, P)
+    assert s.converged, s.message
+    assert s.info["saddles_left"] >= 1 and s.info["saddle_eigenvalues"][0] < 0
+    assert s.info["positive_definite"] is True
+    assert np.abs(s.U[tip, 2]).mean() > 0.3 * 10.0
     # a lateral imperfection of 1e-3 P: Newton with the shifted tangent finds the buckled state
     P[tip, 2] = -1e-3 * 1.5 * Pcr / len(tip)
     r = solve_static(model, fixed, P)

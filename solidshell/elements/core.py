@@ -12,7 +12,12 @@ configuration x_o = X_o + U_o and x_n = X_n + U_n (Eq. 2 with the truncations of
 - at each node i (Eq. 5, Eq. 15): eps_zz,i = x_ni.x_ni / 2 (Green) or the quasi-engineering strain of
   Eq. (24);
 
-minus the same quantities at X ("raw" natural strains).  The transformation to the local frame
+minus the same quantities at X ("raw" natural strains).  The differences are formed in the
+displacement form of Eq. (3), never as x.x - X.X: with u = sum dN U (U_o or U_n) and a the current
+vector, a.b - A.B = u.b + a.v - u.v and a.a/2 - A.A/2 = u.(a - u/2).  Subtracting two products of
+size |X|^2 would leave a strain of size |U||X| with an absolute error eps |X|^2, i.e. lose
+log10(|X|/|U|) digits -- all of them in the linear regime of a stiff plate or in a unit system where
+coordinates are large (issue 11).  The transformation to the local frame
 (Eq. 6), the ANS interpolation to the integration points, the rigidities and J_o w of Eq. (7)--(8)
 are all linear in the raw strains and depend only on the initial geometry, so they are folded once
 per element into constant matrices (``Cmb``, ``Cs``, ``Cz``; see quad4.py / tri3.py).  The energy is
@@ -59,11 +64,27 @@ def _sign_quasi(xo, xn, conn_e, nn, i, mu):
     return -1.0
 
 
+@njit(cache=True, fastmath=_FM, inline="always")
+def _thickness_strain(xe, i, quasi, sign, norm_X):
+    """eps_zz at local node i (Eq. 5 / Eq. 15) in displacement form: x.x/2 - X.X/2 = v.(x - v/2)
+    (Green) or, for Eq. (24), s|x| - |X| with |x| - |X| = v.(2x - v)/(|x| + |X|) (v = U_n)."""
+    x0 = xe[i, 3]; x1 = xe[i, 4]; x2 = xe[i, 5]
+    v0 = xe[i, 9]; v1 = xe[i, 10]; v2 = xe[i, 11]
+    d = v0 * (x0 - 0.5 * v0) + v1 * (x1 - 0.5 * v1) + v2 * (x2 - 0.5 * v2)
+    if not quasi:
+        return d
+    nx = np.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
+    if sign > 0.0:
+        return 2.0 * d / (nx + norm_X)
+    return -nx - norm_X
+
+
 @njit(cache=True, fastmath=_FM, error_model="numpy")
-def _element_force(e, xo, xn, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_mb, r_s, r_z,
+def _element_force(e, xo, xn, U, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_z,
                    quasi, mu, fe, gs, gz, zs, at, dt, xe):
     """Energy of element e; its force into fe (nn,6).  Workspaces: gs (nt,), gz, zs (nn,),
-    at, dt (nt,3) (tying-point tangent and director), xe (nn,6) (the element's x_o | x_n)."""
+    at, dt (nt,3) (tying-point tangent and director), xe (nn,12) (the element's x_o | x_n | U_o |
+    U_n).  Every strain is formed in the displacement form of Eq. (3) (module docstring)."""
     nn = conn.shape[1]
     ngp = dN.shape[0]
     nt = alpha.shape[0]
@@ -74,12 +95,15 @@ def _element_force(e, xo, xn, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_mb, r_s
             xe[i, c] = xo[p, c]
             xe[i, 3 + c] = xn[p, c]
         for c in range(6):
+            xe[i, 6 + c] = U[p, c]
             fe[i, c] = 0.0
     energy = 0.0
     # ---- membrane and bending at the integration points
     for g in range(ngp):
         a1x = 0.0; a1y = 0.0; a1z = 0.0; a2x = 0.0; a2y = 0.0; a2z = 0.0
         b1x = 0.0; b1y = 0.0; b1z = 0.0; b2x = 0.0; b2y = 0.0; b2z = 0.0
+        u1x = 0.0; u1y = 0.0; u1z = 0.0; u2x = 0.0; u2y = 0.0; u2z = 0.0
+        v1x = 0.0; v1y = 0.0; v1z = 0.0; v2x = 0.0; v2y = 0.0; v2z = 0.0
         for i in range(nn):
             d1 = dN[g, i, 0]
             d2 = dN[g, i, 1]
@@ -87,12 +111,23 @@ def _element_force(e, xo, xn, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_mb, r_s
             a2x += d2 * xe[i, 0]; a2y += d2 * xe[i, 1]; a2z += d2 * xe[i, 2]
             b1x += d1 * xe[i, 3]; b1y += d1 * xe[i, 4]; b1z += d1 * xe[i, 5]
             b2x += d2 * xe[i, 3]; b2y += d2 * xe[i, 4]; b2z += d2 * xe[i, 5]
-        e0 = 0.5 * (a1x * a1x + a1y * a1y + a1z * a1z) - r_mb[e, g, 0]
-        e1 = 0.5 * (a2x * a2x + a2y * a2y + a2z * a2z) - r_mb[e, g, 1]
-        e2 = (a1x * a2x + a1y * a2y + a1z * a2z) - r_mb[e, g, 2]
-        k0 = (a1x * b1x + a1y * b1y + a1z * b1z) - r_mb[e, g, 3]
-        k1 = (a2x * b2x + a2y * b2y + a2z * b2z) - r_mb[e, g, 4]
-        k2 = (a1x * b2x + a1y * b2y + a1z * b2z + a2x * b1x + a2y * b1y + a2z * b1z) - r_mb[e, g, 5]
+            u1x += d1 * xe[i, 6]; u1y += d1 * xe[i, 7]; u1z += d1 * xe[i, 8]
+            u2x += d2 * xe[i, 6]; u2y += d2 * xe[i, 7]; u2z += d2 * xe[i, 8]
+            v1x += d1 * xe[i, 9]; v1y += d1 * xe[i, 10]; v1z += d1 * xe[i, 11]
+            v2x += d2 * xe[i, 9]; v2y += d2 * xe[i, 10]; v2z += d2 * xe[i, 11]
+        # displacement form: a.b - A.B = u.b + a.v - u.v with A = a - u, B = b - v
+        e0 = u1x * (a1x - 0.5 * u1x) + u1y * (a1y - 0.5 * u1y) + u1z * (a1z - 0.5 * u1z)
+        e1 = u2x * (a2x - 0.5 * u2x) + u2y * (a2y - 0.5 * u2y) + u2z * (a2z - 0.5 * u2z)
+        e2 = (u1x * (a2x - u2x) + u1y * (a2y - u2y) + u1z * (a2z - u2z)
+              + a1x * u2x + a1y * u2y + a1z * u2z)
+        k0 = (u1x * (b1x - v1x) + u1y * (b1y - v1y) + u1z * (b1z - v1z)
+              + a1x * v1x + a1y * v1y + a1z * v1z)
+        k1 = (u2x * (b2x - v2x) + u2y * (b2y - v2y) + u2z * (b2z - v2z)
+              + a2x * v2x + a2y * v2y + a2z * v2z)
+        k2 = (u1x * (b2x - v2x) + u1y * (b2y - v2y) + u1z * (b2z - v2z)
+              + a1x * v2x + a1y * v2y + a1z * v2z
+              + u2x * (b1x - v1x) + u2y * (b1y - v1y) + u2z * (b1z - v1z)
+              + a2x * v1x + a2y * v1y + a2z * v1z)
         C = Cmb[e, g]
         n0 = C[0, 0, 0] * e0 + C[0, 0, 1] * e1 + C[0, 0, 2] * e2
         n1 = C[0, 1, 0] * e0 + C[0, 1, 1] * e1 + C[0, 1, 2] * e2
@@ -131,13 +166,17 @@ def _element_force(e, xo, xn, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_mb, r_s
         for c in range(3):
             av = 0.0
             dv = 0.0
+            au = 0.0
+            du = 0.0
             for i in range(nn):
                 av += alpha[t, i] * xe[i, oa + c]
                 dv += beta[t, i] * xe[i, ob + c]
+                au += alpha[t, i] * xe[i, 6 + oa + c]
+                du += beta[t, i] * xe[i, 6 + ob + c]
             at[t, c] = av
             dt[t, c] = dv
-            s += av * dv
-        gs[t] = tie[t, 2] * s - r_s[e, t]
+            s += au * (dv - du) + av * du
+        gs[t] = tie[t, 2] * s
     for t in range(nt):
         oa = int(tie[t, 0])
         ob = int(tie[t, 1])
@@ -154,12 +193,9 @@ def _element_force(e, xo, xn, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_mb, r_s
                 fe[i, ob + c] += qb * at[t, c]
     # ---- ANS thickness strain at the nodes (Eq. 5 / Eq. 15), Green or Eq. (24)
     for i in range(nn):
-        xx = xe[i, 3] * xe[i, 3] + xe[i, 4] * xe[i, 4] + xe[i, 5] * xe[i, 5]
         if quasi:
             zs[i] = _sign_quasi(xo, xn, ce, nn, i, mu)
-            gz[i] = zs[i] * np.sqrt(xx) - r_z[e, i]
-        else:
-            gz[i] = 0.5 * xx - r_z[e, i]
+        gz[i] = _thickness_strain(xe, i, quasi, zs[i], r_z[e, i])
     for i in range(nn):
         q = 0.0
         for j in range(nn):
@@ -176,20 +212,23 @@ def _element_force(e, xo, xn, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_mb, r_s
 
 @njit(cache=True)
 def _force_workspace(nn, nt):
-    """Per-thread scratch of _element_force: gs (nt,), gz, zs (nn,), at, dt (nt,3), xe (nn,6)."""
+    """Per-thread scratch of _element_force: gs (nt,), gz, zs (nn,), at, dt (nt,3), xe (nn,12)."""
     m = max(nt, 1)
-    return np.empty(m), np.empty(nn), np.empty(nn), np.empty((m, 3)), np.empty((m, 3)), np.empty((nn, 6))
+    return np.empty(m), np.empty(nn), np.empty(nn), np.empty((m, 3)), np.empty((m, 3)), np.empty((nn, 12))
 
 
 @njit(cache=True, parallel=True, fastmath=_FM)
-def energy_force(xo, xn, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_mb, r_s, r_z, quasi, mu, f_out,
+def energy_force(xo, xn, U, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_z, quasi, mu, f_out,
                  w_out, nth):
     """Element energies into w_out (M,) and element forces into f_out (M, nn, 6), all elements.
 
     xo, xn : (N,3) current nodal mid-surface positions and directors (X + U)
+    U      : (N,6) the displacements [U_o | U_n] themselves: the strains are formed from them
+             (displacement form of Eq. 3), so they keep their digits when U << X
     conn   : (M,nn) connectivity;  dN (ngp,nn,2), alpha/beta (nt,nn), tie (nt,3): the element
              type's constants (tie: see the module docstring)
-    Cmb (M,ngp,2,3,3), Cs (M,nt,nt), Cz (M,nn,nn): folded rigidities;  r_*: raw strains at X
+    Cmb (M,ngp,2,3,3), Cs (M,nt,nt), Cz (M,nn,nn): folded rigidities;  r_z (M,nn): |X_n| at the
+             nodes (used by the quasi-engineering thickness strain of Eq. 24 only)
     nth    : number of work chunks (numba threads); each chunk allocates its workspace once
     """
     M = conn.shape[0]
@@ -199,17 +238,18 @@ def energy_force(xo, xn, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_mb, r_s, r_z
     for th in prange(nth):
         gs, gz, zs, at, dt, xe = _force_workspace(nn, nt)
         for e in range(th * chunk, min(M, (th + 1) * chunk)):
-            w_out[e] = _element_force(e, xo, xn, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_mb, r_s,
+            w_out[e] = _element_force(e, xo, xn, U, conn, dN, alpha, beta, tie, Cmb, Cs, Cz,
                                       r_z, quasi, mu, f_out[e], gs, gz, zs, at, dt, xe)
 
 
 @njit(cache=True, fastmath=_FM, error_model="numpy")
-def _element_tangent(e, xo, xn, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_mb, r_s, r_z,
+def _element_tangent(e, xo, xn, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_z,
                      quasi, mu, gp_membrane, Ke, B, D, oo, on, nz, gs, gz, zs, at, dt, v4, xe):
     """Tangent k_t of Eq. (9) of element e into Ke (nd,nd), nd = 6 nn (dof 6i+c: U_o then U_n).
 
-    ``xe`` (nn,6) [x_o | x_n], and the tying values ``gs``, ``at``, ``dt`` must be as _element_force
-    leaves them for this element (force_tangent calls it first).  ``gp_membrane`` False: the
+    ``xe`` (nn,12) [x_o | x_n | U_o | U_n], the tying values ``gs``, ``at``, ``dt`` and the nodal
+    thickness strains ``gz`` (with the signs ``zs`` of Eq. 24) must be as _element_force leaves them
+    for this element (force_tangent calls it first).  ``gp_membrane`` False: the
     membrane rigidity at the integration points is zero (assumed membrane strains at tying points
     instead), so those B rows are skipped.
     Material part sum B^T C B over the strain rows (membrane+bending per point, then shear tying,
@@ -237,22 +277,35 @@ def _element_tangent(e, xo, xn, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_mb, r
     b2 = v4[3]
     st = v4[4]
     sig = v4[5]
+    u1 = v4[6]
+    u2 = v4[7]
+    w1 = v4[8]
+    w2 = v4[9]
     for g in range(ngp):
         for c in range(3):
             a1[c] = 0.0; a2[c] = 0.0; b1[c] = 0.0; b2[c] = 0.0
+            u1[c] = 0.0; u2[c] = 0.0; w1[c] = 0.0; w2[c] = 0.0
         for i in range(nn):
             for c in range(3):
                 a1[c] += dN[g, i, 0] * xe[i, c]
                 a2[c] += dN[g, i, 1] * xe[i, c]
                 b1[c] += dN[g, i, 0] * xe[i, 3 + c]
                 b2[c] += dN[g, i, 1] * xe[i, 3 + c]
-        st[0] = 0.5 * (a1[0] * a1[0] + a1[1] * a1[1] + a1[2] * a1[2]) - r_mb[e, g, 0]
-        st[1] = 0.5 * (a2[0] * a2[0] + a2[1] * a2[1] + a2[2] * a2[2]) - r_mb[e, g, 1]
-        st[2] = (a1[0] * a2[0] + a1[1] * a2[1] + a1[2] * a2[2]) - r_mb[e, g, 2]
-        st[3] = (a1[0] * b1[0] + a1[1] * b1[1] + a1[2] * b1[2]) - r_mb[e, g, 3]
-        st[4] = (a2[0] * b2[0] + a2[1] * b2[1] + a2[2] * b2[2]) - r_mb[e, g, 4]
-        st[5] = (a1[0] * b2[0] + a1[1] * b2[1] + a1[2] * b2[2]
-                 + a2[0] * b1[0] + a2[1] * b1[1] + a2[2] * b1[2]) - r_mb[e, g, 5]
+                u1[c] += dN[g, i, 0] * xe[i, 6 + c]
+                u2[c] += dN[g, i, 1] * xe[i, 6 + c]
+                w1[c] += dN[g, i, 0] * xe[i, 9 + c]
+                w2[c] += dN[g, i, 1] * xe[i, 9 + c]
+        # the strains in displacement form, exactly as _element_force forms them
+        for r in range(6):
+            st[r] = 0.0
+        for c in range(3):
+            st[0] += u1[c] * (a1[c] - 0.5 * u1[c])
+            st[1] += u2[c] * (a2[c] - 0.5 * u2[c])
+            st[2] += u1[c] * (a2[c] - u2[c]) + a1[c] * u2[c]
+            st[3] += u1[c] * (b1[c] - w1[c]) + a1[c] * w1[c]
+            st[4] += u2[c] * (b2[c] - w2[c]) + a2[c] * w2[c]
+            st[5] += (u1[c] * (b2[c] - w2[c]) + a1[c] * w2[c]
+                      + u2[c] * (b1[c] - w1[c]) + a2[c] * w1[c])
         for r in range(3):
             sig[r] = Cmb[e, g, 0, r, 0] * st[0] + Cmb[e, g, 0, r, 1] * st[1] + Cmb[e, g, 0, r, 2] * st[2]
             sig[3 + r] = Cmb[e, g, 1, r, 0] * st[3] + Cmb[e, g, 1, r, 1] * st[4] + Cmb[e, g, 1, r, 2] * st[5]
@@ -331,13 +384,9 @@ def _element_tangent(e, xo, xn, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_mb, r
                 Ke[a, b] += bta * D[t, b]
     # thickness strains at the nodes: d eps_i / d x_ni = w_i x_ni (w_i = 1 Green, s_i/|x_ni| Eq. 24)
     for i in range(nn):
-        xx = xe[i, 3] ** 2 + xe[i, 4] ** 2 + xe[i, 5] ** 2
         if quasi:
-            zs[i] = _sign_quasi(xo, xn, ce, nn, i, mu)
-            gz[i] = zs[i] * np.sqrt(xx) - r_z[e, i]
-            zs[i] = zs[i] / np.sqrt(xx)
+            zs[i] = zs[i] / np.sqrt(xe[i, 3] ** 2 + xe[i, 4] ** 2 + xe[i, 5] ** 2)
         else:
-            gz[i] = 0.5 * xx - r_z[e, i]
             zs[i] = 1.0
     for i in range(nn):
         q = 0.0
@@ -369,7 +418,7 @@ def _element_tangent(e, xo, xn, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_mb, r
 
 
 @njit(cache=True, parallel=True, fastmath=_FM)
-def force_tangent(xo, xn, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_mb, r_s, r_z, quasi, mu,
+def force_tangent(xo, xn, U, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_z, quasi, mu,
                   gp_membrane, f_out, w_out, K_out, nth):
     """Energies, forces (M,nn,6) and tangents (M,nd,nd) of all elements.  ``gp_membrane``: some
     membrane rigidity sits at the integration points (False when all of it is in the tying terms)."""
@@ -381,14 +430,14 @@ def force_tangent(xo, xn, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_mb, r_s, r_
     for th in prange(nth):
         B = np.empty((max(6, nt), nd))
         D = np.empty((max(6, nt), nd))
-        v4 = np.empty((6, 6))
+        v4 = np.empty((10, 6))
         oo = np.empty((nn, nn))
         on = np.empty((nn, nn))
         nz = np.empty((nn, 3, 3))
         gs, gz, zs, at, dt, xe = _force_workspace(nn, nt)
         for e in range(th * chunk, min(M, (th + 1) * chunk)):
-            w_out[e] = _element_force(e, xo, xn, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_mb, r_s,
+            w_out[e] = _element_force(e, xo, xn, U, conn, dN, alpha, beta, tie, Cmb, Cs, Cz,
                                       r_z, quasi, mu, f_out[e], gs, gz, zs, at, dt, xe)
-            _element_tangent(e, xo, xn, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_mb, r_s, r_z,
+            _element_tangent(e, xo, xn, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_z,
                              quasi, mu, gp_membrane, K_out[e], B, D, oo, on, nz, gs, gz, zs, at, dt,
                              v4, xe)

@@ -42,12 +42,32 @@ Methods (``method=``)
     second eigenvalue crosses zero the path may turn onto another branch
     (``max_negative_eigenvalues_on_path`` > 1 in info flags this).
 
-Convergence (all methods): relative residual |P - F|_free / max(|P|, |reactions|) <= ``tol``
-(default 1e-8) and energy norm |dD . (P - F)| of the last update <= ``energy_tol`` (1e-12) times that
-of the first iteration of the step.  The final state is checked for stability: ``positive_definite``
+Convergence (all methods): relative residual |P - F|_free / max(|P|, |reactions|, |F_free|) <=
+``tol`` (default 1e-8) and energy norm |dD . (P - F)| of the last update <= ``energy_tol`` (1e-12)
+times that of the first iteration of the step.  Newton also stops (``info["criterion"]``) when
+- "displacement": the Newton correction of a positive-definite, unshifted K_t is below ``disp_tol``
+  (1e-10) of max|D| -- to first order it *is* the error of D, so this test is free of any force or
+  length scale;
+- "round-off": neither the potential nor the residual can be lowered any more because the predicted
+  decrease is below the round-off of Pi (1e-11 of |Pi| + |lam P.D|), K_t is positive definite and
+  the Newton correction is below 1e-6 of max|D|.
+Step sizes (trust radius, max_step, the paper's max|dD|, the tests above) are measured in length:
+a director dof (unit-free) counts as the face motion h/2 |dU_n|.  With the strains formed in the
+displacement form of Eq. (3) (elements/core.py), the iteration is then the same in any consistent
+unit system and at any load level (verification/static_units.py: identical iteration counts in
+gf-cm, N-m and N-mm from 1e-8 to 1 of the working load; <= 3 iterations in the linear regime).
+
+Stability (``check_stability``): the final state must be a minimum of Pi.  If the Cholesky
+factorisation of the free-dof K_t fails, the state is a saddle: the solver leaves it along the
+eigenvector of the most negative eigenvalue (ARPACK shift-invert, LOBPCG fallback; both signs and
+five step lengths up to ``saddle_step`` L_f tried, the lowest potential kept) and continues Newton,
+at most ``max_saddle_escapes`` times; each escape is recorded (``saddles_left``,
+``saddle_eigenvalues``, a line in ``warnings``), and a run that cannot reach a minimum returns
+converged=False with status "saddle".  The report of the final state: ``positive_definite``
 (inertia of K_t on the free dofs) and ``min_tangent_eigenvalue`` (eigsh, shift-invert, when the
 problem has at most ``eig_max_dofs`` free dofs).  Solvers never raise on non-convergence: they return
-``converged=False``, the last state and a one-line message.
+``converged=False``, the last state and a one-line message; Ctrl-C returns the last iterate with
+status "interrupted".  No load and nothing prescribed: the unloaded state, converged, 0 iterations.
 
 Displacement control: the fixed dofs take ``load_factor * prescribed``; dead loads are
 ``load_factor * loads``.  ``prescribed`` may also be a function ``load_factor -> (N,6)`` for
@@ -139,6 +159,18 @@ class _System:
         self.factorization = factorization
         self.chol = Cholesky() if factorization == "cholmod" else SuperLUDefinite()
         self._has_ef = hasattr(model, "energy_and_force")
+        # step sizes are measured in length: a director dof (unit-free, Eq. 1) counts as the motion
+        # h/2 |dU_n| of the shell's faces, so that every step control is the same in any unit
+        # system (a max over raw dofs would mix cm and 1 and change with the length unit)
+        h = float(getattr(model.material, "thickness", 1.0))
+        w = np.ones((n, 6))
+        w[:, 3:] = 0.5 * h
+        self.w = w.ravel()
+        self.w_free = self.w[self.free]
+
+    def maxnorm(self, v, free=False):
+        """max |w v| [length]: translations as they are, director dofs times h/2."""
+        return float(np.abs((self.w_free if free else self.w) * v).max(initial=0.0))
 
     # -- vectors
     def _presc_at(self, lam):
@@ -217,9 +249,12 @@ class _System:
         return F, K
 
     def reference_norm(self, F, lam):
-        """max(|lam P|, |reactions|, tiny): the scale of the relative residual."""
+        """max(|lam P|, |reactions|, |F_int on the free dofs|, tiny): the scale of the relative
+        residual.  The internal force enters so that a problem driven by prescribed values alone
+        (P = 0, reactions ~ 0 in a rigid motion) is still measured against the forces in play."""
         r = F[self.fixd] - lam * self.P[self.fixd]
-        return max(float(np.linalg.norm(lam * self.P)), float(np.linalg.norm(r)), 1e-300)
+        return max(float(np.linalg.norm(lam * self.P)), float(np.linalg.norm(r)),
+                   float(np.linalg.norm(F[self.free])), 1e-300)
 
     def Kff(self, K):
         """K restricted to the free dofs, CSC.  The tangents of a solve share one sparsity pattern,
@@ -262,6 +297,7 @@ def _shifted_factor(chol, A, scale, sigma0, sigma_max=1e12):
 class _Opts:
     tol: float = 1e-8
     energy_tol: float = 1e-12
+    disp_tol: float = 1e-10
     max_iter: int = 100
     c: float = 1e-2
     L_f: float = 1.0
@@ -279,6 +315,27 @@ class _Opts:
 
 def _converged(rel, e_ratio, o):
     return rel <= o.tol and e_ratio <= o.energy_tol
+
+
+_ROUNDOFF = 1e-11
+"""An energy change below this fraction of the energy scale |Pi| + |lam P.D| is round-off: Pi is a
+sum of terms of that size, each exact to ~1e-16, over up to ~1e5 elements."""
+
+
+def _energy_scale(sys, D, lam, Pi):
+    """|Pi| + |lam P.D|: the size of the terms whose difference Pi is (Pi itself may be ~0)."""
+    return abs(Pi) + abs(lam * float(np.dot(sys.P, D))) + 1e-300
+
+
+def _iteration_report(stats, rel, o):
+    """Progress within a load step: the fraction of the way (in log of the residual) from the first
+    residual of the step to ``tol``, kept monotone, handed to the driver's callback."""
+    cb = stats.get("on_iter")
+    if cb is None or not np.isfinite(rel) or rel <= 0.0:
+        return
+    r0 = stats.setdefault("rel0", rel)
+    q = 0.0 if r0 <= o.tol else math.log(max(r0 / rel, 1.0)) / math.log(r0 / o.tol)
+    cb(min(max(q, 0.0), 1.0), rel)
 
 
 def _newton_level(sys, D, lam, o, stats):
@@ -303,11 +360,14 @@ def _newton_level(sys, D, lam, o, stats):
     it = 0
     while True:
         g = G[f]
-        ref = max(float(np.linalg.norm(lam * sys.P)), float(np.linalg.norm(G[sys.fixd])), 1e-300)
+        stats["D_last"] = D
+        ref = sys.reference_norm(G + lam * sys.P, lam)
         rel = float(np.linalg.norm(g)) / ref
         if not np.isfinite(rel):
             return D, False, "non-finite residual", rel
+        _iteration_report(stats, rel, o)
         if _converged(rel, e_ratio if it else (0.0 if rel <= o.tol else np.inf), o):
+            stats["criterion"] = "residual"
             return D, True, f"converged in {it} iterations", rel
         if it >= o.max_iter:
             break
@@ -340,8 +400,21 @@ def _newton_level(sys, D, lam, o, stats):
             if not fresh:
                 refresh = True
                 continue
+            if gp == 0.0 and rel <= o.tol:
+                stats["criterion"] = "residual"
+                return D, True, f"converged in {it} iterations", rel
             return D, False, "no descent direction (non-finite or uphill Newton step)", rel
-        pmax = float(np.abs(p).max())
+        pmax = sys.maxnorm(p)
+        dmax = sys.maxnorm(D)
+        if fresh and sigma == 0.0 and pmax <= o.disp_tol * dmax:
+            # scale-free test: with a positive-definite (unshifted) K_t the Newton correction p is
+            # the error of D to first order, and it is below disp_tol of the displacement
+            D = D + p
+            Pi, G = sys.potential_and_gradient(D, lam)
+            rel = float(np.linalg.norm(G[f])) / sys.reference_norm(G + lam * sys.P, lam)
+            stats["criterion"] = "displacement"
+            stats["D_last"] = D
+            return D, True, f"converged in {it} iterations (Newton correction {pmax / dmax:.1e} of |D|)", rel
         alpha = min(1.0, o.max_step / pmax) if pmax > 0 else 1.0
         acc = None
         if o.curvilinear and pmax > 0:
@@ -378,7 +451,7 @@ def _newton_level(sys, D, lam, o, stats):
                 pred = gp * (alpha - 0.5 * alpha * alpha)
                 rho = dec / pred if pred < 0.0 else 0.0
                 step = alpha * pmax
-                if abs(pred) <= 1e-11 * max(abs(Pi), 1e-300):
+                if abs(pred) <= _ROUNDOFF * _energy_scale(sys, D, lam, Pi):
                     # the decrease is below the round-off of Pi: judge the step by the residual
                     # and leave the radius alone (it describes the global phase, not this one)
                     accepted = bool(np.linalg.norm(Gt[f]) < gnorm or dec <= 0.0)
@@ -405,7 +478,7 @@ def _newton_level(sys, D, lam, o, stats):
                     accepted = True
                 elif dec <= o.armijo * alpha * gp:
                     accepted = True
-                elif abs(alpha * gp) <= 1e-11 * max(abs(Pi), 1e-300) and \
+                elif abs(alpha * gp) <= _ROUNDOFF * _energy_scale(sys, D, lam, Pi) and \
                         np.linalg.norm(Gt[f]) < gnorm:
                     # decrease below the round-off of Pi: accept on the residual instead
                     accepted = True
@@ -419,6 +492,14 @@ def _newton_level(sys, D, lam, o, stats):
             else:
                 alpha *= 0.25
         if not accepted:
+            if (abs(gp) <= _ROUNDOFF * _energy_scale(sys, D, lam, Pi) and sigma == 0.0
+                    and pmax <= 1e-6 * max(dmax, 1e-300)):
+                # stagnation at round-off: neither the energy nor the residual can decrease any
+                # more, the tangent is positive definite and the Newton correction is below 1e-6
+                # of |D|: the residual has reached the round-off floor of the internal force
+                stats["criterion"] = "round-off"
+                return D, True, (f"converged at the round-off floor in {it} iterations (relative "
+                                 f"residual {rel:.1e}, Newton correction {pmax / max(dmax, 1e-300):.1e} of |D|)"), rel
             return D, False, "line search failed (no decrease of the potential along the Newton step)", rel
         e_step = abs(alpha * gp)
         e_first = e_step if e_first is None else e_first
@@ -439,11 +520,14 @@ def _paper_level(sys, D, lam, o, stats):
     since_best = 0
     for it in range(o.max_iter + 1):
         F, K = sys.force_tangent(D)
+        stats["D_last"] = D
         r = lam * sys.P[f] - F[f]
         rel = float(np.linalg.norm(r)) / sys.reference_norm(F, lam)
         if not np.isfinite(rel):
             return D, False, "non-finite residual (the lambda-scaled Newton iteration diverged)", rel
+        _iteration_report(stats, rel, o)
         if _converged(rel, e_ratio if it else (0.0 if rel <= o.tol else np.inf), o):
+            stats["criterion"] = "residual"
             return D, True, f"converged in {it} iterations", rel
         if it == o.max_iter:
             break
@@ -466,7 +550,7 @@ def _paper_level(sys, D, lam, o, stats):
         sys.n_factor += 1
         if not np.all(np.isfinite(dD)):
             return D, False, f"singular tangent K_t at iteration {it} (non-finite increment)", rel
-        m = float(np.abs(dD).max())
+        m = sys.maxnorm(dD, free=True)
         mult = min(1.0, o.c * o.L_f / m) if m > 0 else 1.0
         stats["min_multiplier"] = min(stats["min_multiplier"], mult)
         D = D.copy()
@@ -554,6 +638,10 @@ def _load_stepping(sys, D, factors, o, method, stats, progress, path, max_cutbac
                        for pi, cd in zip(pis, cands)]
                 D0 = cands[int(np.argmin(pis))]
             it0 = stats["iterations"]
+            stats.pop("rel0", None)
+            lo, span = lam, trial - lam
+            stats["on_iter"] = lambda q, r, lo=lo, span=span, t=trial: progress(
+                min(1.0, abs(lo + q * span) / scale), f"load factor {t:.4g}, residual {r:.1e}")
             Dn, ok, msg, rel = level(sys, D0, trial, o, stats)
             nit = stats["iterations"] - it0
             if ok:
@@ -582,7 +670,11 @@ def _load_stepping(sys, D, factors, o, method, stats, progress, path, max_cutbac
     return D, True, msg, rel
 
 
-def _arc_length(sys, D, lam_target, o, stats, progress, path, dlam0, max_steps, desired_iter=6):
+def _arc_length(sys, D, lam_target, o, stats, progress, path, dlam0, max_steps, desired_iter=6,
+                max_arc_step=None):
+    """Crisfield's cylindrical arc-length method to load factor ``lam_target`` (module notes).
+    ``max_arc_step``: the largest arc length, as a fraction of the linear path length to the target
+    (|lam_target| |K_0^-1 P|), so a load-deflection curve can be drawn as finely as wanted."""
     f = sys.free
     Pf = sys.P[f]
     if not np.any(Pf):
@@ -595,7 +687,9 @@ def _arc_length(sys, D, lam_target, o, stats, progress, path, dlam0, max_steps, 
     sys.n_solves += 1
     sys.n_factor += 1
     dt = lu.solve(Pf)
-    dl = abs(dlam0) * float(np.linalg.norm(dt))
+    dl_ref = abs(lam_target) * float(np.linalg.norm(dt))
+    dl_cap = np.inf if max_arc_step is None else float(max_arc_step) * dl_ref
+    dl = min(abs(dlam0) * float(np.linalg.norm(dt)), dl_cap)
     dl_min = dl * 1e-6
     prev = None
     rel = np.nan
@@ -616,6 +710,7 @@ def _arc_length(sys, D, lam_target, o, stats, progress, path, dlam0, max_steps, 
         ok = False
         for it in range(o.max_iter):
             Dt = D.copy()
+            stats["D_last"] = D
             Dt[f] += dD
             lt = lam + dlam
             F, K = sys.force_tangent(Dt)
@@ -672,7 +767,7 @@ def _arc_length(sys, D, lam_target, o, stats, progress, path, dlam0, max_steps, 
         stats["load_factor"] = lam
         path.append((lam, D.reshape(sys.n, 6).copy()))
         progress(min(1.0, max(0.0, lam / lam_target)), f"arc-length load factor {lam:.4g}")
-        dl *= min(2.0, max(0.5, math.sqrt(desired_iter / max(it, 1))))
+        dl = min(dl * min(2.0, max(0.5, math.sqrt(desired_iter / max(it, 1)))), dl_cap)
     return D, False, f"arc-length stopped after {max_steps} steps at load factor {lam:.4g}", rel
 
 
@@ -722,14 +817,103 @@ def _stability(sys, D, eig_max_dofs):
     return pd, lmin
 
 
+# ============================================================================ saddles
+def _lowest_mode(A, k_max=6):
+    """(eigenvalue, eigenvector) of the most negative eigenvalue found of the symmetric CSC ``A``,
+    or (None, None).  ARPACK in shift-invert mode about -s (s = 1e-10 of the mean |diagonal|; the
+    LU of A + s I is indefinite-safe) with a few eigenpairs so that a small positive eigenvalue near
+    the shift does not hide the negative one; LOBPCG (smallest algebraic) if ARPACK fails."""
+    n = A.shape[0]
+    if n <= 200:
+        w, V = np.linalg.eigh(A.toarray())
+        return float(w[0]), V[:, 0]
+    s = 1e-10 * float(np.abs(A.diagonal()).mean())
+    try:
+        w, V = eigsh(A, k=min(k_max, n - 2), sigma=-s, which="LM", tol=1e-8, maxiter=5000)
+        i = int(np.argmin(w))
+        if w[i] < 0.0:
+            return float(w[i]), V[:, i]
+    except Exception:  # noqa: BLE001 - fall through to LOBPCG
+        pass
+    try:
+        from scipy.sparse.linalg import lobpcg
+        X = np.random.default_rng(0).standard_normal((n, 2))
+        w, V = lobpcg(A, X, largest=False, tol=1e-8, maxiter=2000)
+        i = int(np.argmin(w))
+        return float(w[i]), V[:, i]
+    except Exception:  # noqa: BLE001
+        return None, None
+
+
+def _leave_saddle(sys, D, lam, o, stats, step_frac):
+    """One escape from a converged state D whose free-dof tangent is not positive definite.
+
+    Finds the eigenvector v of the most negative eigenvalue, scales it to max|v| = 1 and evaluates
+    the potential at D +- t v for t = step_frac L_f x (1, 1/4, 1/16, 1/64, 1/256): along v the
+    energy falls as lam_min t^2 / 2 near D and the quartic terms turn it up again further out, so
+    the lowest of these ten candidates (below Pi(D)) is kept.  Returns (D_new or None, lam_min)."""
+    f = sys.free
+    _, K = sys.force_tangent(D)
+    A = sys.Kff(K)
+    lmin, v = _lowest_mode(A)
+    if lmin is None:
+        return None, None
+    diag = float(np.abs(A.diagonal()).max())
+    if lmin >= -1e-13 * diag:
+        return None, lmin                  # singular, not indefinite: nothing to leave along
+    v = v / sys.maxnorm(v, free=True)
+    Pi0, _ = sys.potential_and_gradient(D, lam)
+    best, Dbest = Pi0, None
+    for t in step_frac * o.L_f * 0.25 ** np.arange(5):
+        for sgn in (1.0, -1.0):
+            Dt = D.copy()
+            Dt[f] += sgn * t * v
+            Pit, _ = sys.potential_and_gradient(Dt, lam)
+            if np.isfinite(Pit) and Pit < best - _ROUNDOFF * _energy_scale(sys, D, lam, Pi0):
+                best, Dbest = Pit, Dt
+    return Dbest, lmin
+
+
+def _seek_minimum(sys, D, lam, o, stats, max_escapes, step_frac, info_w):
+    """Leave saddles until the free-dof tangent at the converged state D is positive definite
+    (Cholesky succeeds), continuing the energy Newton from each escape.  Returns (D, ok, message)."""
+    stats.setdefault("saddle_eigenvalues", [])
+    for _ in range(max_escapes + 1):
+        _, K = sys.force_tangent(D)
+        if sys.chol.factor(sys.Kff(K)):
+            return D, True, ""
+        if len(stats["saddle_eigenvalues"]) >= max_escapes:
+            break
+        Dn, lmin = _leave_saddle(sys, D, lam, o, stats, step_frac)
+        if Dn is None:
+            if lmin is not None and lmin >= 0.0:
+                return D, True, ""         # singular but not indefinite (a free mode): not a saddle
+            return D, False, (f"the equilibrium found is a saddle (min eigenvalue {lmin:.3g}) and no "
+                              "step along its negative-curvature direction lowers the energy")
+        stats["saddle_eigenvalues"].append(float(lmin))
+        info_w.append(f"static: left a saddle at load factor {lam:.4g} (tangent eigenvalue "
+                      f"{lmin:.3g}) along its negative-curvature direction")
+        stats.pop("rel0", None)
+        stats["on_iter"] = None
+        D, ok, msg, _ = _newton_level(sys, Dn, lam, o, stats)
+        if not ok:
+            return D, False, f"after leaving a saddle (eigenvalue {lmin:.3g}) Newton failed: {msg}"
+    lm = stats["saddle_eigenvalues"][-1] if stats["saddle_eigenvalues"] else float("nan")
+    return D, False, (f"no stable equilibrium reached: still a saddle after leaving "
+                      f"{len(stats['saddle_eigenvalues'])} (last eigenvalue {lm:.3g}); raise "
+                      "max_saddle_escapes or check the supports")
+
+
+# ============================================================================ driver
 @single_threaded_blas
 def solve_static(model, fixed, loads, load_factors=None, method="newton", prescribed=None, *,
-                 tol=1e-8, energy_tol=1e-12, max_iter=None, c=1e-2, L_f=None, max_step=None,
-                 U0=None, predictor=True, increment=1.0, min_increment=1e-6, max_cutbacks=8,
-                 curvilinear=False, line_search="trust", trust_radius=0.02,
-                 arc_length_initial=0.1,
-                 max_arc_steps=500, check_stability=True, eig_max_dofs=60000, contact=None,
-                 contact_stiffness=None, factorization="cholmod", progress=None) -> StaticResult:
+                 tol=1e-8, energy_tol=1e-12, disp_tol=1e-10, max_iter=None, c=1e-2, L_f=None,
+                 max_step=None, U0=None, predictor=True, increment=1.0, min_increment=1e-6,
+                 max_cutbacks=8, curvilinear=False, line_search="trust", trust_radius=0.02,
+                 arc_length_initial=0.1, max_arc_step=None, max_arc_steps=500,
+                 check_stability=True, eig_max_dofs=60000, max_saddle_escapes=5, saddle_step=0.05,
+                 contact=None, contact_stiffness=None, factorization="cholmod",
+                 progress=None) -> StaticResult:
     """Static equilibrium of ``model`` under dead ``loads`` and ``prescribed`` fixed dofs.
 
     Parameters
@@ -742,7 +926,9 @@ def solve_static(model, fixed, loads, load_factors=None, method="newton", prescr
     method : "newton" (default) | "paper" (Eqs. 16-18) | "arclength" (Crisfield)
     prescribed : (N,6) values of the fixed dofs at load factor 1 (default 0: clamped), or a
         function load_factor -> (N,6) giving them along the path
-    tol, energy_tol : relative residual and energy-norm tolerances
+    tol, energy_tol : relative residual and energy-norm tolerances (module notes)
+    disp_tol : newton also stops when the Newton correction of a positive-definite, unshifted K_t
+        is below disp_tol max|D| (scale-free; the error of D is then ~ disp_tol |D|)
     max_iter : iterations per load step (default 1000 for newton/arclength -- newton then cuts the
         step back --, 5000 for paper).  The trust-region Newton needs 80-300 iterations on the
         paper's drapes (square-on-disc 30x240: 276-279), and a cap near that count turned a
@@ -756,15 +942,34 @@ def solve_static(model, fixed, loads, load_factors=None, method="newton", prescr
         load factor (newton sub-steps adaptively between the requested factors)
     max_cutbacks : consecutive cut-backs of a failed sub-step (newton)
     arc_length_initial : first arc-length step as a fraction of the target load factor
-    check_stability : report positive_definite and min_tangent_eigenvalue of the final state
+    max_arc_step : largest arc length as a fraction of the linear path length to the target
+        (default: unlimited); e.g. 0.02 draws a load-deflection curve with >= 50 points
+    check_stability : report positive_definite and min_tangent_eigenvalue of the final state, and
+        leave saddles: a converged state whose free-dof tangent is not positive definite is left
+        along the eigenvector of its most negative eigenvalue (both signs, the lower potential
+        kept) and Newton continues to a minimum, at most ``max_saddle_escapes`` times
+        (``saddle_step``: the largest escape step as a fraction of L_f).  A run that cannot reach a
+        minimum returns converged=False.  info: saddles_left, saddle_eigenvalues, warnings.
     contact, contact_stiffness : rigid bodies (solidshell.contact) and the penalty [force/length]
     factorization : "cholmod" (default: CHOLMOD supernodal Cholesky of the positive-definite
         tangents, SuperLU where the paper's scheme meets an indefinite one) or "superlu" (SuperLU's
         LDL^T throughout, as before CHOLMOD was added; 3-5 times slower factorisations)
-    progress : callback(fraction, text)
+    progress : callback(fraction, text): called at the start and at every iteration
+
+    info["status"]: "converged", "not_converged", "saddle" (converged to a saddle that could not be
+    left) or "interrupted" (Ctrl-C: the last iterate is returned).  info["criterion"]: what ended
+    the last Newton loop ("residual", "displacement", "round-off" or "zero load").
     """
     t0 = time.perf_counter()
-    progress = progress or no_progress
+    user_progress = progress or no_progress
+    shown = [0.0]
+
+    def progress(fraction, text=""):
+        # the bar never moves back (a cut-back or a saddle escape restarts a load step's count)
+        shown[0] = max(shown[0], min(float(fraction), 1.0))
+        user_progress(shown[0], text)
+
+    progress(0.0, "static: setting up")
     if method not in METHODS:
         raise InputError(f"unknown static method {method!r}; choose one of: {', '.join(METHODS)}")
     n = model.n_nodes
@@ -779,11 +984,16 @@ def solve_static(model, fixed, loads, load_factors=None, method="newton", prescr
         raise InputError("load_factors must be a non-empty list of finite numbers")
     if factorization not in FACTORIZATIONS:
         raise InputError(f"factorization must be one of {FACTORIZATIONS}, got {factorization!r}")
+    for name, v in (("tol", tol), ("energy_tol", energy_tol), ("disp_tol", disp_tol)):
+        if not (math.isfinite(float(v)) and float(v) > 0.0):
+            raise InputError(f"{name} must be a positive number, got {v!r}")
+    if max_iter is not None and int(max_iter) < 1:
+        raise InputError(f"max_iter must be an integer >= 1, got {max_iter!r}")
     sys = _System(model, fixed, loads, prescribed, contact, contact_stiffness, factorization)
     if sys.free.size == 0:
         raise InputError("every dof is fixed: nothing to solve")
     Lf = float(L_f) if L_f is not None else _free_length(model.mesh, fixed)
-    o = _Opts(tol=float(tol), energy_tol=float(energy_tol),
+    o = _Opts(tol=float(tol), energy_tol=float(energy_tol), disp_tol=float(disp_tol),
               max_iter=int(max_iter if max_iter is not None else (5000 if method == "paper" else 1000)),
               c=float(c), L_f=Lf, max_step=float(max_step) if max_step is not None else 0.5 * Lf,
               curvilinear=bool(curvilinear), line_search=str(line_search),
@@ -793,26 +1003,63 @@ def solve_static(model, fixed, loads, load_factors=None, method="newton", prescr
     D = np.zeros(6 * n) if U0 is None else np.asarray(U0, dtype=float).reshape(-1).copy()
     D = sys.apply_prescribed(D, 0.0)
     stats = dict(iterations=0, load_steps=0, cutbacks=0, load_factor=0.0, shifted_iterations=0,
-                 max_shift=0.0, min_multiplier=1.0, final_relative_residual=np.nan)
+                 max_shift=0.0, min_multiplier=1.0, final_relative_residual=np.nan, D_last=D)
     path = []
+    warnings = []
+    status = None
+    zero = (not np.any(sys.P) and sys.presc_fn is None and not np.any(sys.presc)
+            and not np.any(D))
     try:
-        if method == "arclength":
+        if zero and not np.any(sys.potential_and_gradient(D, factors[-1])[1][sys.free]):
+            # no load, nothing prescribed, no contact force at the start: the unloaded state is
+            # the exact equilibrium (and the lowest energy, zero); no iteration is needed
+            ok, msg, rel = True, "no load: the unloaded state", 0.0
+            stats["load_factor"] = factors[-1]
+            stats["criterion"] = "zero load"
+            path.append((factors[-1], D.reshape(n, 6).copy()))
+        elif method == "arclength":
             D, ok, msg, rel = _arc_length(sys, D, factors[-1], o, stats, progress, path,
-                                          arc_length_initial * factors[-1], max_arc_steps)
+                                          arc_length_initial * factors[-1], max_arc_steps,
+                                          max_arc_step=max_arc_step)
         else:
             D, ok, msg, rel = _load_stepping(sys, D, factors, o, method, stats, progress, path,
                                              max_cutbacks, predictor, increment, min_increment)
+        if ok and check_stability and max_saddle_escapes > 0 and not zero:
+            lam = stats["load_factor"]
+            progress(0.97, "static: checking stability")
+            D2, ok2, msg2 = _seek_minimum(sys, sys.apply_prescribed(D, lam), lam, o, stats,
+                                          int(max_saddle_escapes), float(saddle_step), warnings)
+            D = D2
+            if stats.get("saddle_eigenvalues"):
+                Pi2, G2 = sys.potential_and_gradient(D, lam)
+                rel = float(np.linalg.norm(G2[sys.free])) / sys.reference_norm(G2 + lam * sys.P, lam)
+                if path:
+                    path[-1] = (lam, D.reshape(n, 6).copy())
+            if not ok2:
+                ok, msg, status = False, msg2, "saddle"
+    except KeyboardInterrupt:
+        D = np.asarray(stats.get("D_last", D)).copy()
+        ok, msg, rel, status = False, "interrupted (Ctrl-C): the last iterate is returned", np.nan, "interrupted"
+        warnings.append("static: interrupted by the user; the state is the last iterate, not an equilibrium")
     except (FloatingPointError, np.linalg.LinAlgError, RuntimeError) as exc:
         ok, msg, rel = False, f"{type(exc).__name__}: {exc}", np.nan
     if ok:
         msg = (f"{method}: converged to load factor {stats['load_factor']:.4g} in "
                f"{stats['load_steps']} step(s), {stats['iterations']} iterations")
+        if stats.get("saddle_eigenvalues"):
+            msg += f", {len(stats['saddle_eigenvalues'])} saddle(s) left"
+        if stats.get("criterion") == "zero load":
+            msg = f"{method}: no load and nothing prescribed: the unloaded state, 0 iterations"
+        status = "converged"
     else:
         msg = f"{method}: {msg}"
+        status = status or "not_converged"
     info = {
         "solver": "static",
         "method": method,
         "converged": bool(ok),
+        "status": status,
+        "criterion": stats.get("criterion") if ok else None,
         "iterations": int(stats["iterations"]),
         "linear_solves": int(sys.n_solves),
         "factorizations": int(sys.n_factor),
@@ -823,6 +1070,9 @@ def solve_static(model, fixed, loads, load_factors=None, method="newton", prescr
         "cutbacks": int(stats["cutbacks"]),
         "final_relative_residual": float(rel) if np.isfinite(rel) else None,
         "free_length": Lf,
+        "saddles_left": len(stats.get("saddle_eigenvalues", [])),
+        "saddle_eigenvalues": list(stats.get("saddle_eigenvalues", [])),
+        "warnings": warnings,
     }
     if method == "newton":
         info["shifted_iterations"] = int(stats["shifted_iterations"])
@@ -836,54 +1086,58 @@ def solve_static(model, fixed, loads, load_factors=None, method="newton", prescr
         info["min_multiplier"] = float(stats["min_multiplier"])
     if sys.contact:
         info["contact_stiffness"] = sys.k_contact
-    if check_stability and np.all(np.isfinite(D)):
+    if check_stability and np.all(np.isfinite(D)) and status != "interrupted":
         lam = stats["load_factor"]
-        pd, lmin = _stability(sys, sys.apply_prescribed(D, lam) if ok else D, eig_max_dofs)
+        try:
+            pd, lmin = _stability(sys, sys.apply_prescribed(D, lam) if ok else D, eig_max_dofs)
+        except KeyboardInterrupt:
+            pd, lmin = None, None
         info["positive_definite"] = pd
         info["min_tangent_eigenvalue"] = lmin
     info["wall_time_s"] = time.perf_counter() - t0
+    progress(1.0, "static: done" if ok else "static: stopped")
     return StaticResult(U=D.reshape(n, 6).copy(), converged=bool(ok), message=msg, info=info, path=path)
 
 
 # ============================================================================ registry entry
-_SETTINGS = {"method", "c", "tol", "energy_tol", "max_iter", "load_steps", "load_factors", "L_f",
-             "max_step", "predictor", "increment", "min_increment", "max_cutbacks", "line_search",
-             "trust_radius", "curvilinear", "arc_length_initial", "max_arc_steps",
-             "check_stability", "eig_max_dofs", "contact_stiffness", "factorization"}
+def _other_solver_keys() -> set:
+    """Setting names of the other registered solvers (explicit, relax): ``run`` ignores them so that
+    one settings dict can serve several solvers."""
+    keys = set()
+    try:
+        from ..settings import model_for
+        for kind in ("explicit", "relax"):
+            keys |= set(model_for(kind).model_fields)
+    except Exception:  # noqa: BLE001 - their schema may not exist yet: fall back to their key lists
+        try:
+            from .explicit import _RELAX_KEYS, _RUN_KEYS
+            keys = set(_RUN_KEYS) | set(_RELAX_KEYS)
+        except Exception:  # noqa: BLE001
+            pass
+    return keys
 
 
 def run(problem, settings: dict | None = None, progress=None) -> SolveResult:
     """Registry entry ``"static"``: solve a :class:`~solidshell.problem.Problem`.
 
-    settings: method ("newton" | "paper" | "arclength"), c, tol, energy_tol, max_iter,
-    load_steps (int n -> factors 1/n, 2/n, ..., 1) or load_factors (list), L_f, max_step, predictor,
-    increment, min_increment, max_cutbacks, line_search, trust_radius, curvilinear, arc_length_initial, max_arc_steps, check_stability, eig_max_dofs,
-    contact_stiffness, factorization.  Settings of the other registered solvers (explicit, relax: e.g. ``t_end``)
-    are ignored, so one settings dict can serve several solvers; any other key is an InputError
-    naming it and the valid keys (a typo such as ``cc=0.01`` must not be silently ignored).
+    ``settings`` is parsed by :class:`solidshell.solvers.static_settings.StaticSettings` (every key
+    typed and range-checked; a bad value or an unknown key is one InputError line naming it):
+    method, tol, energy_tol, disp_tol, max_iter, load_steps (n -> factors 1/n, ..., 1) or
+    load_factors, c, L_f, max_step, predictor, increment, min_increment, max_cutbacks,
+    line_search, trust_radius, curvilinear, arc_length_initial, max_arc_step, max_arc_steps,
+    check_stability, eig_max_dofs, max_saddle_escapes, saddle_step, contact_stiffness,
+    factorization.  Settings of the other registered solvers (explicit, relax: e.g. ``t_end``) are
+    ignored, so one settings dict can serve several solvers.
     """
+    from ..settings import parse
+    from .static_settings import StaticSettings
     settings = dict(settings or {})
-    unknown = [k for k in settings if k not in _SETTINGS]
+    unknown = [k for k in settings if k not in StaticSettings.model_fields]
     if unknown:
-        from .explicit import _RELAX_KEYS, _RUN_KEYS    # only on this path: keep static runs light
-        bad = sorted(str(k) for k in unknown if k not in (_RUN_KEYS | _RELAX_KEYS))
-        if bad:
-            raise InputError(f"unknown static setting(s): {', '.join(bad)}; "
-                             f"known: {', '.join(sorted(_SETTINGS))}")
-    s = {k: v for k, v in settings.items() if k in _SETTINGS}
-    method = s.pop("method", "newton")
-    steps = s.pop("load_steps", None)
-    factors = s.pop("load_factors", None)
-    if factors is None and steps is not None:
-        try:
-            ns = int(steps)
-        except (TypeError, ValueError):
-            raise InputError(f"load_steps must be a positive integer, got {steps!r}") from None
-        if ns < 1:
-            raise InputError(f"load_steps must be a positive integer, got {steps!r}")
-        factors = [(i + 1) / ns for i in range(ns)]
-    res = solve_static(problem.model, problem.fixed, problem.loads, load_factors=factors,
-                       method=method, prescribed=problem.prescribed, contact=problem.contact,
-                       progress=progress, **s)
+        other = _other_solver_keys()
+        settings = {k: v for k, v in settings.items() if k in StaticSettings.model_fields or k not in other}
+    s = parse(StaticSettings, settings, "solver.static").solver_kwargs()
+    res = solve_static(problem.model, problem.fixed, problem.loads, prescribed=problem.prescribed,
+                       contact=problem.contact, progress=progress, **s)
     return SolveResult(U=res.U, converged=res.converged, message=res.message, info=res.info,
                        frames=res.path)

@@ -280,14 +280,7 @@ def build_problem(scene: Scene, mesh, fixed=None):
 def check_solver_settings(kind: str, merged: dict):
     """The solver's typed settings (solidshell.settings.validate) before any work: one-line
     InputError naming the key.  Returns the parsed settings model."""
-    try:
-        return ssettings.validate(kind, merged)
-    except ModuleNotFoundError as e:
-        # TRANSITIONAL (until the explicit/static settings models are merged into main): the
-        # solver checks its own settings when it starts.  Remove this except clause at the merge.
-        if e.name in _PENDING_SETTINGS_MODULES:
-            return None
-        raise
+    return ssettings.validate(kind, merged)
 
 
 def check_restart_file(path) -> None:
@@ -311,7 +304,6 @@ def check_restart_file(path) -> None:
         raise InputError(f"restart file {p} is damaged (member {bad} fails its checksum)")
 
 
-_PENDING_SETTINGS_MODULES = ("solidshell.solvers.static_settings", "solidshell.solvers.explicit.settings")
 
 
 def _peak_memory_mb() -> float:

@@ -25,13 +25,6 @@ from solidshell.problem import SolveResult
 
 ROOT = Path(__file__).resolve().parents[1]
 
-# The typed settings models of the explicit and static solvers live on other branches until they are
-# merged; the tests marked ``needs_merge`` check them through the real CLI.  Before the merge they
-# must fail (strict xfail); once the files exist they run as ordinary tests.  Remove the mark then.
-MERGED = ((ROOT / "solidshell/solvers/static_settings.py").is_file()
-          and (ROOT / "solidshell/solvers/explicit/settings.py").is_file())
-needs_merge = pytest.mark.xfail(not MERGED, strict=True,
-                                reason="needs solidshell.solvers.static_settings / explicit.settings (H1, H5)")
 
 
 def cli(*args, timeout=300):
@@ -131,7 +124,6 @@ def test_bad_setting_refused_before_anything_is_written(tmp_path, settings_doubl
     assert not out.exists()              # not even the folder
 
 
-@needs_merge
 @pytest.mark.parametrize("args, needle", [
     (["strip-warp", "--set", "solver.static.tol=abc"], "tol"),
     (["strip-warp", "--set", "solver.static.tol=-1"], "tol"),
@@ -368,7 +360,6 @@ def test_ctrl_c_without_state_keeps_earlier_run(tmp_path, capsys, fake):
     assert not new.exists()                          # a bad input found by the solver: nothing left
 
 
-@needs_merge
 def test_sigint_relax_subprocess_exit_130(tmp_path):
     """Ctrl-C on a real relaxation: the solver returns its last state, the runner writes it."""
     out = tmp_path / "o"

@@ -57,6 +57,14 @@ def relax_run(tmp_path_factory):
                      mass_scaling=1.0, max_steps=2900, frame_every=700)
 
 
+@pytest.fixture(scope="module")
+def relax_kinetic_run(tmp_path_factory):
+    # the same with Cundall's kinetic damping (velocities zeroed at kinetic-energy peaks)
+    return run_scene(SCENE, mesh=LEVEL0, solver="relax", out_dir=tmp_path_factory.mktemp("relaxk"), progress=False,
+                     overrides={**ADAPT, "adapt.const": 0.1, "adapt.eps": 0.05}, adaptive=True,
+                     mass_scaling=1.0, max_steps=2900, frame_every=700, damping="kinetic")
+
+
 # ----------------------------------------------------------------------------- 1. runs and their files
 SUMMARY_KEYS = ("max_active_nodes", "active_nodes_history", "remesh_count", "remesh_time_s", "remesh_share",
                 "max_interpenetrated_nodes", "remesh_energy_jumps")
@@ -77,13 +85,13 @@ def _series(out):
     return times, counts, ids
 
 
-@pytest.mark.parametrize("which", ["explicit", "relax"])
+@pytest.mark.parametrize("which", ["explicit", "relax", "relax_kinetic"])
 def test_adaptive_run_splits_writes_series_and_books_energy(which, request):
     out = request.getfixturevalue(f"{which}_run")
     s = out.summary
     assert s["finite"] and s["message"]
     # explicit: t_end reached; relax: max_steps reached (no steady state is sought in 2900 steps)
-    assert s["status"] == "done" and (s["converged"] or which == "relax"), s["message"]
+    assert s["status"] == "done" and (s["converged"] or which != "explicit"), s["message"]
     for k in SUMMARY_KEYS:
         assert k in s, k
     assert s["remesh_count"] >= 1
@@ -100,10 +108,21 @@ def test_adaptive_run_splits_writes_series_and_books_energy(which, request):
     # remesh injects strain energy (0.67 explicit, 0.18 relax: the jump, booked apart) mostly into
     # the mesh's highest modes, where the measured central-velocity kinetic energy differs from the
     # scheme's conserved energy by a fraction ~ (omega dt)^2 / 4 of that energy.  Measured: 0.022
-    # (explicit), 0.0078 (relax).  The bound 0.05 is well under the unbooked jump (the run's
-    # scale here is a few gf cm, so an unbooked 0.67 would read ~0.2) and 10x under the solver's
-    # own failure threshold max_energy_error = 0.5.
+    # (explicit), 0.0078 (relax), 0.020 (relax, kinetic damping).  The bound 0.05 is well under the
+    # unbooked jump (the explicit run's scale max(W_ext, E_kin) is 3.3 gf cm, so an unbooked 0.67
+    # would read 0.20) and 10x under the solver's own failure threshold max_energy_error = 0.5.
     assert s["energy_balance_error"] < 0.05, s["energy_balance_error"]
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "summary strain_energy of an adaptive run is the change since the last remesh, not the strain "
+    "energy: integrator.py Integrator._sample stores last['Es'] = Es - st.Es0 (and Ec - st.Ec0), and "
+    "_open_segment resets Es0 at every mesh change; report.py reports last['Es'] as 'strain_energy'. "
+    "Measured: -0.314 gf cm while Integrator.energies()['strain'] at the end is 0.500.  Fix: put Es "
+    "itself (and Ec) in last for the report; Es - Es0 belongs to the ledger only"))
+def test_reported_strain_energy_is_the_strain_energy(explicit_run):
+    # an elastic strain energy is never negative (Green strains, positive definite material)
+    assert explicit_run.summary["strain_energy"] >= 0.0, explicit_run.summary["strain_energy"]
 
 
 def test_remesh_record_is_consistent(explicit_run):
@@ -185,9 +204,9 @@ def test_dk_transfer_jump_is_smaller_than_linear(explicit_run):
     "driver.py AdaptiveRun._switch transfers D_n and D_n-1 each by the DK rule, so a new mid-edge "
     "node's velocity is the DK map of the end nodes' director *velocities*: w_oM = -L/8 (v_nA - v_nB) "
     "turns the fast, light director oscillation (|dU_n/dt| ~ 200-800 /s, mass ~1e-7) into a "
-    "translational velocity of a heavy node (72 cm/s against 15 cm/s of free fall at t = 0.016 s); "
-    "each later split injects more kinetic energy (jumps 0.67, 2.2, 34, 42, 527 gf cm) and the "
-    "run goes non-finite at t = 0.037 s.  Fix: D_prev_new = DK(D_n) - linear(D_n - D_n-1), i.e. "
+    "translational velocity of a heavy node (at const 0.05: 72 cm/s against 15 cm/s of free fall "
+    "at t = 0.016 s); here each later split injects more kinetic energy (jumps 0.67, 2.2, 34, 42, "
+    "527 gf cm) and the run goes non-finite at t = 0.037 s.  Fix: D_prev_new = DK(D_n) - linear(D_n - D_n-1), i.e. "
     "positions by DK, velocities by linear/serendipity interpolation (a convex combination, cannot "
     "exceed the neighbours'): measured, this run then reaches t_end with jumps <= 0.63 and balance "
     "error 0.025"))

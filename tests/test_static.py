@@ -231,21 +231,10 @@ def test_arclength_passes_limit_point_of_shallow_arch():
     point, follows the unstable branch with *decreasing* load while the deflection keeps growing,
     and reaches the target load on the inverted (stable) branch; load-controlled Newton at the
     same load lands on the same inverted state."""
-    from solidshell import ShellMesh
+    from test_static_robust import _arch      # pinned support, plane problem, symmetry at mid-span
 
-    S, rise, nx = 10.0, 0.15, 10
-    x = np.linspace(0.0, S / 2, nx + 1)
-    z = rise * (1 - (2 * x / S - 1) ** 2)
-    nodes = np.array([[xi, y, zi] for y in (0.0, 1.0) for xi, zi in zip(x, z)])
-    quads = np.array([[i, i + 1, nx + 2 + i, nx + 1 + i] for i in range(nx)])
-    mesh = ShellMesh(nodes, quads=quads)
-    model = Model(mesh, IsotropicShell(E=1.2e6, nu=0.0, h=0.1))
-    fixed = np.zeros((mesh.n_nodes, 6), bool)
-    end = np.flatnonzero(np.isclose(nodes[:, 0], 0.0))
-    mid = np.flatnonzero(np.isclose(nodes[:, 0], S / 2))
-    fixed[end, :3] = True                       # pinned support
-    fixed[:, 1] = fixed[:, 4] = True            # plane problem
-    fixed[mid, 0] = fixed[mid, 3] = True        # symmetry plane
+    mesh, model, fixed, mid = _arch()
+    rise = 0.15
     P = np.zeros((mesh.n_nodes, 6))
     P[mid, 2] = -5.0 / len(mid)                 # half of a central load of 10 (limit load ~4)
     r = solve_static(model, fixed, P, method="arclength")

@@ -115,13 +115,9 @@ def test_adaptive_run_splits_writes_series_and_books_energy(which, request):
     assert s["energy_balance_error"] < 0.05, s["energy_balance_error"]
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "summary strain_energy of an adaptive run is the change since the last remesh, not the strain "
-    "energy: integrator.py Integrator._sample stores last['Es'] = Es - st.Es0 (and Ec - st.Ec0), and "
-    "_open_segment resets Es0 at every mesh change; report.py reports last['Es'] as 'strain_energy'. "
-    "Measured: -0.315 gf cm while Integrator.energies()['strain'] at the end is 0.495.  Fix: put Es "
-    "itself (and Ec) in last for the report; Es - Es0 belongs to the ledger only"))
 def test_reported_strain_energy_is_the_strain_energy(explicit_run):
+    """summary strain_energy is the energy itself, not its change since the last remesh (each mesh
+    starts a ledger segment with its own reference)."""
     # an elastic strain energy is never negative (Green strains, positive definite material)
     assert explicit_run.summary["strain_energy"] >= 0.0, explicit_run.summary["strain_energy"]
 
@@ -195,17 +191,9 @@ def test_restart_of_an_adaptive_run_is_bit_for_bit(tmp_path):
 
 
 @pytest.mark.skipif(numba.config.NUMBA_NUM_THREADS < 2, reason="one numba thread: nothing to restrict")
-@pytest.mark.xfail(strict=True, reason=(
-    "driver.py AdaptiveRun.run() calls self.start()/self.restart() and self._adapt_pass() outside "
-    "`with threads_for(self.integ, self.settings.threads)` (only advance() is inside), so the initial "
-    "and every remesh's critical-step estimate (Lanczos, ~40 internal-force evaluations in "
-    "Integrator.from_state) run on all numba threads even below SMALL_MESH_ELEMENTS; solvers/explicit "
-    "_drive builds its Integrator inside threads_for.  Measured at load 5 on the 2-core machine: "
-    "_switch to the 256-element level-2 mesh 1.01 s on 2 threads vs 0.07-0.09 s on 1 (remesh_share "
-    "0.45-0.5 of a 4x4 run).  Fix: wrap the start/restart and _adapt_pass in threads_for as well "
-    "(results are bitwise the same on any thread count)"))
 def test_remeshing_runs_on_one_thread_on_small_meshes():
-    """make_problem is called where the driver builds each integrator (start and every remesh); the
+    """The critical-step estimate of every new mesh runs on the solver's thread count (one thread on
+    a small mesh: two were measured 11x slower per remesh at load 5).  make_problem is called where the driver builds each integrator (start and every remesh); the
     numba thread count there must be the one threads_for gives a < SMALL_MESH_ELEMENTS mesh: 1."""
     run = _driver({}, t_end=0.0035, const=0.0005, eps=0.00025)   # splits at steps 200, 250, 300, ...
     seen, make = [], run.make_problem

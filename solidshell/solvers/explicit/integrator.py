@@ -357,7 +357,7 @@ class Integrator:
         if self.n_fric:
             st.max_slip = max(st.max_slip, f["nslip"])
         st.last_ekin = Ek
-        st.last = dict(Ek=Ek, Es=Es - st.Es0, Wext=Wext, Edamp=Edamp, Ec=Ecn - st.Ec0, t=t, Efric=Efric,
+        st.last = dict(Ek=Ek, Es=Es, Wext=Wext, Edamp=Edamp, Ec=Ecn, t=t, Efric=Efric,
                        Et=(f["Et"] if self.n_fric else 0.0), interp=ni)
         return False
 

@@ -7,9 +7,9 @@
 
 The driver knows the solver only through the integrator's small interface (``advance``,
 ``state``, ``from_state``, ``energies``) and the scene only through ``make_problem(mesh)``; the
-solvers never import this package.  The central-difference state (D_n and D_n-1) of every new node
-is transferred, so its velocity is too; friction anchors follow the background nodes (a new node
-starts with no stick anchor).  The energy the transfer adds or removes is booked by the integrator
+solvers never import this package.  A new node's position comes from the DK condition (§5.4) and its
+velocity (the step increment D_n - D_n-1) from linear / serendipity interpolation; friction anchors
+follow the background nodes (a new node starts with no stick anchor).  The energy the transfer adds or removes is booked by the integrator
 as ``remesh_energy_jump`` (a new ledger segment at each mesh change), so the balance check stays
 honest; the driver also lists each remesh's jump.
 """
@@ -222,12 +222,10 @@ class AdaptiveRun:
     def _transfer(self, D, Dp, old: ActiveMesh, new: ActiveMesh, inserted, known):
         """(D_n, D_n-1) on the new mesh.  Positions of new nodes by the chosen transfer (§5.4: DK);
         their step increment D_n - D_n-1 (the velocity) by linear / serendipity interpolation of
-        their neighbours', a convex combination that cannot exceed them.  The paper's "similar
-        approach" for velocities, DK applied to D_n-1 as well, maps the end nodes' director velocities
-        through w_oM = -L/8 (v_nA - v_nB) into the translational velocity of the new node: the light
-        directors oscillate fast (hundreds of 1/s), and the heavy new node got 72 cm/s against 15 cm/s
-        of free fall, injecting kinetic energy at every split until the run went non-finite
-        (tests/test_adapt_driver.py)."""
+        their neighbours', a convex combination that cannot exceed them.  DK applied to D_n-1 too
+        (the paper's "similar approach") would map the fast velocities of the light directors,
+        through w_oM = -L/8 (v_nA - v_nB), into translational velocities of heavy nodes
+        (docs/adaptivity.md)."""
         Nb = len(self.bg.Xo)
 
         def fill(vec, method, centre):

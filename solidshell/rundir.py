@@ -136,12 +136,7 @@ class RunFolder:
         """Remove the earlier run's files, its summary.json first (IOFailure naming the file)."""
         order = sorted(set(self.stale) - {MARKER}, key=lambda n: n != "summary.json")
         for n in order:
-            try:
-                (self.path / n).unlink()
-            except FileNotFoundError:
-                pass
-            except OSError as e:
-                raise _io(e, self.path / n) from None
+            _unlink(self.path / n)
         return order
 
     # ------------------------------------------------------------------ 4. write
@@ -161,10 +156,15 @@ class RunFolder:
     def finish(self, summary: dict) -> Path:
         """Write summary.json (last) and remove the RUNNING marker."""
         p = self.write_json("summary.json", summary)
-        try:
-            (self.path / MARKER).unlink()
-        except FileNotFoundError:
-            pass
-        except OSError as e:
-            raise _io(e, self.path / MARKER) from None
+        _unlink(self.path / MARKER)
         return p
+
+
+def _unlink(p: Path) -> None:
+    """Remove a file of the run folder if it is there (IOFailure naming it if that fails)."""
+    try:
+        p.unlink()
+    except FileNotFoundError:
+        pass
+    except OSError as e:
+        raise _io(e, p) from None

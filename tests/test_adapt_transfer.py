@@ -16,7 +16,7 @@ from solidshell.adapt import criteria as C
 from solidshell.adapt.transfer import dk_midedge, fill_new_nodes, linear_midedge, serendipity_centre
 from solidshell.errors import InputError
 from solidshell.model import Model
-from solidshell.settings import parse
+from solidshell.adapt.settings import parse_adapt
 from verification.adapt_transfer import refine
 
 RNG = np.random.default_rng(20150601)
@@ -390,10 +390,10 @@ def test_thresholds_refused():
             C.mark([1.0], [[0, 0]], [np.ones(1)], const=const, eps=eps)
     assert C.check_thresholds(C.DEFAULT_CONST, C.DEFAULT_EPS) == (0.5, 0.2)
     with pytest.raises(InputError, match="eps"):
-        parse(C.CriteriaSettings, {"const": 0.3, "eps": 0.3}, "adapt")
+        parse_adapt({"const": 0.3, "eps": 0.3})
     with pytest.raises(InputError, match="unknown"):
-        parse(C.CriteriaSettings, {"constant": 0.3}, "adapt")
-    s = parse(C.CriteriaSettings, None, "adapt")
+        parse_adapt({"constant": 0.3})
+    s = parse_adapt(None)
     assert (s.const, s.eps) == (C.DEFAULT_CONST, C.DEFAULT_EPS)
 
 

@@ -34,29 +34,14 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from pydantic import Field, model_validator
 
 from ..errors import InputError
-from ..settings import Finite, SettingsModel
 
-__all__ = ["DEFAULT_CONST", "DEFAULT_EPS", "CriteriaSettings", "check_thresholds", "side_lengths",
+__all__ = ["DEFAULT_CONST", "DEFAULT_EPS", "check_thresholds", "side_lengths",
            "level_side_lengths", "leaf_bending_strain", "Marks", "mark"]
 
 DEFAULT_CONST = 0.5
 DEFAULT_EPS = 0.2
-
-
-class CriteriaSettings(SettingsModel):
-    """const and eps of Eqs. (25)-(26), dimensionless (bending angle per element, rad)."""
-
-    const: Finite = Field(DEFAULT_CONST, gt=0.0)
-    eps: Finite = Field(DEFAULT_EPS, gt=0.0)
-
-    @model_validator(mode="after")
-    def _order(self):
-        if not self.eps < self.const:
-            raise ValueError(f"eps = {self.eps} must be less than const = {self.const} (Eq. 26)")
-        return self
 
 
 def check_thresholds(const: float, eps: float) -> tuple[float, float]:

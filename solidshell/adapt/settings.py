@@ -13,7 +13,7 @@ from pydantic import Field, model_validator
 
 from ..settings import Finite, SettingsModel, parse
 from .background import MAX_LEVELS
-from .criteria import DEFAULT_CONST, DEFAULT_EPS
+from .criteria import DEFAULT_CONST, DEFAULT_EPS, check_thresholds
 
 
 class AdaptSettings(SettingsModel):
@@ -43,8 +43,7 @@ class AdaptSettings(SettingsModel):
 
     @model_validator(mode="after")
     def _hysteresis(self):
-        if not self.eps < self.const:
-            raise ValueError(f"Eq. (26) needs 0 < eps < const, got const = {self.const:g}, eps = {self.eps:g}")
+        check_thresholds(self.const, self.eps)       # the criteria's own rule: 0 < eps < const
         return self
 
 

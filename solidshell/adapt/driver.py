@@ -29,6 +29,7 @@ from .background import BackgroundMesh
 from .criteria import leaf_bending_strain, level_side_lengths, mark
 from .forest import ActiveMesh, AdaptiveMesh
 from .settings import AdaptSettings
+from .settle import settle_directors
 from .transfer import fill_new_nodes
 from ..solvers.blas import single_threaded_blas
 from ..solvers.explicit import Integrator, checkpoint, parse_settings, threads_for
@@ -75,6 +76,7 @@ class AdaptiveRun:
         self.history = []          # (t, active nodes, elements) after every mesh change and at the start
         self.remeshes = []         # per remesh: t, splits, merges, nodes in/out, energy jump
         self.remesh_seconds = 0.0
+        self.settle_failures = 0   # director settlings whose residual did not fall by three digits
         self.integ = None
         self.restart_path = restart
 
@@ -202,9 +204,11 @@ class AdaptiveRun:
         inserted = np.setdiff1d(new.nodes, old.nodes, assume_unique=True)
         known = np.zeros(Nb, dtype=bool)
         known[old.nodes] = True
-        st.D, st.D_prev = self._transfer(st.D, st.D_prev, old, new, inserted, known)
-        st.anchors = _remap_anchors(st.anchors, old.nodes, new.nodes, Nb)
         problem = self.make_problem(new.mesh)
+        st.D, st.D_prev = self._transfer(st.D, st.D_prev, old, new, inserted, known)
+        if self.adapt.settle_directors:
+            st.D, st.D_prev = self._settle(problem, st.D, st.D_prev)
+        st.anchors = _remap_anchors(st.anchors, old.nodes, new.nodes, Nb)
         jump0 = st.remesh_energy_jump
         self.integ = self.cls.from_state(problem, st, self.settings, reestimate_step=self._needs_new_step(old, new),
                                          progress=self.progress, relax=self.relax)
@@ -237,6 +241,16 @@ class AdaptiveRun:
         D_new = fill(D, self.adapt.transfer, "kirchhoff")
         step = fill(D - Dp, "linear", "serendipity")
         return D_new, D_new - step
+
+    def _settle(self, problem, D, Dp):
+        """Both time levels' directors at equilibrium with their positions (settle.py): the director
+        velocity becomes the quasi-static director's rate, with no top-of-spectrum oscillation."""
+        out = []
+        for vec in (D, Dp):
+            x, rep = settle_directors(problem.model, problem.loads, problem.fixed, vec)
+            self.settle_failures += 0 if rep.converged else 1
+            out.append(x)
+        return out[0], out[1]
 
     def _needs_new_step(self, old: ActiveMesh, new: ActiveMesh) -> bool:
         """A new critical-step estimate when the finest level present changed (the step is set by
@@ -273,6 +287,8 @@ class AdaptiveRun:
             "adapt_levels": int(self.adapt.levels), "adapt_const": float(self.adapt.const),
             "adapt_eps": float(self.adapt.eps), "adapt_every": int(self.adapt.every),
             "adapt_transfer": self.adapt.transfer,
+            "adapt_settle_directors": bool(self.adapt.settle_directors),
+            "settle_failures": int(self.settle_failures),
             "level0_elements": int(self.bg.n_elements(0)), "background_nodes": int(len(self.bg.Xo)),
             "max_active_nodes": int(max(counts)), "final_active_nodes": int(counts[-1]),
             "active_nodes_history": [[round(t, 6), n, m] for t, n, m in self.history],

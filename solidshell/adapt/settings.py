@@ -28,6 +28,8 @@ class AdaptSettings(SettingsModel):
                 interpolation ("linear", for comparison); centre nodes always by the 8-node serendipity
                 functions
     project_boundary : place new nodes on a curved boundary (a circular sheet or rim) on the true curve
+    settle_directors : after each transfer, put the director dofs of both time levels at equilibrium
+                with the positions (settle.py); False keeps the bare DK directors of Eq. (32)
 
     The background mesh itself refuses a level count whose memory estimate exceeds half of the
     available memory (``background.estimate_background_bytes``), with the estimate.
@@ -40,6 +42,7 @@ class AdaptSettings(SettingsModel):
     every: int = Field(200, ge=1)
     transfer: Literal["dk", "linear"] = "dk"
     project_boundary: bool = True
+    settle_directors: bool = True
 
     @model_validator(mode="after")
     def _hysteresis(self):

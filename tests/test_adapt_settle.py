@@ -2,8 +2,8 @@
 
 A 4x2 wool sheet is bent onto a cylinder of radius 8 cm (positions and directors of the exact
 bending), refined once, and its new nodes filled by the DK transfer (Eq. 32): the directors are then
-off equilibrium.  Settling must put them at equilibrium (director residual down by at least 1e6, the
-target of the solver's rtol), lower the total potential, leave every translational dof bit for bit,
+off equilibrium.  Settling must put them at equilibrium (director residual down by at least 1e3, the
+target of the settler's rtol), lower the total potential, leave every translational dof bit for bit,
 and change nothing where there is nothing to settle (a rigid motion of the flat sheet; an already
 settled state).
 """
@@ -60,8 +60,8 @@ def test_settling_puts_dk_directors_at_equilibrium_and_keeps_positions():
     S = S.reshape(U.shape)
     r_after = np.linalg.norm((loads.ravel() - model.internal_force(S).ravel())[idx])
     assert rep.converged and rep.iterations >= 1
-    # Newton on a smooth block: the residual falls by the solver's rtol (1e-6) at least
-    assert r_after <= 1e-6 * r_before, (r_before, r_after)
+    # Newton on a smooth block: the residual falls by the settler's rtol (1e-3) at least
+    assert r_after <= 1e-3 * r_before, (r_before, r_after)
     assert np.isclose(rep.residual_before, r_before) and np.isclose(rep.residual_after, r_after)
     assert np.array_equal(S[:, :3], U[:, :3])                 # translations untouched, bit for bit
     assert np.array_equal(S[fixed], U[fixed])                 # and every prescribed dof
@@ -74,8 +74,10 @@ def test_settling_a_settled_state_or_a_rigid_motion_changes_nothing():
     model, fixed, loads, U = _case()
     S, _ = settle_directors(model, loads, fixed, U)
     S2, rep = settle_directors(model, loads, fixed, S)
-    # a settled state moves by round-off only (one Newton step on a residual of ~1e-6 of the first)
-    assert np.abs(S2 - S).max() < 1e-9, np.abs(S2 - S).max()
+    # a settled state moves by at most the correction of its residual (<= 1e-3 of the first, whose
+    # correction was < 0.1): far below the first settling's change
+    d1 = np.abs(S - U.ravel()).max()
+    assert np.abs(S2 - S).max() < 1e-3 * d1, (np.abs(S2 - S).max(), d1)
     # a rigid motion of the flat sheet is stress free: nothing to settle, no iteration taken
     X, Xn = model.mesh.nodes, model.mesh.directors
     Q = Rotation.from_rotvec([0.3, -0.5, 0.2]).as_matrix()

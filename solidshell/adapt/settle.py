@@ -14,10 +14,9 @@ stretch v, so near v ~ 0.1 the top mode passes the stability limit and the run w
 
 What.  With the positions U_o held, the directors minimise the total potential Pi = U(D) - P.D; a
 few Newton steps on the director block K_nn of the tangent (Eq. 9), each backtracked until Pi falls,
-reach that minimum.  Applied to both time levels D_n and D_n-1 of the central-difference state, the
-director velocity becomes the rate of the quasi-static director, so the fast director oscillation is
-removed and the slow rotation with the sheet is kept.  Positions, the translational velocities and
-every translational dof are untouched, so DK's placement of the new nodes (§5.4) stands.
+reach that minimum.  The driver settles D_n and shifts D_n-1 with it, so the velocity is kept.
+Positions and every translational dof are untouched, so DK's placement of the new nodes (§5.4)
+stands.
 """
 
 from __future__ import annotations
@@ -30,18 +29,6 @@ from scipy.sparse.linalg import splu
 
 
 _SHIFTS = (0.0, 1e-3, 1e-1, 10.0)   # Levenberg shifts, in units of the mean diagonal of K_nn
-
-
-def _solve(K, r, shift):
-    """K_nn^-1 r, or (K_nn + shift mean(diag K_nn) I)^-1 r; None if singular or not finite."""
-    if shift:
-        d = K.diagonal()
-        K = K + diags(np.full(d.size, shift * float(np.mean(np.abs(d)))), format="csc")
-    try:
-        x = splu(K.tocsc()).solve(r)
-    except RuntimeError:
-        return None
-    return x if np.all(np.isfinite(x)) else None
 
 
 @dataclass
@@ -62,46 +49,76 @@ def director_dofs(fixed: np.ndarray) -> np.ndarray:
     return np.flatnonzero((sel & ~fixed).ravel())
 
 
-def settle_directors(model, loads: np.ndarray, fixed: np.ndarray, D: np.ndarray, *, max_iter: int = 8,
-                     rtol: float = 1e-6, settled: float = 1e-3) -> tuple[np.ndarray, SettleReport]:
-    """(D with its free directors at equilibrium, report).  ``D`` flat (6N,) or (N, 6), not modified;
-    ``loads`` (N, 6) [force], ``fixed`` (N, 6) bool.  Stops when the director residual is below
-    ``rtol`` times its start value, after ``max_iter`` Newton steps, or when a step cannot lower Pi;
-    the report calls it converged when the residual fell by ``settled`` (three digits: the rest of the
-    imbalance is then far below the translational out-of-balance force the transfer leaves)."""
-    shape = fixed.shape
-    U = np.array(D, dtype=float).reshape(shape)
-    flat = U.ravel()
-    P = np.asarray(loads, dtype=float).ravel()
-    idx = director_dofs(np.asarray(fixed, dtype=bool))
-    E, F = model.energy_and_force(U)
-    pi = float(E) - float(P @ flat)
-    r = (P - np.asarray(F).ravel())[idx]
-    r0 = float(np.linalg.norm(r))
-    rn, it = r0, 0
-    while it < max_iter and rn > rtol * r0 and r0 > 0.0:
-        K = model.tangent(U).tocsr()[idx][:, idx].tocsc()
+class DirectorSettler:
+    """Settles the directors of states on one problem (``model``, ``loads`` (N,6) [force], ``fixed``
+    (N,6) bool) by Newton steps on the director block K_nn of the tangent, each backtracked until Pi
+    falls, with Levenberg shifts where K_nn is not convex there (the Newton step is then not a descent
+    direction).  A modified Newton that kept K_nn from the first state needed more than 8 steps for
+    two digits on the square pedestal (the Green thickness strain makes the block strongly
+    nonlinear), so K_nn is refreshed every step."""
+
+    def __init__(self, model, loads, fixed):
+        self.model = model
+        self.fixed = np.asarray(fixed, dtype=bool)
+        self.P = np.asarray(loads, dtype=float).ravel()
+        self.idx = director_dofs(self.fixed)
+
+    def _step(self, U, r, shift):
+        """K_nn^-1 r at U, or (K_nn + shift mean|diag K_nn| I)^-1 r; None if singular or not finite."""
+        K = self.model.tangent(U).tocsr()[self.idx][:, self.idx].tocsc() if shift == 0.0 else self._K
+        self._K = K if shift == 0.0 else self._K
+        if shift:
+            d = K.diagonal()
+            K = K + diags(np.full(d.size, shift * float(np.mean(np.abs(d)))), format="csc")
+        try:
+            x = splu(K.tocsc(), permc_spec="MMD_AT_PLUS_A").solve(r)   # symmetric: a symmetric ordering
+        except RuntimeError:
+            return None
+        return x if np.all(np.isfinite(x)) else None
+
+    def _descend(self, U, flat, r, pi):
+        """One backtracked step; (Pi, force) after it, or None (flat restored) if none lowers Pi."""
+        idx, P = self.idx, self.P
         base = flat[idx].copy()
-        accepted = False
-        for shift in _SHIFTS:           # Newton, then Levenberg-shifted where K_nn is not convex
-            step = _solve(K, r, shift)
+        for shift in _SHIFTS:
+            step = self._step(U, r, shift)
             if step is None or not float(r @ step) > 0.0:
                 continue
             s = 1.0
             for _ in range(8):          # backtrack on Pi: a full step may overshoot
                 flat[idx] = base + s * step
-                E_t, F_t = model.energy_and_force(U)
+                E_t, F_t = self.model.energy_and_force(U)
                 pi_t = float(E_t) - float(P @ flat)
                 if np.isfinite(pi_t) and pi_t < pi:
-                    accepted = True
-                    break
+                    return pi_t, F_t
                 s *= 0.5
-            if accepted:
-                break
-        if not accepted:
             flat[idx] = base
-            break
-        pi, it = pi_t, it + 1
-        r = (P - np.asarray(F_t).ravel())[idx]
-        rn = float(np.linalg.norm(r))
-    return flat.copy(), SettleReport(it, r0, rn, bool(rn <= settled * r0))
+        return None
+
+    def __call__(self, D, *, max_iter: int = 8, rtol: float = 1e-3):
+        """(D with its free directors at equilibrium (flat, 6N), report).  ``D`` flat (6N,) or (N,6),
+        not modified.  Stops when the director residual is below ``rtol`` times that of D (three digits:
+        the rest is then far below the translational out-of-balance force the transfer leaves), after
+        ``max_iter`` steps, or when no step lowers Pi."""
+        idx, P = self.idx, self.P
+        U = np.array(D, dtype=float).reshape(self.fixed.shape)
+        flat = U.ravel()
+        E, F = self.model.energy_and_force(U)
+        pi = float(E) - float(P @ flat)
+        r = (P - np.asarray(F).ravel())[idx]
+        r0 = float(np.linalg.norm(r))
+        rn, it = float(np.linalg.norm(r)), 0
+        while it < max_iter and rn > rtol * r0 and r0 > 0.0:
+            got = self._descend(U, flat, r, pi)
+            if got is None:
+                break
+            pi, F = got
+            it += 1
+            r = (P - np.asarray(F).ravel())[idx]
+            rn = float(np.linalg.norm(r))
+        return flat.copy(), SettleReport(it, r0, rn, bool(rn <= rtol * r0))
+
+
+def settle_directors(model, loads, fixed, D, **kw):
+    """One state's directors settled (:class:`DirectorSettler`): (flat D, SettleReport)."""
+    return DirectorSettler(model, loads, fixed)(D, **kw)

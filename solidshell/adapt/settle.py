@@ -14,8 +14,9 @@ stretch v, so near v ~ 0.1 the top mode passes the stability limit and the run w
 
 What.  With the positions U_o held, the directors minimise the total potential Pi = U(D) - P.D; a
 few Newton steps on the director block K_nn of the tangent (Eq. 9), each backtracked until Pi falls,
-reach that minimum.  The driver settles D_n and shifts D_n-1 with it, so the velocity is kept.
-Positions and every translational dof are untouched, so DK's placement of the new nodes (§5.4)
+reach that minimum.  The driver settles both time levels D_n and D_n-1 of the central-difference
+state: the director velocity becomes the rate of the quasi-static director, so the fast director
+oscillation is removed and the slow rotation with the sheet is kept.  Positions and every translational dof are untouched, so DK's placement of the new nodes (§5.4)
 stands.
 """
 
@@ -55,7 +56,8 @@ class DirectorSettler:
     falls, with Levenberg shifts where K_nn is not convex there (the Newton step is then not a descent
     direction).  A modified Newton that kept K_nn from the first state needed more than 8 steps for
     two digits on the square pedestal (the Green thickness strain makes the block strongly
-    nonlinear), so K_nn is refreshed every step."""
+    nonlinear), so K_nn is refreshed every step; a second state (the other time level) may start
+    from the first one's settled directors, one step away."""
 
     def __init__(self, model, loads, fixed):
         self.model = model
@@ -95,9 +97,10 @@ class DirectorSettler:
             flat[idx] = base
         return None
 
-    def __call__(self, D, *, max_iter: int = 8, rtol: float = 1e-3):
+    def __call__(self, D, *, start=None, max_iter: int = 8, rtol: float = 1e-3):
         """(D with its free directors at equilibrium (flat, 6N), report).  ``D`` flat (6N,) or (N,6),
-        not modified.  Stops when the director residual is below ``rtol`` times that of D (three digits:
+        not modified; ``start``: a state whose free directors to start from (taken only if they give
+        the lower Pi).  Stops when the director residual is below ``rtol`` times that of D (three digits:
         the rest is then far below the translational out-of-balance force the transfer leaves), after
         ``max_iter`` steps, or when no step lowers Pi."""
         idx, P = self.idx, self.P
@@ -107,6 +110,15 @@ class DirectorSettler:
         pi = float(E) - float(P @ flat)
         r = (P - np.asarray(F).ravel())[idx]
         r0 = float(np.linalg.norm(r))
+        if start is not None:
+            base = flat[idx].copy()
+            flat[idx] = np.asarray(start, dtype=float).ravel()[idx]
+            E_s, F_s = self.model.energy_and_force(U)
+            pi_s = float(E_s) - float(P @ flat)
+            if np.isfinite(pi_s) and pi_s < pi:
+                pi, r = pi_s, (P - np.asarray(F_s).ravel())[idx]
+            else:
+                flat[idx] = base
         rn, it = float(np.linalg.norm(r)), 0
         while it < max_iter and rn > rtol * r0 and r0 > 0.0:
             got = self._descend(U, flat, r, pi)

@@ -59,6 +59,7 @@ def FIXED_COLUMNS():
         ("nodes", pa.int64(), "mesh nodes"),
         ("elements", pa.int64(), "mesh elements"),
         ("wall_time_s", pa.float64(), "the run's wall time on its worker [s]"),
+        ("cpu_time_s", pa.float64(), "CPU time of the worker process during the run (all threads) [s]"),
         ("run_dir", pa.string(), "the run's folder (summary.json, result.vtu, top.png)"),
         ("worker", pa.string(), "address of the worker that ran it"),
         ("finished_at", pa.string(), "UTC time the result was recorded (ISO 8601)"),

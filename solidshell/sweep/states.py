@@ -141,6 +141,7 @@ class State:
     fold_count: int
     representative: dict                     # the ledger row of its first run
     members: list = field(default_factory=list)   # ledger rows
+    profile: np.ndarray | None = field(default=None, repr=False)   # the representative's r(theta)
 
     @property
     def count(self) -> int:
@@ -176,14 +177,13 @@ def classify(rows, dc_tol: float = 0.01, boundary_tol: float = 0.03, group: str 
                 continue
             if abs(rep["drape_coefficient"] - row["drape_coefficient"]) > dc_tol:
                 continue
-            r0 = st._profile
+            r0 = st.profile
             d = np.abs(r[idx] - r0[None, :]).max(axis=1).min() / max(r0.mean(), 1e-300)
             if d <= boundary_tol:
                 home = st
                 break
         if home is None:
-            home = State(number=len(states) + 1, fold_count=int(row["fold_count"]), representative=row)
-            home._profile = r
+            home = State(number=len(states) + 1, fold_count=int(row["fold_count"]), representative=row, profile=r)
             states.append(home)
         home.members.append(row)
     return states, unsettled

@@ -95,7 +95,7 @@ def run_task(task: dict) -> dict:
     from ..errors import InputError, SolverError
     from ..runner import run_scene
 
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     over = {"output.pictures": task["pictures"], **task["overrides"]}
     with _limit_threads(task["threads"]):
         try:
@@ -108,6 +108,7 @@ def run_task(task: dict) -> dict:
             row["finished_at"] = _now()
             return row
     row = row_from_output(task, out, time.perf_counter() - t0)
+    row["cpu_time_s"] = time.process_time() - c0        # all threads of the worker process
     row["finished_at"] = _now()
     return row
 

@@ -73,6 +73,22 @@ def rows(out, spec):
     return {r["key"]: r for r in Ledger(out, spec).read().to_pylist()}
 
 
+def steady(out, spec) -> dict:
+    """Throughput once every worker has finished its first run (numba loading, imports: the
+    worker's warm-up): runs recorded after that moment / the time they took [runs/s]."""
+    from datetime import datetime
+    rs = sorted(rows(out, spec).values(), key=lambda r: r["finished_at"])
+    ts = [datetime.fromisoformat(r["finished_at"]) for r in rs]
+    first = {}
+    for r, t in zip(rs, ts):
+        first.setdefault(r["worker"], t)
+    t0 = max(first.values())
+    n = sum(1 for t in ts if t > t0)
+    span = (ts[-1] - t0).total_seconds()
+    return {"warm_up_run_wall_s": sorted(round(r["wall_time_s"], 1) for r in rs)[-len(first):],
+            "steady_runs": n, "steady_span_s": span, "steady_runs_per_s": round(n / span, 4) if span else None}
+
+
 def free_port() -> int:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
@@ -130,12 +146,14 @@ def speed(spec, out, rep):
         rw = rows(out / tag, spec).values()
         res[tag] = {"workers": n, "wall_s": round(wall, 1), "load_before": before, "load_after": load(),
                     "sum_run_wall_s": round(sum(x["wall_time_s"] for x in rw), 1),
-                    "sum_run_cpu_s": round(sum(x["cpu_time_s"] for x in rw), 1)}
+                    "sum_run_cpu_s": round(sum(x["cpu_time_s"] for x in rw), 1), **steady(out / tag, spec)}
         print(f"{n} worker(s): {wall:.1f} s (load {before} -> {res[tag]['load_after']})", flush=True)
     a, b = rows(out / "local1", spec), rows(out / "local2", spec)
     t1 = res["local1"]["wall_s"] + res["local1b"]["wall_s"]
     t2 = res["local2"]["wall_s"] + res["local2b"]["wall_s"]
+    thr = lambda *t: sum(res[x]["steady_runs_per_s"] for x in t)      # noqa: E731
     rep["speed"] = {**res, "ratio_1_over_2": round(t1 / t2, 3),
+                    "steady_throughput_ratio_2_over_1": round(thr("local2", "local2b") / thr("local1", "local1b"), 3),
                     "ratio_first_pair": round(res["local1"]["wall_s"] / res["local2"]["wall_s"], 3),
                     "results_identical_1_vs_2": not same(a, b)}
 
@@ -162,11 +180,13 @@ def speed_sessions(spec, out, rep):
         assert r.recorded == 16 and not r.failed, r
         rw = rows(out / tag, spec).values()
         res[tag] = {"workers": n, "wall_s": round(wall, 1), "load_before": before, "load_after": load(),
-                    "sum_run_cpu_s": round(sum(x["cpu_time_s"] for x in rw), 1)}
+                    "sum_run_cpu_s": round(sum(x["cpu_time_s"] for x in rw), 1), **steady(out / tag, spec)}
         print(f"{n} worker(s) in own sessions: {wall:.1f} s (load {before} -> {res[tag]['load_after']})", flush=True)
     t1 = res["sess1"]["wall_s"] + res["sess1b"]["wall_s"]
     t2 = res["sess2"]["wall_s"] + res["sess2b"]["wall_s"]
+    thr = lambda *t: sum(res[x]["steady_runs_per_s"] for x in t)      # noqa: E731
     rep["speed_sessions"] = {**res, "ratio_1_over_2": round(t1 / t2, 3),
+                             "steady_throughput_ratio_2_over_1": round(thr("sess2", "sess2b") / thr("sess1", "sess1b"), 3),
                              "results_identical_1_vs_2": not same(rows(out / "sess1", spec), rows(out / "sess2", spec))}
 
 
@@ -197,24 +217,25 @@ def kill_worker(spec, out, rep):
     hc = HandCluster(2, out)
     info = {}
 
+    def executing(dask_worker):                    # runs on the worker: the tasks it is running
+        return sorted(str(ts.key) for ts in dask_worker.state.executing)
+
     def killer():
-        # wait until a task has run ~half its time on a worker, then SIGKILL that worker's process
-        deadline = time.time() + 900
+        # once 3 runs are recorded, wait for a worker to be 4 s into a run, then SIGKILL its process
+        deadline = time.time() + 1800
         while time.time() < deadline:
-            proc = hc.client.processing()
-            busy = {w: ts for w, ts in proc.items() if ts}
-            if busy and len(list((out / "killw" / "ledger").glob("*.parquet"))) >= 3:
-                time.sleep(4.0)
-                proc = hc.client.processing()
-                busy = {w: ts for w, ts in proc.items() if ts}
-                if not busy:
-                    continue
-                w, ts = next(iter(busy.items()))
-                pid = hc.worker_pids()[w]
-                info.update(worker=w, pid=pid, task=ts[0], killed_at=time.strftime("%H:%M:%S"),
-                            recorded_before=len(list((out / "killw" / "ledger").glob("*.parquet"))))
-                os.kill(pid, signal.SIGKILL)
-                return
+            if len(list((out / "killw" / "ledger").glob("*.parquet"))) >= 3:
+                running = {w: ks for w, ks in hc.client.run(executing).items() if ks}
+                if running:
+                    w, ks = next(iter(running.items()))
+                    time.sleep(4.0)
+                    if hc.client.run(executing, workers=[w]).get(w) != ks:
+                        continue                        # that run ended meanwhile: pick again
+                    pid = hc.worker_pids()[w]
+                    info.update(worker=w, pid=pid, task=ks[0], killed_at=time.strftime("%H:%M:%S"),
+                                recorded_before=len(list((out / "killw" / "ledger").glob("*.parquet"))))
+                    os.kill(pid, signal.SIGKILL)
+                    return
             time.sleep(0.5)
 
     th = threading.Thread(target=killer, daemon=True)
@@ -272,6 +293,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("parts", nargs="*", default=["speed", "scheduler", "kill-worker", "kill-client"])
     ap.add_argument("--out", default=str(HERE / "out" / "sweep_cluster"))
+    ap.add_argument("--recompute", action="store_true", help="recompute the speed figures from the ledgers kept")
     a = ap.parse_args()
     out = Path(a.out).resolve()
     out.mkdir(parents=True, exist_ok=True)
@@ -282,12 +304,46 @@ def main():
     rep = json.loads(rep_path.read_text()) if rep_path.is_file() else {}
     rep["cpus"] = os.cpu_count()
     dirs = {"speed": ["local1", "local2", "local2b", "local1b"], "speed-sessions": ["sess1", "sess2", "sess2b", "sess1b"], "scheduler": ["hand"], "kill-worker": ["killw"], "kill-client": ["killc"]}
+    if a.recompute:
+        for key, tags in (("speed", ("local1", "local2", "local2b", "local1b")),
+                          ("speed_sessions", ("sess1", "sess2", "sess2b", "sess1b"))):
+            if key in rep:
+                for t in tags:
+                    rep[key][t].update(steady(out / t, spec))
+                thr = lambda *t: sum(rep[key][x]["steady_runs_per_s"] for x in t)      # noqa: E731
+                rep[key]["steady_throughput_ratio_2_over_1"] = round(thr(tags[1], tags[2]) / thr(tags[0], tags[3]), 3)
+        a.parts = []
+        rep_path.write_text(json.dumps(rep, indent=1, default=str))
     for part in a.parts:
         for d in dirs[part]:
             shutil.rmtree(out / d, ignore_errors=True)       # a fresh sweep, not a resumed one
         {"speed": speed, "speed-sessions": speed_sessions, "scheduler": scheduler, "kill-worker": kill_worker, "kill-client": kill_client}[part](spec, out, rep)
         rep_path.write_text(json.dumps(rep, indent=1, default=str))
-    print(f"wrote {rep_path}")
+    write_md(rep, out / "sweep_cluster.md")
+    print(f"wrote {rep_path} and sweep_cluster.md")
+
+
+def write_md(rep, path):
+    """The figures of sweep_cluster.json as a short table (load averages: 1, 5, 15 min)."""
+    lines = [f"# solidshell sweep on dask.distributed ({rep.get('cpus')} CPUs, shared machine)", ""]
+    for key, title in (("speed", "LocalCluster (one session)"), ("speed_sessions", "workers in their own sessions")):
+        if key not in rep:
+            continue
+        r = rep[key]
+        lines += [f"## 16-run sweep, 1 vs 2 workers: {title}", "",
+                  "| sweep | workers | wall [s] | run CPU [s] | steady runs/s | load before | load after |",
+                  "|---|---|---|---|---|---|---|"]
+        for tag, v in r.items():
+            if isinstance(v, dict):
+                lines.append(f"| {tag} | {v['workers']} | {v['wall_s']} | {v['sum_run_cpu_s']} | "
+                             f"{v.get('steady_runs_per_s')} | {v['load_before']} | {v['load_after']} |")
+        lines += ["", f"wall ratio (1 worker / 2 workers, ABBA sums): {r['ratio_1_over_2']}; steady throughput "
+                  f"ratio (2 / 1): {r.get('steady_throughput_ratio_2_over_1')}; results identical: "
+                  f"{r['results_identical_1_vs_2']}", ""]
+    for key in ("scheduler", "kill_worker", "kill_client"):
+        if key in rep:
+            lines += [f"## {key}", "", "```", json.dumps(rep[key], indent=1, default=str), "```", ""]
+    Path(path).write_text("\n".join(lines) + "\n")
 
 
 if __name__ == "__main__":

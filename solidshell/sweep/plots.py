@@ -86,7 +86,8 @@ def curve_figure(rows, x, y, path, x_ref=1.0, x_label=None, by=None, log_x=False
     ax.grid(True, alpha=0.3)
     if by:
         ax.legend(fontsize=8)
-    ax.set_title(title or f"{y} against {x}  (numbers: fold count; x: not converged)", fontsize=10)
+    ax.set_title(f"{title + ': ' if title else ''}{y.replace('_', ' ')}  (numbers: fold count; x: not converged)",
+                 fontsize=10)
     fig.tight_layout()
     path = Path(path)
     fig.savefig(path, dpi=110)

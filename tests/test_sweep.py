@@ -165,6 +165,13 @@ def test_ledger_once_per_key(tmp_path):
     t = led.read()
     assert t.num_rows == 1 and t.column("drape_coefficient").to_pylist() == [0.7]
     assert str(t.schema.field("perturbation.seed").type) == "int64"
+    # a part written before a column existed reads with that column null
+    import pyarrow.parquet as pq
+    old = t.drop_columns(["interpenetrated_nodes"]).set_column(0, "key", [[s.runs[1].key]])
+    old = old.set_column(old.schema.get_field_index("index"), "index", [[1]])
+    pq.write_table(old, led.dir / f"{s.runs[1].key}.parquet")
+    t2 = led.read()
+    assert t2.num_rows == 2 and t2.column("interpenetrated_nodes").to_pylist() == [None, None]
     other = from_dict({**BASE, "name": "other"}, "o.toml")
     with pytest.raises(InputError, match="ledger of sweep 't'"):
         Ledger(tmp_path, other).check()

@@ -53,6 +53,7 @@ def FIXED_COLUMNS():
         ("fold_count", pa.int64(), "folds of the projected boundary (solidshell.analysis)"),
         ("fold_angles_deg", pa.list_(pa.float64()), "polar angles of the fold crests [deg]"),
         ("mean_radius", pa.float64(), "mean radius of the projected boundary [cm]"),
+        ("interpenetrated_nodes", pa.int64(), "nodes where the sheet passes through itself (n_p . d_p < 0, §4.3)"),
         ("radius_profile", pa.list_(pa.float32()), f"r(theta) [cm] at {PROFILE_POINTS} angles, 1 deg apart"),
         ("fingerprint", pa.string(), "folds, canonical fold angles (5 deg) under the symmetry group, DC"),
         ("symmetry", pa.string(), "the symmetry group the fingerprint is taken under"),
@@ -174,5 +175,11 @@ class Ledger:
         parts = sorted(self.dir.glob("*.parquet")) if self.dir.is_dir() else []
         if not parts:
             return self.schema.empty_table()
-        t = pa.concat_tables([pq.read_table(p, schema=self.schema) for p in parts])
-        return t.sort_by("index")
+        return pa.concat_tables([self._part(pq.read_table(p)) for p in parts]).sort_by("index")
+
+    def _part(self, t):
+        """A part in this ledger's schema (a column an older part lacks is read as nulls)."""
+        pa = _pa()
+        cols = [t.column(f.name).cast(f.type) if f.name in t.column_names else pa.nulls(t.num_rows, f.type)
+                for f in self.schema]
+        return pa.Table.from_arrays(cols, schema=self.schema)

@@ -48,14 +48,15 @@ def write_report(spec: SweepSpec, out, group: str | None = None) -> dict:
     with open(st_csv, "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["state", "fold_count", "runs", "frequency", "dc_min", "dc_mean", "dc_max",
-                    "fold_angles_deg", "stable_runs", "representative_key", "picture"])
+                    "fold_angles_deg", "stable_runs", "interpenetrated_runs", "representative_key", "picture"])
         for st in states:
             lo, mean, hi = st.dc_range()
             rep = st.representative
             w.writerow([st.number, st.fold_count, st.count, f"{st.count / total:.4f}", f"{lo:.4f}",
                         f"{mean:.4f}", f"{hi:.4f}",
                         " ".join(f"{a:.1f}" for a in rep.get("fold_angles_deg") or []),
-                        sum(1 for m in st.members if m.get("stable")), rep["key"],
+                        sum(1 for m in st.members if m.get("stable")),
+                        sum(1 for m in st.members if m.get("interpenetrated_nodes")), rep["key"],
                         str(Path(rep["run_dir"]) / "top.png")])
     files.append(st_csv)
     freq = {}
@@ -65,13 +66,15 @@ def write_report(spec: SweepSpec, out, group: str | None = None) -> dict:
              f"{total} of {spec.n_runs} runs recorded; {len(states)} distinct state(s) under symmetry {group} "
              f"(dc_tol {c.dc_tol}, boundary_tol {c.boundary_tol}); {len(unsettled)} run(s) unsettled "
              f"(not converged or failed).", "",
-             "| state | folds | runs | frequency | DC mean (min-max) | stable | representative |",
-             "|---|---|---|---|---|---|---|"]
+             "| state | folds | runs | frequency | DC mean (min-max) | stable | self-penetrating | representative |",
+             "|---|---|---|---|---|---|---|---|"]
     for st in states:
         lo, mean, hi = st.dc_range()
         stable = sum(1 for m in st.members if m.get("stable"))
+        pen = [m.get("interpenetrated_nodes") for m in st.members]
+        pen_s = "?" if all(p is None for p in pen) else f"{sum(1 for p in pen if p)}/{st.count}"
         lines.append(f"| S{st.number} | {st.fold_count} | {st.count} | {st.count / total:.2f} | "
-                     f"{mean:.4f} ({lo:.4f}-{hi:.4f}) | {stable}/{st.count} | {st.representative['key']} |")
+                     f"{mean:.4f} ({lo:.4f}-{hi:.4f}) | {stable}/{st.count} | {pen_s} | {st.representative['key']} |")
     lines += ["", "Fold-count frequencies: " + (", ".join(f"{k} folds: {v}/{total}" for k, v in sorted(freq.items()))
                                                  or "none"), ""]
     if unsettled:

@@ -69,6 +69,7 @@ def row_from_output(task: dict, out, wall: float) -> dict:
         "residual": s.get("final_relative_residual"),
         "drape_coefficient": s.get("drape_coefficient"), "fold_count": s.get("fold_count"),
         "fold_angles_deg": s.get("fold_angles_deg"), "mean_radius": s.get("mean_radius"),
+        "interpenetrated_nodes": s.get("interpenetrated_nodes"),
         "nodes": s["counts"]["nodes"], "elements": s["counts"]["elements"], "wall_time_s": wall,
     })
     if s.get("center") is not None and s.get("finite"):

@@ -1,9 +1,11 @@
-"""Command line: ``solidshell scenes | mesh | run`` (also ``python -m solidshell ...``).
+"""Command line: ``solidshell scenes | mesh | run | sweep`` (also ``python -m solidshell ...``).
 
     solidshell scenes
     solidshell mesh SCENE [--mesh 48x16x4] [--out DIR] [--force] [--allow-large]
     solidshell run  SCENE [--mesh M] [--solver static|explicit|relax] [--set key=value ...] [--out DIR]
                           [--checkpoint FILE] [--restart FILE] [--force] [--allow-large]
+    solidshell sweep SWEEP [--scheduler tcp://HOST:PORT] [--workers N] [--threads N] [--out DIR]
+                           [--retries N] [--limit N] [--list]     (solidshell.sweep; needs dask)
 
 SCENE is a packaged scene name (``solidshell scenes`` lists them) or the path of a .toml scene
 file.  ``--set`` overrides any scene key by its dotted name (``--set solver.static.c=2e-3``,
@@ -97,6 +99,21 @@ def _parser() -> argparse.ArgumentParser:
                         "scene's mesh.adaptive_level0 or --mesh; settings: --set adapt.KEY=VALUE")
     r.add_argument("--no-progress", action="store_true", help="no progress bar")
     _common(r)
+
+    w = sub.add_parser("sweep", help="an ensemble of runs on dask.distributed (solidshell.sweep); "
+                                     "results in a Parquet ledger, states and a figure")
+    w.add_argument("sweep", nargs="?", help="sweep .toml file or packaged study name (--list)")
+    w.add_argument("--scheduler", metavar="tcp://HOST:PORT", help="a running Dask scheduler "
+                   "(default: a local cluster on 127.0.0.1)")
+    w.add_argument("--workers", type=int, metavar="N", help="local cluster: worker processes "
+                   "(default: CPU count / threads)")
+    w.add_argument("--threads", type=int, default=1, metavar="N", help="threads per run (default 1)")
+    w.add_argument("--retries", type=int, default=2, metavar="N", help="extra attempts of a failed task")
+    w.add_argument("--out", metavar="DIR", help="output folder (default: runs/sweep-<name>); "
+                   "run again with the same folder to resume")
+    w.add_argument("--limit", type=int, metavar="N", help="run at most N of the missing runs")
+    w.add_argument("--list", action="store_true", help="list the packaged studies")
+    w.add_argument("--no-progress", action="store_true", help="no progress bar or lines")
     return p
 
 
@@ -172,6 +189,47 @@ def _cmd_run(args) -> int:
     return EXIT_OK if s.get("converged") else EXIT_NOT_CONVERGED
 
 
+def _cmd_sweep(args) -> int:
+    from pathlib import Path
+
+    from .sweep import load_spec, studies
+
+    if args.list:
+        for name in studies():
+            spec = load_spec(name)
+            print(f"{name}  ({spec.n_runs} runs, scene {spec.scene})  {spec.description}")
+        return EXIT_OK
+    if not args.sweep:
+        raise InputError("solidshell sweep: give a sweep file or a packaged study name (--list)")
+    from .sweep.engine import require_dask
+
+    require_dask()                      # before the sweep is parsed: the one thing to install first
+    from .sweep.engine import run_sweep
+    from .sweep.report import sweep_group, write_report
+
+    spec = load_spec(args.sweep)
+    out = args.out or f"runs/sweep-{spec.name}"
+    group = sweep_group(spec)
+    for k in ("retries", "limit"):
+        v = getattr(args, k)
+        if v is not None and v < 0:
+            raise InputError(f"--{k} must be >= 0, got {v}")
+    res = run_sweep(spec, out, scheduler=args.scheduler, workers=args.workers, threads=args.threads,
+                    retries=args.retries, progress=not args.no_progress, group=group, limit=args.limit)
+    rep = write_report(spec, out, group)
+    print(f"sweep {spec.name}: {res.recorded} run(s) recorded now, {res.skipped} before, "
+          f"{len(res.failed)} without a result, {res.total} in all; {res.wall_time_s:.1f} s")
+    for key, why in res.failed:
+        _say(f"solidshell: run {key} has no result: {why}")
+    freq = ", ".join(f"{k} folds {v:.0%}" for k, v in rep["fold_frequencies"].items())
+    print(f"  {len(rep['states'])} state(s) under {rep['group']}" + (f"; {freq}" if freq else "")
+          + (f"; {rep['unsettled']} unsettled" if rep["unsettled"] else ""))
+    print(f"  wrote {out}/: ledger/ (Parquet), " + ", ".join(Path(f).name for f in rep["files"]))
+    if res.interrupted:
+        return EXIT_INTERRUPTED
+    return EXIT_NOT_CONVERGED if res.failed or res.recorded + res.skipped < res.total else EXIT_OK
+
+
 def main(argv=None) -> int:
     """Entry point; returns the exit status (the console script exits with it)."""
     argv = list(sys.argv[1:] if argv is None else argv)
@@ -186,6 +244,8 @@ def main(argv=None) -> int:
             return _cmd_scenes(args)
         if args.command == "mesh":
             return _cmd_mesh(args)
+        if args.command == "sweep":
+            return _cmd_sweep(args)
         return _cmd_run(args)
     except InputError as e:
         _say(f"solidshell: error: {e}")

@@ -277,6 +277,28 @@ def build_problem(scene: Scene, mesh, fixed=None):
     return Problem(model, fixed, scene_loads(sc, model), contact=contact_bodies(sc), name=sc.name)
 
 
+def perturbed_start(scene: Scene, mesh, fixed, settings: dict):
+    """The starting state U0 of the scene's ``[perturbation]`` (solidshell.perturbation), or None
+    when it has none (or amplitude 0).  A perturbation and a solver U0 together are refused."""
+    if not scene.perturbation or not scene.perturbation.get("amplitude"):
+        return None
+    if settings.get("U0") is not None:
+        raise InputError(f"{scene.source}: perturbation and solver setting U0 both give the starting state; "
+                         f"keep one")
+    from .perturbation import initial_state
+
+    centre = None
+    ped = scene.pedestal()
+    if ped is not None:
+        centre = ped["centre"]
+    else:
+        centre = next((c["centre"] for c in scene.contact if c["type"] == "sphere"), None)
+    try:
+        return initial_state(scene.perturbation, mesh, fixed, centre)
+    except InputError as e:
+        raise InputError(f"{scene.source}: {e}") from None
+
+
 def check_solver_settings(kind: str, merged: dict):
     """The solver's typed settings (solidshell.settings.validate) before any work: one-line
     InputError naming the key.  Returns the parsed settings model."""
@@ -430,11 +452,15 @@ def _run(sc, kind, mesh_arg, out_dir, cb, settings, timings, t_start, overrides=
     material = sc.material_object()
     check_load_sets(sc, mesh)
     bodies = contact_bodies(sc)
+    solver_s = s                  # the solver's settings: s plus a perturbed start (kept out of summary)
     if kind != "none":
-        check_initial_contact(sc, mesh, fixed, bodies, U0=s.get("U0"))
+        U0 = perturbed_start(sc, mesh, fixed, s)
+        if U0 is not None:
+            solver_s = {**s, "U0": U0}
+        check_initial_contact(sc, mesh, fixed, bodies, U0=solver_s.get("U0"))
     adaptive_run = None
     if adapt is not None:       # builds the background mesh: its checks (quads only, memory) come now
-        adaptive_run = _adaptive_run(sc, mesh, s, adapt, kind, cb)
+        adaptive_run = _adaptive_run(sc, mesh, solver_s, adapt, kind, cb)
         mesh_name = f"{mesh_name} adaptive ({adapt.levels} levels)"
     timings["mesh"] = time.perf_counter() - t
     if folder is not None and folder.foreign:
@@ -456,6 +482,8 @@ def _run(sc, kind, mesh_arg, out_dir, cb, settings, timings, t_start, overrides=
     summary["total_weight"] = float(material.weight_per_area * summary["area"])
     summary["overrides"] = dict(overrides or {})
     summary["scene_inputs"] = sc.summary()          # the resolved scene, to reproduce the run
+    if solver_s is not s:
+        summary["perturbation"] = dict(sc.perturbation)
     if s and s.get("checkpoint"):
         summary["checkpoint"] = str(s["checkpoint"])
     if s and s.get("restart"):
@@ -482,7 +510,7 @@ def _run(sc, kind, mesh_arg, out_dir, cb, settings, timings, t_start, overrides=
                 model = problem.model
                 timings["setup"] = time.perf_counter() - t
                 t = time.perf_counter()
-                result = fn(problem, dict(s), _phase(cb, 0.08, 0.9))
+                result = fn(problem, dict(solver_s), _phase(cb, 0.08, 0.9))
             else:
                 timings["setup"] = time.perf_counter() - t
                 t = time.perf_counter()

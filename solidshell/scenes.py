@@ -89,6 +89,11 @@ Scene file format
     snapshots = [0.0, 0.1, 0.4, 2.1]      # times [s] kept in the time series and pictured
     pictures = ["top", "iso"]             # any of top, iso, side (x-z), side_yz (y-z)
 
+    [perturbation]                        # optional: a seeded starting state (solidshell.perturbation)
+    shape = "random"                      #   "random" (smooth field: seed, wavelength [cm]) or
+    amplitude = 0.5                       #   "folds" (folds = n, phase [deg]); amplitude [cm],
+    seed = 0                              #   0 = none; --set perturbation.seed=3 in a sweep
+
 Scenes are immutable; :meth:`Scene.with_overrides` returns a validated copy with dotted keys set,
 e.g. ``{"mesh.density": "24x8x4", "solver.static.c": 2e-3, "material.warp_angle": 90}``.
 """
@@ -272,6 +277,7 @@ class Scene:
     solver: dict              # {"kind": str, "static": {...}, "explicit": {...}, "relax": {...}}
     output: dict              # {"snapshots": [...], "pictures": [...]}
     adapt: dict = field(default_factory=dict)   # the [adapt] table (solidshell.adapt.settings.AdaptSettings)
+    perturbation: dict = field(default_factory=dict)   # [perturbation] (solidshell.perturbation), {} = none
     source: str = "<dict>"
     raw: dict = field(default_factory=dict, repr=False, compare=False)
 
@@ -282,7 +288,7 @@ class Scene:
         raw = copy.deepcopy(data)
         _table(ctx, "(top level)", data)
         top = {"name", "title", "paper_section", "description", "geometry", "mesh", "material", "model",
-               "supports", "loads", "contact", "solver", "output", "adapt"}
+               "supports", "loads", "contact", "solver", "output", "adapt", "perturbation"}
         _unknown(ctx, "", data, top)
         for req in ("name", "title", "geometry"):
             if req not in data:
@@ -517,10 +523,16 @@ class Scene:
             from .adapt.settings import parse_adapt
             parse_adapt(adapt, f"{source}: adapt")
 
+        # perturbation of the starting state (solidshell.perturbation), checked here too ------------
+        perturbation = dict(_table(ctx, "perturbation", data.get("perturbation", {})))
+        if perturbation:
+            from .perturbation import parse_perturbation
+            perturbation = parse_perturbation(perturbation, f"{source}: perturbation").as_dict()
+
         return cls(name=name, title=title, paper_section=section, description=description,
                    geometry=geometry, mesh=mesh, material=material, model=model, supports=supports,
                    loads=loads, contact=tuple(contact), solver=solver, output=output, adapt=adapt,
-                   source=source, raw=raw)
+                   perturbation=perturbation, source=source, raw=raw)
 
     # ------------------------------------------------------------------ derived
     @property
@@ -627,7 +639,8 @@ class Scene:
                 "material": plain(self.material), "model": plain(self.model),
                 "supports": plain(self.supports), "loads": plain(self.loads),
                 "contact": plain(list(self.contact)), "solver": plain(self.solver),
-                "output": plain(self.output), "adapt": plain(self.adapt)}
+                "output": plain(self.output), "adapt": plain(self.adapt),
+                "perturbation": plain(self.perturbation)}
 
 
 def _setting(ctx, key, v):

@@ -12,13 +12,15 @@ belongs to which solver kind.
 from __future__ import annotations
 
 import math
-from typing import Annotated, Any
+from typing import Annotated, Any, Optional
+
+import numpy as np
 
 from pydantic import AfterValidator, BaseModel, ConfigDict, ValidationError
 
 from .errors import InputError
 
-__all__ = ["SettingsModel", "parse", "validate", "Finite", "SOLVER_KINDS"]
+__all__ = ["SettingsModel", "parse", "validate", "Finite", "StateArray", "SOLVER_KINDS"]
 
 SOLVER_KINDS = ("static", "explicit", "relax")
 
@@ -31,6 +33,29 @@ def _finite(x: float) -> float:
 
 Finite = Annotated[float, AfterValidator(_finite)]
 """A float that must be finite (use with pydantic's Field(gt=..., ge=...) for ranges)."""
+
+
+def _state_array(v: Any) -> Optional[np.ndarray]:
+    """A U0 / V0 value: None, or numbers reshapeable to (N, 6) (one row of 6 dofs per node), finite."""
+    if v is None:
+        return None
+    if isinstance(v, (str, bytes, bool)) or np.isscalar(v) and not isinstance(v, (int, float)):
+        raise ValueError("must be an array of numbers, 6 per node ((N, 6) dofs)")
+    try:
+        a = np.array(v, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError("must be an array of numbers, 6 per node ((N, 6) dofs)") from None
+    if a.size == 0 or a.size % 6:
+        raise ValueError(f"must hold 6 numbers per node ((N, 6) dofs), got {a.size} numbers")
+    if not np.all(np.isfinite(a)):
+        raise ValueError("must be finite")
+    a = a.reshape(-1, 6)
+    a.flags.writeable = False
+    return a
+
+
+StateArray = Annotated[Any, AfterValidator(_state_array)]
+"""A solver state array (U0, V0): None or (N, 6) finite numbers, read-only once parsed."""
 
 
 class SettingsModel(BaseModel):

@@ -13,7 +13,7 @@ from typing import Literal, Optional
 
 from pydantic import Field, field_validator, model_validator
 
-from ..settings import Finite, SettingsModel
+from ..settings import Finite, SettingsModel, StateArray
 
 __all__ = ["StaticSettings"]
 
@@ -51,6 +51,7 @@ class StaticSettings(SettingsModel):
     saddle_step: Finite = Field(0.05, gt=0.0, description="largest escape step, fraction of L_f")
     contact_stiffness: Optional[Finite] = Field(None, gt=0.0)
     factorization: Literal["cholmod", "superlu"] = "cholmod"
+    U0: StateArray = None     # (N, 6) starting state [length] (e.g. a scene's [perturbation])
 
     @field_validator("load_factors")
     @classmethod

@@ -15,7 +15,7 @@ import numpy as np
 from pydantic import AfterValidator, BeforeValidator, Field, ValidationInfo, field_validator
 
 from ...errors import InputError
-from ...settings import Finite, SettingsModel, parse
+from ...settings import Finite, SettingsModel, StateArray, parse
 
 __all__ = ["ExplicitSettings", "RelaxSettings", "parse_settings", "RUN_KEYS", "RELAX_KEYS", "RESTART_NEUTRAL"]
 
@@ -23,25 +23,6 @@ Pos = Annotated[Finite, Field(gt=0)]
 NonNeg = Annotated[Finite, Field(ge=0)]
 PosInt = Annotated[int, Field(gt=0)]
 NonNegInt = Annotated[int, Field(ge=0)]
-
-
-def _state_array(v: Any) -> Optional[np.ndarray]:
-    """A U0 / V0 value: None, or numbers reshapeable to (N, 6) (one row of 6 dofs per node), finite."""
-    if v is None:
-        return None
-    if isinstance(v, (str, bytes, bool)) or np.isscalar(v) and not isinstance(v, (int, float)):
-        raise ValueError("must be an array of numbers, 6 per node ((N, 6) dofs)")
-    try:
-        a = np.array(v, dtype=float)
-    except (TypeError, ValueError):
-        raise ValueError("must be an array of numbers, 6 per node ((N, 6) dofs)") from None
-    if a.size == 0 or a.size % 6:
-        raise ValueError(f"must hold 6 numbers per node ((N, 6) dofs), got {a.size} numbers")
-    if not np.all(np.isfinite(a)):
-        raise ValueError("must be finite")
-    a = a.reshape(-1, 6)
-    a.flags.writeable = False
-    return a
 
 
 def _path(v: Any) -> Optional[str]:
@@ -60,7 +41,6 @@ def _times(v: Any) -> Any:
     return [float(x) for x in np.ravel(v)] if isinstance(v, np.ndarray) else v
 
 
-StateArray = Annotated[Any, AfterValidator(_state_array)]
 PathStr = Annotated[Any, AfterValidator(_path)]
 
 

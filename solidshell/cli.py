@@ -4,6 +4,7 @@
     solidshell mesh SCENE [--mesh 48x16x4] [--out DIR] [--force] [--allow-large]
     solidshell run  SCENE [--mesh M] [--solver static|explicit|relax] [--set key=value ...] [--out DIR]
                           [--checkpoint FILE] [--restart FILE] [--force] [--allow-large]
+    solidshell verify [NAME ...] [--quick] [--out DIR] [--list] [--references] [--fenicsx]
 
 SCENE is a packaged scene name (``solidshell scenes`` lists them) or the path of a .toml scene
 file.  ``--set`` overrides any scene key by its dotted name (``--set solver.static.c=2e-3``,
@@ -97,6 +98,9 @@ def _parser() -> argparse.ArgumentParser:
                         "scene's mesh.adaptive_level0 or --mesh; settings: --set adapt.KEY=VALUE")
     r.add_argument("--no-progress", action="store_true", help="no progress bar")
     _common(r)
+
+    from .verify.cli import add_parser as _add_verify
+    _add_verify(sub)
     return p
 
 
@@ -186,6 +190,9 @@ def main(argv=None) -> int:
             return _cmd_scenes(args)
         if args.command == "mesh":
             return _cmd_mesh(args)
+        if args.command == "verify":
+            from .verify.cli import run as _cmd_verify
+            return _cmd_verify(args)
         return _cmd_run(args)
     except InputError as e:
         _say(f"solidshell: error: {e}")

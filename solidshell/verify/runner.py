@@ -52,7 +52,7 @@ HEADER = f"{'name':<58} {'value':>13} {'reference':>13} {'error':>10} {'tol':>8}
 def line(r: Record) -> str:
     res = {"passed": "pass", "failed": "FAIL", "skipped": "skipped", "error": "ERROR"}[r.status]
     err = "-" if r.error is None else f"{r.error:.2e}"
-    tol = "-" if r.tolerance is None else f"{r.tolerance:.0e}" if r.tolerance else "0"
+    tol = "-" if r.tolerance is None else f"{r.tolerance:.2g}"
     extra = f"  ({r.note})" if r.note else ""
     return f"{r.name:<58} {_fmt(r.value):>13} {_fmt(r.reference_value):>13} {err:>10} {tol:>8}  {res}{extra}"
 

@@ -37,7 +37,7 @@ def draw(fig: dict, path: Path) -> Path:
         if fig.get("logy"):
             ax.set_yscale("log")
         if fig.get("equal"):
-            ax.set_aspect("equal", adjustable="datalim")
+            ax.set_aspect("equal", adjustable="box")
     else:
         for s in fig["series"]:
             pts = [(h, e) for h, e in zip(s["h"], s["error"]) if e and e > 0 and math.isfinite(e)]

@@ -27,10 +27,11 @@ def _say(msg: str) -> None:
 def _fenicsx(out_dir) -> int:
     """verification.fenicsx.crosscheck.main(out_dir) -> list of record dicts (solidshell.verify
     record format); printed like the other checks and written to <out>/fenicsx.json."""
+    import dataclasses
     import importlib
     import json
 
-    from ..errors import IOFailure
+    from ..errors import InputError, IOFailure
     from .record import Record
     from .runner import HEADER, line, prepare_out
 
@@ -46,7 +47,16 @@ def _fenicsx(out_dir) -> int:
     out = prepare_out(out_dir)
     rows = mod.main(out)
     fields = set(Record.__dataclass_fields__)
-    recs = [Record(**{k: v for k, v in r.items() if k in fields}) for r in rows]
+    required = {k for k, f in Record.__dataclass_fields__.items() if f.default is dataclasses.MISSING}
+    recs = []
+    for i, r in enumerate(rows):
+        missing = sorted(required - set(r))
+        if missing:
+            raise InputError(f"verification.fenicsx.crosscheck record {i} lacks {', '.join(missing)}")
+        r = {k: v for k, v in r.items() if k in fields}
+        if "status" not in r:
+            r["status"] = "skipped" if r["passed"] is None else "passed" if r["passed"] else "failed"
+        recs.append(Record(**r))
     print(HEADER)
     for r in recs:
         print(line(r))

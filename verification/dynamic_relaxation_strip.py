@@ -27,7 +27,6 @@ from solidshell.verify.dynamics import TOL, VARIANTS, relax_strip_problem as str
 from . import REFERENCE, write_json
 
 
-
 def main():
     import json
     ref = json.loads((REFERENCE / "elastica_strip.json").read_text())["strip"]

@@ -40,17 +40,13 @@ Run: ``python -m verification.locking`` -> tables and verification/out/locking.j
 from __future__ import annotations
 
 import argparse
-import importlib.util
 
-import numpy as np
 
 from solidshell.verify.cantilevers import (  # noqa: F401  (the computations live in the package)
     B, E, L, MH_REF, RATIOS, beams, circle, column_buckling, curved_cantilever, end_moment, macneal_harder_beam,
     macneal_harder_mesh, strip_mesh, tip_load)
 
 from . import OUT, write_json
-
-
 
 
 def run(ratios=RATIOS, n=8, verbose=True):

@@ -48,8 +48,6 @@ from solidshell.verify.plates import (  # noqa: F401  (the computations live in 
 from . import OUT, plate_reference, rate, write_json
 
 
-
-
 def run(ns=(4, 8, 16, 32), kinds=("quad", "quad~", "tri", "trix"), supports=("clamped", "ss_hard", "ss_soft"),
         ratios=(100.0, 1000.0), verbose=True):
     refs = plate_reference()

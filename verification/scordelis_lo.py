@@ -15,13 +15,9 @@ from __future__ import annotations
 import json
 import pathlib
 
-import numpy as np
-import scipy.sparse.linalg as spl
 
 from solidshell.verify.elements import REFERENCE, midside_deflection, roof  # noqa: F401
 OUT = pathlib.Path(__file__).with_name("out")
-
-
 
 
 def main():

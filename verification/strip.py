@@ -15,7 +15,6 @@ import argparse
 import json
 import os
 import sys
-import time
 
 import numpy as np
 
@@ -24,8 +23,6 @@ from solidshell.verify.strips import shape_error, solve_strip, strip_problem  # 
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 REF = str(reference_dir() / "elastica_strip.json")
-
-
 
 
 def main(argv=None):

@@ -21,8 +21,6 @@ from solidshell.verify.elements import distorted_patch as patch
 OUT = pathlib.Path(__file__).with_name("out")
 
 
-
-
 def main():
     mat = IsotropicShell(E=1.0e4, nu=0.3, h=0.01)
     rows = []

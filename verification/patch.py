@@ -31,7 +31,6 @@ Run: ``python -m verification.patch`` -> table and verification/out/patch.json.
 
 from __future__ import annotations
 
-
 from solidshell.verify.elements import (  # noqa: F401  (the computations live in the package)
     AMP, AREA, INNER, MAT, NODES, OUTER, QUADS, exact_field, patch_mesh, run_one)
 

@@ -51,7 +51,10 @@ def draw(fig: dict, path: Path) -> Path:
     ax.set_ylabel(fig["ylabel"])
     ax.set_title(fig["title"], fontsize=10)
     ax.grid(True, which="both", lw=0.3)
-    ax.legend(fontsize=8)
+    if fig.get("equal"):          # a tall equal-aspect plot leaves room on the right
+        ax.legend(fontsize=8, loc="center left", bbox_to_anchor=(1.02, 0.5))
+    else:
+        ax.legend(fontsize=8)
     f.tight_layout()
     try:
         f.savefig(path, dpi=110)

@@ -133,9 +133,12 @@ def check_references(quick: bool = False, log=print, names=None) -> list[dict]:
                 continue
             t0 = time.perf_counter()
             out = Path(tmp) / name
-            _regenerate(name, out, quick)
-            diffs = compare_json(json.loads((ref / name).read_text()), json.loads(out.read_text()),
-                                 spec["rtol"], spec["atol"])
+            try:
+                _regenerate(name, out, quick)
+                diffs = compare_json(json.loads((ref / name).read_text()), json.loads(out.read_text()),
+                                     spec["rtol"], spec["atol"])
+            except Exception as exc:  # noqa: BLE001 - a script that fails is a changed reference
+                diffs = [f"regeneration failed: {type(exc).__name__}: {exc}"]
             row = {"file": f"reference/{name}", "script": f"reference/{spec['script']}",
                    "rtol": spec["rtol"], "atol": spec["atol"], "passed": not diffs,
                    "differences": diffs, "wall_time_s": time.perf_counter() - t0}

@@ -6,6 +6,7 @@
                           [--checkpoint FILE] [--restart FILE] [--force] [--allow-large]
     solidshell sweep SWEEP [--scheduler tcp://HOST:PORT] [--workers N] [--threads N] [--out DIR]
                            [--retries N] [--limit N] [--list]     (solidshell.sweep; needs dask)
+    solidshell verify [NAME ...] [--quick] [--out DIR] [--list] [--references] [--fenicsx]
 
 SCENE is a packaged scene name (``solidshell scenes`` lists them) or the path of a .toml scene
 file.  ``--set`` overrides any scene key by its dotted name (``--set solver.static.c=2e-3``,
@@ -114,6 +115,8 @@ def _parser() -> argparse.ArgumentParser:
     w.add_argument("--limit", type=int, metavar="N", help="run at most N of the missing runs")
     w.add_argument("--list", action="store_true", help="list the packaged studies")
     w.add_argument("--no-progress", action="store_true", help="no progress bar or lines")
+    from .verify.cli import add_parser as _add_verify
+    _add_verify(sub)
     return p
 
 
@@ -246,6 +249,9 @@ def main(argv=None) -> int:
             return _cmd_mesh(args)
         if args.command == "sweep":
             return _cmd_sweep(args)
+        if args.command == "verify":
+            from .verify.cli import run as _cmd_verify
+            return _cmd_verify(args)
         return _cmd_run(args)
     except InputError as e:
         _say(f"solidshell: error: {e}")

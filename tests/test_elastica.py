@@ -1,16 +1,13 @@
 """The elastica references: internal consistency and agreement with closed forms / tables (fast)."""
 
-import importlib.util
 import json
-import os
 
 import numpy as np
 import pytest
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-spec = importlib.util.spec_from_file_location("elastica", os.path.join(ROOT, "reference", "elastica.py"))
-el = importlib.util.module_from_spec(spec)
-spec.loader.exec_module(el)
+from solidshell.verify import references
+
+el = references.module("elastica")
 
 
 def test_small_deflection_limit():

@@ -8,18 +8,10 @@ from scipy.spatial.transform import Rotation
 from solidshell import Fabric, IsotropicShell, ShellMesh
 from solidshell.boundary import gravity_loads, line_load, point_load, surface_load
 from solidshell.model import Model
+from solidshell.verify.elements import mixed_curved_mesh  # two quads + two triangles, doubly curved
 
 ISO = IsotropicShell(E=1.0e4, nu=0.3, h=0.1, density=2.0)
 WOOL30 = Fabric.wool(warp_angle=30.0)
-
-
-def mixed_curved_mesh():
-    """Two distorted quads and two triangles on a doubly curved surface (directors = averaged normals)."""
-    P = np.array([[0.0, 0.0], [1.1, 0.1], [2.0, -0.1], [-0.1, 0.9], [1.0, 1.2], [2.1, 1.0],
-                  [0.4, 2.0], [1.6, 2.1]])
-    z = 0.15 * P[:, 0] ** 2 - 0.1 * P[:, 1] ** 2 + 0.05 * P[:, 0] * P[:, 1]
-    X = np.column_stack([P, z])
-    return ShellMesh(X, quads=[[0, 1, 4, 3], [1, 2, 5, 4]], tris=[[3, 4, 6], [4, 7, 6]])
 
 
 def flat_grid(n, tri=False, distort=0.3, seed=1):

@@ -2,26 +2,17 @@
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-REF = Path(__file__).resolve().parent.parent / "reference"
+from solidshell.verify import references
 
-
-def _load(name):
-    spec = importlib.util.spec_from_file_location(f"reference_{name}", REF / f"{name}.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
-
-
-kp = _load("kirchhoff_plate")
-beams = _load("beams")
+REF = references.reference_dir()
+kp = references.module("kirchhoff_plate")
+beams = references.module("beams")
 
 
 # ----------------------------------------------------------------------------- plate series

@@ -1,9 +1,7 @@
 """Static solvers against independent references: heavy elastica (strip, Section 3.1), the end-moment
 circle and the end-shear elastica (Mattiasson 1981), plus the solver contract (never raise, info)."""
 
-import importlib.util
 import json
-import os
 
 import numpy as np
 import pytest
@@ -15,13 +13,10 @@ from solidshell.model import Model
 from solidshell.problem import Problem, SolveResult
 from solidshell.solvers import get as get_solver
 from solidshell.solvers.static import solve_static
+from solidshell.verify import references
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-with open(os.path.join(ROOT, "reference", "elastica_strip.json")) as fh:
-    ELASTICA = json.load(fh)
-_spec = importlib.util.spec_from_file_location("elastica", os.path.join(ROOT, "reference", "elastica.py"))
-elastica = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(elastica)
+ELASTICA = references.elastica_strip()
+elastica = references.module("elastica")
 
 
 def wool_strip(n, cut):

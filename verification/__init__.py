@@ -1,15 +1,19 @@
-"""Verification of the solid-shell elements against independent references (DESIGN.md, Verification).
+"""Verification studies and table scripts (DESIGN.md, Verification).
 
-Each module prints its error table and writes ``verification/out/<name>.json`` (+ a PNG where useful):
+The checks against independent references are ``solidshell verify`` (the package
+``solidshell/verify/``: records, tolerances and the report).  The scripts here print the longer
+tables of the same computations (imported from the package) or run studies too long for it, and
+write ``verification/out/<name>.json`` (+ a PNG where useful):
 
-* ``python -m verification.plates``   square plate, uniform pressure, clamped / simply supported, vs the
-  Kirchhoff series of ``reference/plates.json`` (quads, triangles, a/h = 100 and 1000);
-* ``python -m verification.locking``  cantilever strip vs Timoshenko beam theory for L/h = 10..10^4
-  (shear locking) and pure bending with nu = 0.3 (thickness locking);
-* ``python -m verification.patch``    membrane and bending patch tests on distorted meshes;
-* ``python -m verification.report``   all of the above into ``verification/out/report.md``.
+* ``python -m verification.plates``   square plate, uniform pressure, vs the Kirchhoff series (all meshes);
+* ``python -m verification.locking``  cantilever strips vs beam theory for L/h = 10..10^4;
+* ``python -m verification.patch``    membrane and bending patch tests, with the thickness scan;
+* ``python -m verification.report``   the three above into ``verification/out/report.md``;
+* ``python -m verification.strip``, ``.static_cantilevers``, ``.zero_modes``, ``.scordelis_lo``,
+  ``.dynamic_cantilever``, ``.dynamic_relaxation_strip``: the tables behind the corresponding checks;
+* ``static_scenes``, ``static_convergence``, ``dynamic_scenes``, ``dynamic_sphere``, ... : studies.
 
-This file holds the small shared helpers: structured meshes, linear (small-deflection) solves.
+This file re-exports the shared helpers (from solidshell.verify.common) and writes the JSON tables.
 """
 
 from __future__ import annotations
@@ -17,65 +21,12 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-import numpy as np
-import scipy.sparse.linalg as spla
+from solidshell.verify.common import buckling_factors, linear_solve, rate, rect_grid, split_quads  # noqa: F401
+from solidshell.verify.plates import plate_reference  # noqa: F401
+from solidshell.verify.references import reference_dir
 
 OUT = Path(__file__).resolve().parent / "out"
-REFERENCE = Path(__file__).resolve().parent.parent / "reference"
-
-
-def rect_grid(nx: int, ny: int, lx: float, ly: float, x0: float = 0.0, y0: float = 0.0):
-    """(nodes (N,3), quads (nx*ny,4)) of a structured grid on [x0,x0+lx] x [y0,y0+ly], counter-
-    clockwise quads; node (i, j) has index j*(nx+1) + i."""
-    x = x0 + np.linspace(0.0, lx, nx + 1)
-    y = y0 + np.linspace(0.0, ly, ny + 1)
-    X, Y = np.meshgrid(x, y)                       # (ny+1, nx+1)
-    nodes = np.column_stack([X.ravel(), Y.ravel(), np.zeros(X.size)])
-    i, j = np.meshgrid(np.arange(nx), np.arange(ny))
-    n0 = (j * (nx + 1) + i).ravel()
-    quads = np.column_stack([n0, n0 + 1, n0 + nx + 2, n0 + nx + 1])
-    return nodes, quads
-
-
-def split_quads(quads: np.ndarray, pattern: str = "/") -> np.ndarray:
-    """Triangles from counter-clockwise quads (1,2,3,4): "/" cuts along 1-3, "\\" along 2-4,
-    "x" alternates the two in a checkerboard (needs the structured numbering only for looks)."""
-    q = np.asarray(quads)
-    t13 = np.concatenate([q[:, [0, 1, 2]], q[:, [0, 2, 3]]])
-    t24 = np.concatenate([q[:, [0, 1, 3]], q[:, [1, 2, 3]]])
-    if pattern == "/":
-        return t13
-    if pattern == "\\":
-        return t24
-    if pattern == "x":
-        alt = (np.arange(len(q)) % 2).astype(bool)
-        return np.concatenate([q[~alt][:, [0, 1, 2]], q[~alt][:, [0, 2, 3]],
-                               q[alt][:, [0, 1, 3]], q[alt][:, [1, 2, 3]]])
-    raise ValueError(f"unknown split pattern {pattern!r}")
-
-
-def linear_solve(model, fixed: np.ndarray, loads: np.ndarray, prescribed: np.ndarray | None = None):
-    """Small-deflection solution: K(0) u = f on the free dofs, with u = prescribed on the fixed
-    ones.  Returns U (N,6) and the reactions R (N,6) = K u - f (zero on free dofs up to round-off)."""
-    N = model.n_nodes
-    K = model.tangent(np.zeros((N, 6))).tocsr()
-    fixed = np.asarray(fixed, dtype=bool).ravel()
-    f = np.asarray(loads, dtype=float).ravel()
-    u = np.zeros(6 * N) if prescribed is None else np.asarray(prescribed, dtype=float).ravel().copy()
-    u[~fixed] = 0.0
-    free = np.flatnonzero(~fixed)
-    rhs = f[free] - K[free][:, fixed] @ u[fixed] if fixed.any() else f[free]
-    Kff = K[free][:, free].tocsc()
-    u[free] = spla.spsolve(Kff, rhs)
-    R = K @ u - f
-    return u.reshape(N, 6), R.reshape(N, 6)
-
-
-def rate(e_coarse: float, e_fine: float, ratio: float = 2.0):
-    """Observed order log(|e_coarse/e_fine|)/log(ratio) (None if either is zero)."""
-    if e_coarse == 0 or e_fine == 0:
-        return None
-    return float(np.log(abs(e_coarse / e_fine)) / np.log(ratio))
+REFERENCE = reference_dir()
 
 
 def write_json(name: str, data) -> Path:
@@ -83,33 +34,3 @@ def write_json(name: str, data) -> Path:
     p = OUT / f"{name}.json"
     p.write_text(json.dumps(data, indent=1, default=float))
     return p
-
-
-def plate_reference() -> dict:
-    """The stored Kirchhoff references (reference/plates.json, made by reference/kirchhoff_plate.py)."""
-    return json.loads((REFERENCE / "plates.json").read_text())
-
-
-def buckling_factors(model, fixed: np.ndarray, loads: np.ndarray, k: int = 3, eps: float = 1e-6):
-    """Linearised buckling: the smallest load factors lambda with (K_0 + lambda K_G) phi = 0, where the
-    pre-buckling state is the linear solution u_1 under ``loads`` and the load-stiffness
-    K_G = (K_t(eps u_1) - K_t(-eps u_1)) / (2 eps) is taken from the element's own tangent (so this
-    checks the geometric -- Green-strain -- part of Eq. (9)).  The initial-displacement terms that
-    the difference quotient also contains are O(h^2/L^2) relative for thin plates.
-    Solved densely as -K_G phi = mu K_0 phi on the free dofs, lambda = 1/mu for the largest mu > 0.
-    Returns (lambdas (k,), modes (N,6,k))."""
-    import scipy.linalg as sla
-
-    U1, _ = linear_solve(model, fixed, loads)
-    K0 = model.tangent(np.zeros_like(U1)).toarray()
-    KG = (model.tangent(eps * U1).toarray() - model.tangent(-eps * U1).toarray()) / (2.0 * eps)
-    free = np.flatnonzero(~np.asarray(fixed, dtype=bool).ravel())
-    A = -KG[np.ix_(free, free)]
-    A = 0.5 * (A + A.T)
-    B = K0[np.ix_(free, free)]
-    mu, vec = sla.eigh(A, 0.5 * (B + B.T))
-    order = np.argsort(mu)[::-1][:k]
-    lam = 1.0 / mu[order]
-    modes = np.zeros((6 * model.n_nodes, k))
-    modes[free] = vec[:, order]
-    return lam, modes.reshape(model.n_nodes, 6, k)

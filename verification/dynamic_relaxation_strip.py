@@ -21,32 +21,10 @@ import time
 
 import numpy as np
 
-from solidshell import Fabric, ShellMesh
-from solidshell.model import Model
-from solidshell.problem import Problem
 from solidshell.solvers import explicit
-from solidshell.units import G0
+from solidshell.verify.dynamics import TOL, VARIANTS, relax_strip_problem as strip  # noqa: F401
 
-from . import REFERENCE, rect_grid, write_json
-
-VARIANTS = {
-    "paper": dict(damping="rayleigh", alpha=5.0, mass_scaling=100),
-    "kinetic": dict(damping="kinetic", mass_scaling=100),
-    "kin+dir": dict(damping="kinetic", mass_scaling=1e4, mass_scaling_mode="director"),
-}
-TOL = dict(tol_residual=1e-4, tol_kinetic=1e-8)
-
-
-def strip(cut: str, nx: int):
-    nodes, quads = rect_grid(nx, 1, 5.0, 1.0)
-    mesh = ShellMesh(nodes, quads=quads)
-    fab = Fabric.wool(warp_angle=0.0 if cut == "warp" else 90.0)
-    model = Model(mesh, fab)
-    fixed = np.zeros((mesh.n_nodes, 6), bool)
-    fixed[np.isclose(nodes[:, 0], 0.0)] = True
-    loads = np.zeros((mesh.n_nodes, 6))
-    loads[:, 2] = -model.lumped_mass()[:, 0] * G0
-    return Problem(model, fixed, loads, name=f"strip {cut} {nx}x1")
+from . import REFERENCE, write_json
 
 
 def main():

@@ -31,87 +31,10 @@ Run: ``python -m verification.patch`` -> table and verification/out/patch.json.
 
 from __future__ import annotations
 
-import numpy as np
+from solidshell.verify.elements import (  # noqa: F401  (the computations live in the package)
+    AMP, AREA, INNER, MAT, NODES, OUTER, QUADS, exact_field, patch_mesh, run_one)
 
-from solidshell import IsotropicShell, Model, ShellMesh
-
-from . import linear_solve, write_json
-
-NODES = np.array([[0.0, 0.0], [0.24, 0.0], [0.24, 0.12], [0.0, 0.12],
-                  [0.04, 0.02], [0.18, 0.03], [0.16, 0.08], [0.08, 0.08]])
-QUADS = np.array([[0, 1, 5, 4], [1, 2, 6, 5], [2, 3, 7, 6], [3, 0, 4, 7], [4, 5, 6, 7]])
-OUTER = np.arange(4)
-INNER = np.arange(4, 8)
-AREA = 0.24 * 0.12
-MAT = IsotropicShell(E=1.0e6, nu=0.25, h=0.001)
-AMP = 1.0e-3
-
-
-def _rotation(axis=(1.0, 2.0, 3.0), angle=0.7):
-    k = np.asarray(axis, float) / np.linalg.norm(axis)
-    K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
-    return np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * K @ K
-
-
-def patch_mesh(kind: str):
-    """(ShellMesh, R) for kind in quads|tris|mixed, optionally with suffix -rot."""
-    base, rot = (kind[:-4], True) if kind.endswith("-rot") else (kind, False)
-    q = QUADS
-    if base == "quads":
-        quads, tris = q, None
-    elif base == "tris":
-        quads, tris = None, np.concatenate([q[:, [0, 1, 2]], q[:, [0, 2, 3]]])
-    elif base == "mixed":
-        quads, tris = q[4:], np.concatenate([q[:4, [0, 1, 2]], q[:4, [0, 2, 3]]])
-    else:
-        raise ValueError(kind)
-    X = np.column_stack([NODES, np.zeros(len(NODES))])
-    R = _rotation() if rot else np.eye(3)
-    Xr = X @ R.T + (np.array([0.3, -0.2, 0.5]) if rot else 0.0)
-    directors = np.tile(R[:, 2], (len(X), 1))
-    return ShellMesh(Xr, quads=quads, tris=tris, directors=directors), R
-
-
-def exact_field(case: str, R=np.eye(3)):
-    x, y = NODES[:, 0], NODES[:, 1]
-    U = np.zeros((len(NODES), 6))
-    g = AMP * np.column_stack([x + y / 2, y + x / 2])
-    if case == "membrane":
-        U[:, 0:2] = g
-        e = AMP * np.ones(3)
-    elif case == "bending":
-        U[:, 2] = AMP * (x**2 + x * y + y**2) / 2
-        U[:, 3:5] = -g
-        e = -AMP * np.ones(3)
-    else:
-        raise ValueError(case)
-    U[:, :3] = U[:, :3] @ R.T
-    U[:, 3:] = U[:, 3:] @ R.T
-    return U, e
-
-
-def run_one(kind: str, case: str, h: float | None = None, membrane: str = "full") -> dict:
-    mesh, R = patch_mesh(kind)
-    mat = MAT if h is None else IsotropicShell(E=MAT.E, nu=MAT.nu, h=h)
-    model = Model(mesh, mat, membrane=membrane)
-    Ue, e = exact_field(case, R)
-    fixed = np.zeros((8, 6), dtype=bool)
-    fixed[OUTER] = True
-    U, _ = linear_solve(model, fixed, np.zeros((8, 6)), prescribed=Ue)
-    K = model.tangent(np.zeros((8, 6)))
-    r = (K @ Ue.ravel()).reshape(8, 6)
-    C = mat.C_m if case == "membrane" else mat.C_b
-    energy = 0.5 * Ue.ravel() @ (K @ Ue.ravel())
-    energy_ref = 0.5 * AREA * e @ C @ e
-    out = dict(mesh=kind, case=case, h=mat.h,
-               displacement_error=float(np.abs(U[INNER] - Ue[INNER]).max() / np.abs(Ue).max()),
-               equilibrium_residual=float(np.abs(r[INNER]).max() / np.abs(r).max()),
-               energy_error=float((energy - energy_ref) / energy_ref))
-    if not kind.endswith("-rot"):
-        kb = model.bending_strain(U)
-        target = np.sqrt(3.0) * AMP if case == "bending" else 0.0
-        out["bending_strain_error"] = float(np.abs(kb - target).max() / (np.sqrt(3.0) * AMP))
-    return out
+from . import write_json
 
 
 def run(verbose=True):

@@ -15,52 +15,14 @@ import argparse
 import json
 import os
 import sys
-import time
 
 import numpy as np
 
+from solidshell.verify.references import reference_dir
+from solidshell.verify.strips import shape_error, solve_strip, strip_problem  # noqa: F401
+
 HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.dirname(HERE)
-REF = os.path.join(ROOT, "reference", "elastica_strip.json")
-
-
-def strip_problem(n: int, cut: str, membrane: str = "full"):
-    """Mesh, model, fixed mask and gravity loads of the n x 1 strip (warp- or weft-cut)."""
-    from solidshell.boundary import clamp, gravity_loads
-    from solidshell.material import Fabric
-    from solidshell.meshing import build_mesh
-    from solidshell.model import Model
-
-    mesh = build_mesh("strip", f"{n}x1", length=5.0, width=1.0)
-    model = Model(mesh, Fabric.wool(warp_angle=0.0 if cut == "warp" else 90.0), membrane=membrane)
-    return mesh, model, clamp(mesh, "clamped"), gravity_loads(model)
-
-
-def solve_strip(n: int, cut: str, method: str = "newton", membrane: str = "full", **kw):
-    """Solve the strip; returns dict(tip_x, tip_z, centreline (x, z) sorted by x, result)."""
-    from solidshell.solvers.static import solve_static
-
-    mesh, model, fixed, loads = strip_problem(n, cut, membrane)
-    t0 = time.perf_counter()
-    res = solve_static(model, fixed, loads, method=method, **kw)
-    wall = time.perf_counter() - t0
-    x = mesh.nodes + res.U[:, :3]
-    tip = mesh.node_set("tip")
-    # centreline: average the two nodes across the width at every station along the strip
-    X0 = np.round(mesh.nodes[:, 0], 9)
-    st = np.unique(X0)
-    cx = np.array([x[X0 == s_, 0].mean() for s_ in st])
-    cz = np.array([x[X0 == s_, 2].mean() for s_ in st])
-    return {"tip_x": float(x[tip, 0].mean()), "tip_z": float(x[tip, 2].mean()), "s": st, "cx": cx,
-            "cz": cz, "result": res, "wall": wall}
-
-
-def shape_error(sol, ref):
-    """max over the nodal stations s of |(x,z)_shell(s) - (x,z)_elastica(s)| [cm]."""
-    s = np.asarray(ref["curve"]["s"])
-    xr = np.interp(sol["s"], s, ref["curve"]["x"])
-    zr = np.interp(sol["s"], s, ref["curve"]["z"])
-    return float(np.max(np.hypot(sol["cx"] - xr, sol["cz"] - zr)))
+REF = str(reference_dir() / "elastica_strip.json")
 
 
 def main(argv=None):

@@ -14,28 +14,11 @@ import pathlib
 
 import numpy as np
 
-from solidshell import IsotropicShell, ShellMesh
+from solidshell import IsotropicShell
 from solidshell.model import Model
+from solidshell.verify.elements import distorted_patch as patch
 
 OUT = pathlib.Path(__file__).with_name("out")
-
-
-def patch(n: int, kind: str, distort: float = 0.3) -> ShellMesh:
-    x = np.linspace(0.0, 1.0, n + 1)
-    X, Y = np.meshgrid(x, x)
-    P = np.column_stack([X.ravel(), Y.ravel(), np.zeros(X.size)])
-    inner = (P[:, 0] > 0) & (P[:, 0] < 1) & (P[:, 1] > 0) & (P[:, 1] < 1)
-    P[inner, :2] += distort / n * np.random.default_rng(1).uniform(-1, 1, (inner.sum(), 2))
-    a = (np.arange(n)[None, :] + (n + 1) * np.arange(n)[:, None]).ravel()
-    q = np.column_stack([a, a + 1, a + n + 2, a + n + 1])
-    if kind == "quad":
-        return ShellMesh(P, quads=q)
-    t = np.vstack([q[:, [0, 1, 2]], q[:, [0, 2, 3]]])
-    if kind == "tri":
-        return ShellMesh(P, tris=t)
-    half = len(q) // 2 if len(q) > 1 else 0          # mixed: first half quads, rest split
-    rest = q[half:]
-    return ShellMesh(P, quads=q[:half], tris=np.vstack([rest[:, [0, 1, 2]], rest[:, [0, 2, 3]]]))
 
 
 def main():

@@ -1,0 +1,117 @@
+"""Run checks, print one line per record, and hand the results to the report writer."""
+
+from __future__ import annotations
+
+import os
+import platform
+import time
+import traceback
+from pathlib import Path
+
+from ..errors import InputError, IOFailure
+from .record import CHECKS, Context, Record
+
+DEFAULT_OUT = "verification-out"
+
+
+def select(names=None, quick: bool = False) -> list:
+    """The checks to run: the named ones (in registry order), else the quick or the default set.
+    An unknown name is an InputError listing the valid names."""
+    if names:
+        bad = [n for n in names if n not in CHECKS]
+        if bad:
+            raise InputError(f"unknown check {bad[0]!r}; valid: {', '.join(CHECKS)}")
+        return [c for c in CHECKS.values() if c.name in set(names)]
+    return [c for c in CHECKS.values() if (c.quick if quick else c.default)]
+
+
+def prepare_out(out_dir) -> Path:
+    """Create the output folder and prove it writable before anything runs (IOFailure otherwise)."""
+    p = Path(out_dir)
+    try:
+        p.mkdir(parents=True, exist_ok=True)
+        probe = p / ".write-test"
+        probe.write_text("")
+        probe.unlink()
+    except OSError as e:
+        raise IOFailure.from_oserror(e, p) from None
+    return p
+
+
+def _fmt(v) -> str:
+    if v is None:
+        return "-"
+    if isinstance(v, float):
+        return f"{v:.6g}"
+    return str(v)
+
+
+HEADER = f"{'name':<58} {'value':>13} {'reference':>13} {'error':>10} {'tol':>8}  result"
+
+
+def line(r: Record) -> str:
+    res = {"passed": "pass", "failed": "FAIL", "skipped": "skipped", "error": "ERROR"}[r.status]
+    err = "-" if r.error is None else f"{r.error:.2e}"
+    tol = "-" if r.tolerance is None else f"{r.tolerance:.2g}"
+    extra = f"  ({r.note})" if r.note else ""
+    return f"{r.name:<58} {_fmt(r.value):>13} {_fmt(r.reference_value):>13} {err:>10} {tol:>8}  {res}{extra}"
+
+
+def run_checks(checks, quick: bool = False, log=print) -> dict:
+    """Run the checks; a check that raises becomes one "error" record (the run goes on)."""
+    ctx = Context(quick=quick, log=log)
+    records, per_check = [], []
+    t_all = time.perf_counter()
+    log(HEADER)
+    for c in checks:
+        t0 = time.perf_counter()
+        n_fig = len(ctx.figures)
+        try:
+            recs = list(c.fn(ctx))
+        except Exception as exc:  # noqa: BLE001 - a broken check is a failed check, not a crash
+            recs = [Record(name=f"{c.name}/error", reference="-", source="-", quantity="-", value=None,
+                           reference_value=None, error=None, tolerance=None, passed=False, wall_time_s=0.0,
+                           status="error", note=f"{type(exc).__name__}: {exc}",
+                           why=traceback.format_exc(limit=3).strip().splitlines()[-1])]
+        wall = time.perf_counter() - t0
+        for r in recs:
+            r.check, r.topic = c.name, c.topic
+            log(line(r))
+        for f in ctx.figures[n_fig:]:
+            f["check"] = c.name
+        records += recs
+        per_check.append({"name": c.name, "topic": c.topic, "summary": c.summary, "wall_time_s": wall,
+                          "records": len(recs), "failed": sum(r.status in ("failed", "error") for r in recs),
+                          "skipped": sum(r.status == "skipped" for r in recs)})
+    total = time.perf_counter() - t_all
+    n_fail = sum(r.status in ("failed", "error") for r in records)
+    n_skip = sum(r.status == "skipped" for r in records)
+    log(f"{len(records)} records from {len(checks)} checks: {len(records) - n_fail - n_skip} passed, "
+        f"{n_fail} failed, {n_skip} skipped; {total:.1f} s")
+    return {"quick": quick, "records": records, "checks": per_check, "figures": ctx.figures,
+            "wall_time_s": total, "failed": n_fail, "skipped": n_skip, "machine": machine()}
+
+
+def machine() -> dict:
+    try:
+        load = os.getloadavg()
+    except OSError:     # pragma: no cover - not on this platform
+        load = None
+    return {"python": platform.python_version(), "platform": platform.platform(), "cpus": os.cpu_count(),
+            "load_average": load, "time_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())}
+
+
+def verify(names=None, quick: bool = False, out_dir=DEFAULT_OUT, log=print, write: bool = True) -> dict:
+    """Select, run, and (``write``) write ``verification.json``, ``report.md`` and the figures to
+    ``out_dir``.  Returns the run dict (``records`` are Record objects; ``failed`` counts failures
+    and errors)."""
+    from .report import write_report
+
+    checks = select(names, quick)
+    out = prepare_out(out_dir) if write else None
+    run = run_checks(checks, quick, log)
+    if write:
+        files = write_report(run, out)
+        log(f"wrote {', '.join(str(f) for f in files)}")
+        run["files"] = [str(f) for f in files]
+    return run

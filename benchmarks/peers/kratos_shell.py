@@ -1,0 +1,129 @@
+"""KratosMultiphysics worker: a clamped isotropic shell under its own weight, solved statically with
+geometric nonlinearity (corotational shell, Newton-Raphson with uniform load stepping).
+
+Runs in the Python that has KratosMultiphysics (``.venv-kratos``, see ``benchmarks/peers/README.md``);
+it imports nothing from solidshell.  ``kratos_launch.run_kratos`` feeds it one JSON problem on stdin
+and reads one JSON answer from stdout (Kratos' own banner goes to stderr):
+
+problem: nodes (N,3) [cm], quads (E,4) 0-based, counter-clockwise seen from +z; clamped (node
+indices, all 6 dofs fixed); section {E [gf/cm^2], nu, h [cm]}; weight [gf/cm^2] acting along -z;
+element (a Kratos element name); steps (uniform load increments); tol (relative residual), abs_tol
+(residual norm [gf]);
+max_iter; linear_solver (a Kratos solver_type); matrix (return the last tangent, CSR).
+
+answer: displacement (N,3) and rotation (N,3), converged, per-step Newton iterations, the wall
+times of set-up and solve [s], the Kratos version, and (if asked) the tangent of the last Newton
+iteration in CSR arrays with the fixed dofs' rows and columns removed (for a stability check).
+
+The weight enters as a body force: nodal VOLUME_ACCELERATION (0, 0, -lambda) with DENSITY =
+weight / h, so that the element's mass per area (DENSITY * h) times the acceleration is the weight
+per area; lambda runs 1/steps, 2/steps, ..., 1.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import sys
+import time
+
+
+def solve(p: dict) -> dict:
+    import KratosMultiphysics as KM
+    import KratosMultiphysics.StructuralMechanicsApplication as SMA
+    import KratosMultiphysics.LinearSolversApplication  # noqa: F401  (registers sparse_lu)
+    from KratosMultiphysics import python_linear_solver_factory as lsf
+
+    KM.Logger.GetDefaultOutput().SetSeverity(KM.Logger.Severity.WARNING)
+    t0 = time.perf_counter()
+    model = KM.Model()
+    mp = model.CreateModelPart("shell")
+    mp.SetBufferSize(2)
+    for v in (KM.DISPLACEMENT, KM.ROTATION, KM.REACTION, KM.REACTION_MOMENT, KM.VOLUME_ACCELERATION):
+        mp.AddNodalSolutionStepVariable(v)
+    prop = mp.GetProperties()[1]
+    sec = p["section"]
+    prop.SetValue(KM.YOUNG_MODULUS, float(sec["E"]))
+    prop.SetValue(KM.POISSON_RATIO, float(sec["nu"]))
+    prop.SetValue(KM.THICKNESS, float(sec["h"]))
+    prop.SetValue(KM.DENSITY, float(p["weight"]) / float(sec["h"]))
+    # Kratos 10.x maps ShellThickElementCorotational3D4N to its MITC4 element, which takes the
+    # through-thickness-integrated Reissner-Mindlin law; the thin element integrates a plane-stress law.
+    thick = "Thick" in p["element"] and hasattr(SMA, "ReissnerMindlinShellElasticConstitutiveLaw")
+    prop.SetValue(KM.CONSTITUTIVE_LAW, SMA.ReissnerMindlinShellElasticConstitutiveLaw() if thick
+                  else SMA.LinearElasticPlaneStress2DLaw())
+    for i, (x, y, z) in enumerate(p["nodes"]):
+        mp.CreateNewNode(i + 1, float(x), float(y), float(z))
+    vu = KM.VariableUtils()
+    for d, r in (("DISPLACEMENT", "REACTION"), ("ROTATION", "REACTION_MOMENT")):
+        for c in "XYZ":
+            vu.AddDof(KM.KratosGlobals.GetVariable(f"{d}_{c}"), KM.KratosGlobals.GetVariable(f"{r}_{c}"), mp)
+    for e, q in enumerate(p["quads"]):
+        mp.CreateNewElement(p["element"], e + 1, [int(i) + 1 for i in q], prop)
+    clamped = [int(i) + 1 for i in p["clamped"]]
+    for i in clamped:
+        node = mp.Nodes[i]
+        for d in ("DISPLACEMENT", "ROTATION"):
+            for c in "XYZ":
+                node.Fix(KM.KratosGlobals.GetVariable(f"{d}_{c}"))
+
+    lin = lsf.ConstructSolver(KM.Parameters(json.dumps({"solver_type": p.get("linear_solver", "sparse_lu")})))
+    scheme = KM.ResidualBasedIncrementalUpdateStaticScheme()
+    crit = KM.ResidualCriteria(float(p.get("tol", 1e-9)), float(p.get("abs_tol", 1e-30)))
+    crit.SetEchoLevel(0)
+    bs = KM.ResidualBasedBlockBuilderAndSolver(lin)
+    strategy = KM.ResidualBasedNewtonRaphsonStrategy(mp, scheme, crit, bs, int(p.get("max_iter", 30)),
+                                                     False, False, True)
+    strategy.SetEchoLevel(0)
+    strategy.Initialize()
+    strategy.Check()
+    t_setup = time.perf_counter() - t0
+
+    steps = int(p["steps"])
+    iters, converged = [], True
+    t1 = time.perf_counter()
+    for k in range(1, steps + 1):
+        lam = k / steps
+        mp.CloneTimeStep(lam)
+        mp.ProcessInfo[KM.STEP] = k
+        vu.SetVariable(KM.VOLUME_ACCELERATION, KM.Array3([0.0, 0.0, -lam]), mp.Nodes)
+        strategy.Solve()
+        iters.append(int(mp.ProcessInfo[KM.NL_ITERATION_NUMBER]))
+        if not strategy.IsConverged():
+            converged = False
+            break
+    t_solve = time.perf_counter() - t1
+
+    disp = [list(n.GetSolutionStepValue(KM.DISPLACEMENT)) for n in mp.Nodes]
+    rot = [list(n.GetSolutionStepValue(KM.ROTATION)) for n in mp.Nodes]
+    out = {"displacement": disp, "rotation": rot, "converged": converged, "iterations": iters,
+           "load_factor": len(iters) / steps if converged else (len(iters) - 1) / steps,
+           "wall_setup_s": t_setup, "wall_solve_s": t_solve,
+           "kratos_version": KM.KratosGlobals.Kernel.Version(), "element": p["element"]}
+    if p.get("matrix"):
+        A = strategy.GetSystemMatrix()
+        # dof ids of the fixed dofs: the block builder keeps them in the system with a unit-like
+        # diagonal; the caller drops them before the stability check.
+        names = [f"{d}_{c}" for d in ("DISPLACEMENT", "ROTATION") for c in "XYZ"]
+        fixed = sorted(node.GetDof(KM.KratosGlobals.GetVariable(v)).EquationId
+                       for node in mp.Nodes for v in names if node.IsFixed(KM.KratosGlobals.GetVariable(v)))
+        out["matrix"] = {"indptr": list(A.index1_data()), "indices": list(A.index2_data()),
+                         "data": list(A.value_data()), "n": A.Size1(), "fixed": fixed}
+    return out
+
+
+def main():
+    p = json.load(sys.stdin)
+    # Kratos' banner and logger write to the C-level stdout: point fd 1 at stderr for the solve and
+    # keep the original stdout for the one JSON answer.
+    answer = os.fdopen(os.dup(1), "w")
+    os.dup2(2, 1)
+    with contextlib.redirect_stdout(sys.stderr):
+        out = solve(p)
+    answer.write(json.dumps(out))
+    answer.flush()
+
+
+if __name__ == "__main__":
+    main()

@@ -73,7 +73,7 @@ def run_once(python: str, problem: dict, timeout: float = 3600.0) -> dict:
     return out
 
 
-def run_kratos(python: str, problem: dict, steps=(1, 2, 4, 8, 16, 32, 64)) -> dict:
+def run_kratos(python: str, problem: dict, steps=(1, 2, 4, 8, 16, 32, 64), verbose: bool = False) -> dict:
     """Solve with the fewest uniform load steps that converge, trying ``steps`` in turn (a failed
     Kratos Newton step cannot be rolled back from Python, so each try starts afresh).
 
@@ -87,6 +87,10 @@ def run_kratos(python: str, problem: dict, steps=(1, 2, 4, 8, 16, 32, 64)) -> di
         total += out["wall_solve_s"]
         attempts.append({"steps": s, "converged": out["converged"], "wall_solve_s": out["wall_solve_s"],
                          "iterations": out["iterations"]})
+        if verbose:
+            print(f"  Kratos {s} load step(s): {'converged' if out['converged'] else 'failed at step '}"
+                  f"{'' if out['converged'] else len(out['iterations'])}, {sum(out['iterations'])} Newton "
+                  f"iterations, {out['wall_solve_s']:.2f} s", file=sys.stderr, flush=True)
         if out["converged"]:
             break
     out["attempts"] = attempts

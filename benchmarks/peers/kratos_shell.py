@@ -9,7 +9,8 @@ problem: nodes (N,3) [cm], quads (E,4) 0-based, counter-clockwise seen from +z; 
 indices, all 6 dofs fixed); section {E [gf/cm^2], nu, h [cm]}; weight [gf/cm^2] acting along -z;
 element (a Kratos element name); steps (uniform load increments); tol (relative residual), abs_tol
 (residual norm [gf]);
-max_iter; linear_solver (a Kratos solver_type); matrix (return the last tangent, CSR).
+max_iter; linear_solver (a Kratos solver_type); matrix (return the last tangent, CSR); initial
+(optional {displacement (N,3), rotation (N,3) rotation vectors}: the state Newton starts from).
 
 answer: displacement (N,3) and rotation (N,3), converged, per-step Newton iterations, the wall
 times of set-up and solve [s], the Kratos version, and (if asked) the tangent of the last Newton
@@ -35,7 +36,7 @@ def solve(p: dict) -> dict:
     import KratosMultiphysics.LinearSolversApplication  # noqa: F401  (registers sparse_lu)
     from KratosMultiphysics import python_linear_solver_factory as lsf
 
-    KM.Logger.GetDefaultOutput().SetSeverity(KM.Logger.Severity.WARNING)
+    KM.Logger.GetDefaultOutput().SetSeverity(KM.Logger.Severity.INFO if p.get("echo") else KM.Logger.Severity.WARNING)
     t0 = time.perf_counter()
     model = KM.Model()
     mp = model.CreateModelPart("shell")
@@ -68,26 +69,43 @@ def solve(p: dict) -> dict:
             for c in "XYZ":
                 node.Fix(KM.KratosGlobals.GetVariable(f"{d}_{c}"))
 
-    lin = lsf.ConstructSolver(KM.Parameters(json.dumps({"solver_type": p.get("linear_solver", "sparse_lu")})))
-    scheme = KM.ResidualBasedIncrementalUpdateStaticScheme()
-    crit = KM.ResidualCriteria(float(p.get("tol", 1e-9)), float(p.get("abs_tol", 1e-30)))
-    crit.SetEchoLevel(0)
-    bs = KM.ResidualBasedBlockBuilderAndSolver(lin)
-    strategy = KM.ResidualBasedNewtonRaphsonStrategy(mp, scheme, crit, bs, int(p.get("max_iter", 30)),
-                                                     False, False, True)
-    strategy.SetEchoLevel(0)
-    strategy.Initialize()
-    strategy.Check()
-    t_setup = time.perf_counter() - t0
+    echo = int(p.get("echo", 0))
 
-    steps = int(p["steps"])
+    def newton(scheme, tol, abs_tol, max_iter):
+        lin = lsf.ConstructSolver(KM.Parameters(json.dumps({"solver_type": p.get("linear_solver", "sparse_lu")})))
+        crit = KM.ResidualCriteria(tol, abs_tol)
+        crit.SetEchoLevel(echo)
+        bs = KM.ResidualBasedBlockBuilderAndSolver(lin)
+        st = KM.ResidualBasedNewtonRaphsonStrategy(mp, scheme, crit, bs, max_iter, False, False, True)
+        st.SetEchoLevel(echo)
+        st.Initialize()
+        st.Check()
+        return st
+
+    def gravity(lam):
+        vu.SetVariable(KM.VOLUME_ACCELERATION, KM.Array3([0.0, 0.0, -lam]), mp.Nodes)
+
+    if p.get("initial"):
+        # Start Newton from a given state (displacements and rotation vectors), set before the
+        # strategy initialises the elements: the corotational transformation reads the nodal
+        # ROTATION into its nodal orientations when it is initialised, so the start is consistent.
+        for node, u, r in zip(mp.Nodes, p["initial"]["displacement"], p["initial"]["rotation"]):
+            for buf in (0, 1):
+                node.SetSolutionStepValue(KM.DISPLACEMENT, buf, KM.Array3([float(v) for v in u]))
+                node.SetSolutionStepValue(KM.ROTATION, buf, KM.Array3([float(v) for v in r]))
+        vu.UpdateCurrentPosition(mp.Nodes)
+
+    tol, abs_tol, max_iter = float(p.get("tol", 1e-9)), float(p.get("abs_tol", 1e-30)), int(p.get("max_iter", 30))
+    strategy = newton(KM.ResidualBasedIncrementalUpdateStaticScheme(), tol, abs_tol, max_iter)
+    t_setup = time.perf_counter() - t0
     iters, converged = [], True
     t1 = time.perf_counter()
+    steps = int(p["steps"])
     for k in range(1, steps + 1):
         lam = k / steps
         mp.CloneTimeStep(lam)
         mp.ProcessInfo[KM.STEP] = k
-        vu.SetVariable(KM.VOLUME_ACCELERATION, KM.Array3([0.0, 0.0, -lam]), mp.Nodes)
+        gravity(lam)
         strategy.Solve()
         iters.append(int(mp.ProcessInfo[KM.NL_ITERATION_NUMBER]))
         if not strategy.IsConverged():
@@ -98,7 +116,7 @@ def solve(p: dict) -> dict:
     disp = [list(n.GetSolutionStepValue(KM.DISPLACEMENT)) for n in mp.Nodes]
     rot = [list(n.GetSolutionStepValue(KM.ROTATION)) for n in mp.Nodes]
     out = {"displacement": disp, "rotation": rot, "converged": converged, "iterations": iters,
-           "load_factor": len(iters) / steps if converged else (len(iters) - 1) / steps,
+           "load_factor": len(iters) / steps if converged else (len(iters) - 1) / steps, "seeded": bool(p.get("initial")),
            "wall_setup_s": t_setup, "wall_solve_s": t_solve,
            "kratos_version": KM.KratosGlobals.Kernel.Version(), "element": p["element"]}
     if p.get("matrix"):

@@ -20,11 +20,16 @@ Each Kratos solve is a Newton-Raphson with uniform load steps (1, 2, 4, ... unti
 ``wall_solve_total_s`` adds the failed tries), run by ``kratos_launch`` with OMP_NUM_THREADS=1; the
 time is the worker's solve alone (set-up, Python start and Kratos import are reported apart).
 
-Prints the table (mesh, elements, tip error, Newton iterations, time), and for each error level
-the coarsest mesh of each code that reaches it and the time ratio solidshell / Kratos, with the
-load average before and after (the machine is shared).  Exit 3 with one line when Kratos is missing.
+Every code runs the same refinement sequence n = 5, 10, 20, 40.  A code "reaches" an error level at
+the coarsest mesh from which it and every finer mesh run stay below it: a single coarse mesh can
+land close by a cancellation (Kratos' MITC4 on 1 cm squares: stiff discretisation against its
+shear-stabilisation softening gives 0.15 % at 5x1, then 0.25-0.31 % on the finer n x 1 meshes).
 
-Run:  python benchmarks/peers/strip.py [--levels 0.005 0.002] [--json out.json]
+Prints the table (mesh, elements, tip error, Newton iterations, time), and for each error level
+the mesh of each code that reaches it and the time ratio solidshell / Kratos, with the load average
+before and after (the machine is shared).  Exit 3 with one line when Kratos is missing.
+
+Run:  python benchmarks/peers/strip_vs_kratos.py [--levels 0.005 0.002] [--json out.json]
 Not part of the test run (about a minute on a quiet machine).
 """
 
@@ -48,7 +53,7 @@ import kratos_launch  # noqa: E402
 L, WIDTH, WEIGHT, B_WARP, T_WARP = 5.0, 1.0, 0.019, 0.083, 1118.2
 H_K = (12.0 * B_WARP / T_WARP) ** 0.5
 SECTION_K = {"E": T_WARP / H_K, "nu": 0.0, "h": H_K}
-MESHES = (5, 10, 20, 40, 80)
+MESHES = (5, 10, 20, 40)
 
 
 def kratos_strip(py: str, element: str, n: int, m: int) -> dict:
@@ -66,6 +71,17 @@ def kratos_strip(py: str, element: str, n: int, m: int) -> dict:
     return out
 
 
+def reaches(seq, level):
+    """The coarsest row of a refinement sequence from which every row is converged and below
+    ``level`` (None if the finest is not)."""
+    hit = None
+    for r in reversed(seq):
+        if not (r["converged"] and r["tip_error"] < level):
+            break
+        hit = r
+    return hit
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--levels", type=float, nargs="+", default=[0.005, 0.002])
@@ -76,7 +92,6 @@ def main(argv=None):
 
     with open(os.path.join(ROOT, "reference", "elastica_strip.json")) as fh:
         ref = json.load(fh)["strip"]["warp"]["tip_z"]
-    target = min(a.levels)
     load0 = os.getloadavg()
     solve_strip(MESHES[0], "warp")          # warm-up: numba compilation / cache load, not timed
     rows = []
@@ -98,10 +113,8 @@ def main(argv=None):
     for n in MESHES:
         sol = solve_strip(n, "warp")
         r = sol["result"]
-        err = record("solidshell", "solid-shell quad (ANS)", f"{n}x1", n, sol["tip_z"], r.converged,
-                     r.info["iterations"], sol["wall"])
-        if err < target:
-            break
+        record("solidshell", "solid-shell quad (ANS)", f"{n}x1", n, sol["tip_z"], r.converged,
+               r.info["iterations"], sol["wall"])
     for element, width_div in (("ShellThickElementCorotational3D4N", 5), ("ShellThinElementCorotational3D4N", 0)):
         for n in MESHES:
             m = max(1, n // width_div) if width_div else 1
@@ -110,20 +123,20 @@ def main(argv=None):
             except RuntimeError as e:
                 print(f"Kratos {element} {n}x{m}: {e}")
                 break
-            err = record("Kratos", element, f"{n}x{m}", o["n_elements"], o["tip_z"], o["converged"],
+            record("Kratos", element, f"{n}x{m}", o["n_elements"], o["tip_z"], o["converged"],
                          sum(o["iterations"]), o["wall_solve_s"],
                          {"wall_all_tries_s": o["wall_solve_total_s"], "load_steps": o["attempts"][-1]["steps"],
                           "wall_setup_s": o["wall_setup_s"], "wall_process_s": o["wall_process_s"],
                           "attempts": o["attempts"]})
-            if err < target or not o["converged"]:
+            if not o["converged"]:
                 break
     load1 = os.getloadavg()
     print(f"load average after: {load1[0]:.2f} {load1[1]:.2f} {load1[2]:.2f}")
     summary = []
     for lev in a.levels:
-        ss = next((r for r in rows if r["code"] == "solidshell" and r["converged"] and r["tip_error"] < lev), None)
+        ss = reaches([r for r in rows if r["code"] == "solidshell"], lev)
         for element in ("ShellThickElementCorotational3D4N", "ShellThinElementCorotational3D4N"):
-            kr = next((r for r in rows if r["element"] == element and r["converged"] and r["tip_error"] < lev), None)
+            kr = reaches([r for r in rows if r["element"] == element], lev)
             if ss is None or kr is None:
                 print(f"tip error < {lev:.1%}: {'solidshell' if ss is None else element} did not reach it")
                 continue

@@ -34,29 +34,23 @@ def test_missing_kratos_says_so_in_one_line_and_exits_3(tmp_path):
     assert "pip install KratosMultiphysics KratosStructuralMechanicsApplication" in lines[0]
 
 
-def _rotate(k, v):
-    """Rodrigues: rotate the rows of v by the rotation vectors k."""
-    ang = np.linalg.norm(k, axis=1)[:, None]
-    axis = np.divide(k, ang, out=np.zeros_like(k), where=ang > 0)
-    return (v * np.cos(ang) + np.cross(axis, v) * np.sin(ang)
-            + axis * np.sum(axis * v, axis=1)[:, None] * (1 - np.cos(ang)))
+def test_nodal_rotation_vectors_recover_a_rigid_rotation():
+    # A rigid rotation of the whole pedestal mesh (translations and directors rotated alike) must
+    # come back as the same rotation vector at every node, drilling part included.
+    from scipy.spatial.transform import Rotation
 
+    from solidshell.meshing import build_mesh
 
-def test_rotation_vectors_turn_directors_onto_deformed_directors():
     ped = _load(ROOT / "reference" / "pedestal_kratos.py", "reference_pedestal_kratos")
-    rng = np.random.default_rng(3)
-    n0 = rng.normal(size=(50, 3))
-    n0 /= np.linalg.norm(n0, axis=1)[:, None]
-    d = 1.7 * rng.normal(size=(50, 3))           # any length: only the direction is used
-    d[0] = 2.0 * n0[0]                           # no rotation
-    d[1] = -n0[1] + 1e-9 * np.cross(n0[1], [1.0, 0.0, 0.0])   # nearly half a turn
-    k = ped.rotation_vectors(n0, d)
-    target = d / np.linalg.norm(d, axis=1)[:, None]
-    # exact up to round-off in arctan2/cross products of unit vectors: 1e-7 leaves room for the
-    # near-half-turn row whose axis is defined by a 1e-9 component
-    assert np.allclose(_rotate(k, n0), target, atol=1e-7)
-    assert np.allclose(k[0], 0.0)
-    # the smallest rotation has no component along the director (no drilling); 1e-7 because the
-    # near-half-turn row's axis is the normalised 1e-9 cross product, accurate to ~1e-16 / 1e-9
-    assert np.allclose(np.sum(k * n0, axis=1), 0.0, atol=1e-7)
-    assert np.allclose(np.sum(k[2:] * n0[2:], axis=1), 0.0, atol=1e-12)
+    mesh = build_mesh("square_on_square", "6x2x4")
+    rv = np.array([0.4, -1.1, 0.7])
+    R = Rotation.from_rotvec(rv).as_matrix()
+    X = mesh.nodes
+    U = np.zeros((mesh.n_nodes, 6))
+    U[:, :3] = X @ R.T - X
+    U[:, 3:] = mesh.directors @ R.T - mesh.directors
+    k = ped.nodal_rotation_vectors(mesh, U)
+    # exact up to the SVD's round-off on O(1) matrices
+    assert np.allclose(k, rv, atol=1e-10)
+    # and no rotation for no deformation
+    assert np.allclose(ped.nodal_rotation_vectors(mesh, np.zeros_like(U)), 0.0, atol=1e-12)

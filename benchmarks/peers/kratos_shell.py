@@ -10,7 +10,8 @@ indices, all 6 dofs fixed); section {E [gf/cm^2], nu, h [cm]}; weight [gf/cm^2] 
 element (a Kratos element name); steps (uniform load increments); tol (relative residual), abs_tol
 (residual norm [gf]);
 max_iter; linear_solver (a Kratos solver_type); matrix (return the last tangent, CSR); initial
-(optional {displacement (N,3), rotation (N,3) rotation vectors}: the state Newton starts from).
+(optional {displacement (N,3), rotation (N,3) rotation vectors}: the state Newton starts from);
+line_search (Kratos' LineSearchStrategy instead of plain Newton-Raphson).
 
 answer: displacement (N,3) and rotation (N,3), converged, per-step Newton iterations, the wall
 times of set-up and solve [s], the Kratos version, and (if asked) the tangent of the last Newton
@@ -76,7 +77,15 @@ def solve(p: dict) -> dict:
         crit = KM.ResidualCriteria(tol, abs_tol)
         crit.SetEchoLevel(echo)
         bs = KM.ResidualBasedBlockBuilderAndSolver(lin)
-        st = KM.ResidualBasedNewtonRaphsonStrategy(mp, scheme, crit, bs, max_iter, False, False, True)
+        if p.get("line_search"):
+            # Kratos' Newton with a line search along each Newton direction (secant on the
+            # directional residual, step in [min_alpha, max_alpha])
+            st = KM.LineSearchStrategy(mp, scheme, crit, bs, KM.Parameters(json.dumps({
+                "max_iteration": max_iter, "compute_reactions": False, "reform_dofs_at_each_step": False,
+                "move_mesh_flag": True, "max_line_search_iterations": 10, "first_alpha_value": float(p.get("ls_first", 0.5)),
+                "second_alpha_value": float(p.get("ls_second", 1.0)), "min_alpha": 0.05, "max_alpha": 1.0, "line_search_tolerance": 0.5})))
+        else:
+            st = KM.ResidualBasedNewtonRaphsonStrategy(mp, scheme, crit, bs, max_iter, False, False, True)
         st.SetEchoLevel(echo)
         st.Initialize()
         st.Check()

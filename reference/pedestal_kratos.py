@@ -263,10 +263,10 @@ def main(argv=None):
         kr = run_kratos(py, m, seed_U=U if ss["state"] != "not converged" else None)
         records += [kr, ss]
         compare([kr, ss])
+        with open(a.out, "w") as fh:      # after every mesh: a long run stopped later keeps these
+            json.dump(records, fh, indent=1)
     load1 = os.getloadavg()
     print(f"load average after: {load1[0]:.2f} {load1[1]:.2f} {load1[2]:.2f}")
-    with open(a.out, "w") as fh:
-        json.dump(records, fh, indent=1)
     print(f"wrote {a.out}")
     return records
 

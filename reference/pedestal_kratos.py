@@ -174,7 +174,7 @@ def run_kratos(py: str, mesh_name: str, seed_U=None) -> dict:
             "load_steps": out["attempts"][-1]["steps"], "newton_iterations": sum(out["iterations"]),
             "wall_solve_s": out["wall_solve_s"], "wall_solve_all_tries_s": out["wall_solve_total_s"],
             "attempts": out["attempts"],
-            "start": "solidshell's state (Newton at full weight)" if seed_U is not None else "flat sheet"}
+            "start": "solidshell's state (line-searched Newton at full weight)" if seed_U is not None else "flat sheet"}
 
 
 def run_solidshell(mesh_name: str) -> dict:

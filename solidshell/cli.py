@@ -1,9 +1,10 @@
-"""Command line: ``solidshell scenes | mesh | run`` (also ``python -m solidshell ...``).
+"""Command line: ``solidshell scenes | mesh | run | figures`` (also ``python -m solidshell ...``).
 
     solidshell scenes
     solidshell mesh SCENE [--mesh 48x16x4] [--out DIR] [--force] [--allow-large]
     solidshell run  SCENE [--mesh M] [--solver static|explicit|relax] [--set key=value ...] [--out DIR]
                           [--checkpoint FILE] [--restart FILE] [--force] [--allow-large]
+    solidshell figures [FIG ...] [--quick] [--out DIR]     (the paper's figures, paper_figures/)
 
 SCENE is a packaged scene name (``solidshell scenes`` lists them) or the path of a .toml scene
 file.  ``--set`` overrides any scene key by its dotted name (``--set solver.static.c=2e-3``,
@@ -97,6 +98,11 @@ def _parser() -> argparse.ArgumentParser:
                         "scene's mesh.adaptive_level0 or --mesh; settings: --set adapt.KEY=VALUE")
     r.add_argument("--no-progress", action="store_true", help="no progress bar")
     _common(r)
+
+    f = sub.add_parser("figures", help="render the paper's figures (paper_figures/): Figs. 4-13, 19-22")
+    f.add_argument("figs", nargs="*", metavar="FIG", help="figure numbers, e.g. 5 12 (default: all)")
+    f.add_argument("--quick", action="store_true", help="coarser meshes and faster relaxation (minutes)")
+    f.add_argument("--out", metavar="DIR", default="figures", help="output folder (default: figures)")
     return p
 
 
@@ -172,6 +178,18 @@ def _cmd_run(args) -> int:
     return EXIT_OK if s.get("converged") else EXIT_NOT_CONVERGED
 
 
+def _cmd_figures(args) -> int:
+    try:
+        from paper_figures.registry import make_figures, module_name
+    except ImportError:
+        raise InputError("the paper_figures package is not importable here: run from the source tree "
+                         "(or install it with pip install -e .)") from None
+    for f in args.figs:              # every name checked before any figure runs
+        module_name(f)
+    make_figures(args.figs, quick=args.quick, out_dir=args.out)
+    return EXIT_OK
+
+
 def main(argv=None) -> int:
     """Entry point; returns the exit status (the console script exits with it)."""
     argv = list(sys.argv[1:] if argv is None else argv)
@@ -186,6 +204,8 @@ def main(argv=None) -> int:
             return _cmd_scenes(args)
         if args.command == "mesh":
             return _cmd_mesh(args)
+        if args.command == "figures":
+            return _cmd_figures(args)
         return _cmd_run(args)
     except InputError as e:
         _say(f"solidshell: error: {e}")

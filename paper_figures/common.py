@@ -149,29 +149,37 @@ def projected_boundary(out):
 def views_figure(rows, views=("top", "iso"), boundaries=None, pedestal=None, boundary_title=None,
                  panel_size=3.6, mesh_lines=True):
     """A figure of ``rows`` = [(label, RunOutput or (mesh, scene), X)], one row per state with one
-    panel per view, all on ONE colour scale (one colour bar), plus an optional panel of projected
-    boundaries (label -> (M,2) points).  Returns (fig, axes)."""
+    panel per view, all on ONE colour scale (one colour bar, in its own column), plus an optional
+    panel of projected boundaries (label -> (M,2) points) on the right.  Returns (fig, axes)."""
     plt = mpl()
-    nr, nc = len(rows), len(views) + (1 if boundaries else 0)
-    fig = plt.figure(figsize=(panel_size * nc + 0.8, panel_size * nr * 0.92))
-    gs = fig.add_gridspec(nr, nc, wspace=0.08, hspace=0.18)
+    nr, nv = len(rows), len(views)
+    widths = [1.25 if v == "iso" else 1.0 for v in views] + [0.05]
+    if boundaries:
+        widths += [0.12, 1.25]
+    fig = plt.figure(figsize=(panel_size * sum(widths) + 0.6, panel_size * nr * 0.95 + 0.5))
+    gs = fig.add_gridspec(nr, len(widths), width_ratios=widths, wspace=0.12, hspace=0.32)
     norm = height_norm(*[X for _, _, X in rows])
     axes, sm = [], None
     for i, (label, src, X) in enumerate(rows):
         mesh, sc = (src.mesh, src.scene) if hasattr(src, "mesh") else src
         for j, v in enumerate(views):
             ax = fig.add_subplot(gs[i, j])
-            sm = panel(ax, mesh, X, v, scene=sc, norm=norm, mesh_lines=mesh_lines,
-                       title=f"{label}: {'top' if v == 'top' else 'isometric' if v == 'iso' else 'side'} view")
+            sm = panel(ax, mesh, X, v, scene=sc, norm=norm, mesh_lines=mesh_lines)
+            if j == 0:                   # the row's label once, over its first panel
+                ax.set_title(label, fontsize=9, loc="left")
             axes.append(ax)
+    cax = fig.add_subplot(gs[:, nv])
+    cb = fig.colorbar(sm, cax=cax)
+    cb.set_label("height z [cm]", fontsize=8)
+    cb.ax.tick_params(labelsize=7)
     if boundaries:
         ax = fig.add_subplot(gs[:, -1])
         boundary_panel(ax, boundaries, pedestal)
         ax.set_xlabel("x [cm]", fontsize=8)
         ax.set_ylabel("y [cm]", fontsize=8)
         ax.set_title(boundary_title or "projected boundaries on the X-Y plane", fontsize=9)
+        ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.1), ncol=1, frameon=False)
         axes.append(ax)
-    shared_colorbar(fig, axes[: nr * len(views)], sm)
     return fig, axes
 
 

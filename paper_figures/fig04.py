@@ -41,13 +41,13 @@ def make(out_dir: Path, quick: bool = False) -> dict:
             c = centreline(out)
             rec["tip_z_error_vs_elastica"] = float(c[-1, 1] - ref[cut]["tip_z"])
             recs.append(rec)
-    fig = plt.figure(figsize=(9.0, 5.0))
-    ax_a = fig.add_axes([0.0, 0.04, 0.48, 0.82])
+    fig = plt.figure(figsize=(10.0, 5.0))
+    ax_a = fig.add_axes([0.0, 0.04, 0.44, 0.82])
     o = runs["warp", "10x1"]
     X = common.positions(o.mesh, o.U)
     sm = common.panel(ax_a, o, X, "iso", title="(a) warp-cut strip, 10x1 elements, isometric view")
     common.colorbar(fig, ax_a, sm)
-    ax_b = fig.add_axes([0.56, 0.1, 0.42, 0.76])
+    ax_b = fig.add_axes([0.5, 0.1, 0.28, 0.76])
     colours = {"warp": "C0", "weft": "C3"}
     for cut in ("warp", "weft"):
         r = ref[cut]["curve"]
@@ -61,7 +61,7 @@ def make(out_dir: Path, quick: bool = False) -> dict:
     ax_b.set_xlabel("x [cm]  (along the strip)")
     ax_b.set_ylabel("z [cm]")
     ax_b.grid(True, lw=0.3, alpha=0.5)
-    ax_b.legend(fontsize=7, loc="lower left")
+    ax_b.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.03, 0.5), frameon=False)
     ax_b.set_title("(b) side view: centre lines over the elastica", fontsize=9)
     info = {"figure": NAME, "caption": CAPTION, "quick": quick, "runs": recs,
             "differs_from_paper": "reference curve: the heavy elastica instead of the paper's 50x5 S4R model"}

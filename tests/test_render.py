@@ -95,3 +95,31 @@ def test_run_picture_is_a_sane_png(tmp_path):
     assert 300 < img.shape[0] < 2000 and 300 < img.shape[1] < 2000    # ~7x6 in at 130 dpi
     assert p.stat().st_size > 10_000                                  # not a blank image
     assert renderer() in ("vtk", "matplotlib")
+
+
+def test_figures_cli_refuses_an_unknown_figure(capsys):
+    from solidshell.cli import main
+
+    assert main(["figures", "4", "3"]) == 2           # checked before any figure runs
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "unknown figure '3'" in err[0] and "4, 5, 6" in err[0] and "22" in err[0]
+
+
+def test_fig04_quick_renders_over_the_elastica(tmp_path):
+    # Fig. 4 in quick mode (four static strips, seconds): the PNG exists with a sane size, and its
+    # json carries each strip's tip error against the elastica; the 10x1/20x1 tips are within 0.5 %
+    # / 0.2 % of the 5 cm length (verification/strip.py measures 0.45 % and 0.12 %).
+    import json
+
+    import matplotlib.image as mimg
+
+    from paper_figures.registry import make_figures
+
+    make_figures(["fig4"], quick=True, out_dir=tmp_path, say=lambda *_: None)
+    img = mimg.imread(tmp_path / "fig04.png")
+    assert 500 < img.shape[1] < 3000 and 300 < img.shape[0] < 2000
+    info = json.loads((tmp_path / "fig04.json").read_text())
+    errs = {(r["scene"], r["mesh"]): abs(r["tip_z_error_vs_elastica"]) for r in info["runs"]}
+    assert len(errs) == 4
+    for (scene, mesh), e in errs.items():
+        assert e < (0.025 if mesh == "10x1" else 0.01), (scene, mesh, e)

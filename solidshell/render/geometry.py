@@ -69,7 +69,7 @@ class Camera:
         return P @ r, P @ u, P @ d
 
 
-def _iso(elev_deg: float, azim_deg: float) -> Camera:
+def oblique(elev_deg: float, azim_deg: float) -> Camera:
     """matplotlib's (elev, azim) convention: the eye sits along (cos e cos a, cos e sin a, sin e)."""
     e, a = np.radians(elev_deg), np.radians(azim_deg)
     eye = np.array([np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)])
@@ -79,7 +79,7 @@ def _iso(elev_deg: float, azim_deg: float) -> Camera:
 # One camera per view name: the same picture of a figure looks the same in every run.
 CAMERAS = {
     "top": Camera((0.0, 0.0, -1.0), (0.0, 1.0, 0.0)),       # x right, y up
-    "iso": _iso(30.0, -60.0),
+    "iso": oblique(30.0, -60.0),
     "side": Camera((0.0, 1.0, 0.0), (0.0, 0.0, 1.0)),       # looking along +y: x right, z up
     "side_yz": Camera((-1.0, 0.0, 0.0), (0.0, 0.0, 1.0)),   # looking along -x: y right, z up
     "bottom": Camera((0.0, 0.0, 1.0), (0.0, 1.0, 0.0)),

@@ -157,7 +157,7 @@ def views_figure(rows, views=("top", "iso"), boundaries=None, pedestal=None, bou
     if boundaries:
         widths += [0.12, 1.25]
     fig = plt.figure(figsize=(panel_size * sum(widths) + 0.6, panel_size * nr * 0.95 + 0.5))
-    gs = fig.add_gridspec(nr, len(widths), width_ratios=widths, wspace=0.12, hspace=0.32)
+    gs = fig.add_gridspec(nr, len(widths), width_ratios=widths, wspace=0.2, hspace=0.32)
     norm = height_norm(*[X for _, _, X in rows])
     axes, sm = [], None
     for i, (label, src, X) in enumerate(rows):

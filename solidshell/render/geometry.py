@@ -181,7 +181,7 @@ def scene_surfaces(mesh, X, bodies, mesh_lines: bool = True, cover_pedestal: boo
     zmin = float(np.min(X[:, 2])) if len(X) else 0.0
     for b in bodies:
         if b["type"] == "sphere":
-            out.append(sphere_surface(b["centre"], b["radius"]))
+            out.append(sphere_surface(b["centre"], b["radius"] - chord_sag(mesh, X, b["radius"])))
         elif b["type"] == "pedestal":
             top = float(b.get("centre", (0, 0, 0))[2])
             size = b["diameter"] if b.get("shape") == "disc" else b["size"]
@@ -195,6 +195,21 @@ def scene_surfaces(mesh, X, bodies, mesh_lines: bool = True, cover_pedestal: boo
             else:
                 out += list(pedestal_surfaces(b, bottom))
     return out
+
+
+def chord_sag(mesh, X, radius: float) -> float:
+    """How far a flat element lying on a sphere of ``radius`` dips below the sphere between its
+    nodes [cm]: d^2 / (8 R) for its diagonal d (the 90th percentile over the sheet).  Contact acts
+    at the nodes, so the drawn sphere is made this much smaller; else it would show through the
+    middle of every element resting on it."""
+    cells = np.asarray(mesh.quads, int).reshape(-1, 4)
+    if not len(cells):
+        cells = np.asarray(mesh.tris, int).reshape(-1, 3)[:, [0, 1, 2, 1]]
+    if not len(cells):
+        return 0.0
+    P = np.asarray(X, float)[cells]
+    d = np.maximum(np.linalg.norm(P[:, 2] - P[:, 0], axis=1), np.linalg.norm(P[:, 3] - P[:, 1], axis=1))
+    return float(np.percentile(d, 90) ** 2 / (8.0 * radius))
 
 
 def _sheet_around(mesh, X, body) -> bool:

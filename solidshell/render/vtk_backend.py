@@ -102,19 +102,33 @@ def render_image(surfaces, camera: Camera, extent, norm, cmap, height_px: int = 
     W = int(round(H * aspect))
     if W > 2400:                                  # very wide views: cap the width instead
         W, H = 2400, int(round(2400 / aspect))
+    from vtkmodules.vtkRenderingCore import vtkMapper
+
+    # mesh lines are separate line actors (VTK's shader-drawn show_edges vanish on a sheet seen
+    # edge-on, as in a side view of a flat sheet); polygons are pushed back so the lines on them win
+    vtkMapper.SetResolveCoincidentTopologyToPolygonOffset()
     p = pv.Plotter(off_screen=True, window_size=(W, H), lighting="light_kit")
     try:
         p.set_background("white")
         for s in surfaces:
             poly = _polydata(s)
-            kw = dict(show_edges=bool(s.edges), edge_color=(0.05, 0.05, 0.05), line_width=edge_width,
-                      smooth_shading=False, ambient=0.18, diffuse=0.85)
+            kw = dict(show_edges=False, smooth_shading=False, ambient=0.18, diffuse=0.85)
             if s.scalars is not None:
                 poly.point_data["z"] = np.asarray(s.scalars, float)
                 p.add_mesh(poly, scalars="z", cmap=cmap, clim=(norm.vmin, norm.vmax), show_scalar_bar=False,
                            specular=0.1, **kw)
             else:
                 p.add_mesh(poly, color=s.color, specular=0.25, specular_power=20.0, **kw)
+            if s.edges:
+                p.add_mesh(poly.extract_all_edges(), color=(0.05, 0.05, 0.05), line_width=edge_width,
+                           lighting=False, opacity=0.75)
+            if s.scalars is not None and s.edges:
+                # the sheet's rim, thick and coloured: a sheet seen edge-on still reads as a curve
+                rim = poly.extract_feature_edges(boundary_edges=True, feature_edges=False,
+                                                 manifold_edges=False, non_manifold_edges=False)
+                if rim.n_points:
+                    p.add_mesh(rim, scalars="z", cmap=cmap, clim=(norm.vmin, norm.vmax), show_scalar_bar=False,
+                               line_width=max(2.5, 3.0 * edge_width), lighting=False)
         r, u, d = camera.frame()
         cx, cy = 0.5 * (x0 + x1), 0.5 * (y0 + y1)
         pts = np.concatenate([s.points for s in surfaces])

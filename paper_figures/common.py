@@ -153,9 +153,9 @@ def views_figure(rows, views=("top", "iso"), boundaries=None, pedestal=None, bou
     panel of projected boundaries (label -> (M,2) points) on the right.  Returns (fig, axes)."""
     plt = mpl()
     nr, nv = len(rows), len(views)
-    widths = [1.25 if v == "iso" else 1.0 for v in views] + [0.05]
+    widths = [1.4 if v == "iso" else 1.0 for v in views] + [0.05]
     if boundaries:
-        widths += [0.12, 1.25]
+        widths += [0.4, 1.25]
     fig = plt.figure(figsize=(panel_size * sum(widths) + 0.6, panel_size * nr * 0.95 + 0.5))
     gs = fig.add_gridspec(nr, len(widths), width_ratios=widths, wspace=0.2, hspace=0.32)
     norm = height_norm(*[X for _, _, X in rows])

@@ -6,7 +6,7 @@ coordinates [cm], equal axes, labels that follow the warp direction, the rigid b
 
 The renderer is VTK (PyVista, off-screen) when it can render here, else the depth-sorting
 matplotlib painter (one log line says so, once per process).  ``SOLIDSHELL_RENDERER=matplotlib``
-(or ``vtk``) forces one.
+forces the painter.
 """
 
 from __future__ import annotations

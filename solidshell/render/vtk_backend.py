@@ -107,6 +107,7 @@ def render_image(surfaces, camera: Camera, extent, norm, cmap, height_px: int = 
     # mesh lines are separate line actors (VTK's shader-drawn show_edges vanish on a sheet seen
     # edge-on, as in a side view of a flat sheet); polygons are pushed back so the lines on them win
     vtkMapper.SetResolveCoincidentTopologyToPolygonOffset()
+    vtkMapper.SetResolveCoincidentTopologyPolygonOffsetParameters(2.0, 8.0)
     p = pv.Plotter(off_screen=True, window_size=(W, H), lighting="light_kit")
     try:
         p.set_background("white")
@@ -123,12 +124,11 @@ def render_image(surfaces, camera: Camera, extent, norm, cmap, height_px: int = 
                 p.add_mesh(poly.extract_all_edges(), color=(0.05, 0.05, 0.05), line_width=edge_width,
                            lighting=False, opacity=0.75)
             if s.scalars is not None and s.edges:
-                # the sheet's rim, thick and coloured: a sheet seen edge-on still reads as a curve
+                # the sheet's rim, a thicker dark line: a sheet seen edge-on still reads as a curve
                 rim = poly.extract_feature_edges(boundary_edges=True, feature_edges=False,
                                                  manifold_edges=False, non_manifold_edges=False)
                 if rim.n_points:
-                    p.add_mesh(rim, scalars="z", cmap=cmap, clim=(norm.vmin, norm.vmax), show_scalar_bar=False,
-                               line_width=max(2.5, 3.0 * edge_width), lighting=False)
+                    p.add_mesh(rim, color=(0.05, 0.05, 0.05), line_width=max(1.6, 2.0 * edge_width), lighting=False)
         r, u, d = camera.frame()
         cx, cy = 0.5 * (x0 + x1), 0.5 * (y0 + y1)
         pts = np.concatenate([s.points for s in surfaces])

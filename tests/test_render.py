@@ -33,7 +33,7 @@ def _centre_pixel(backend, monkeypatch, tmp_path, view, body):
     import matplotlib.image as mimg
 
     monkeypatch.setenv("SOLIDSHELL_RENDERER", backend)
-    mesh = _sheet()
+    mesh = _sheet(7)                 # odd: the centre pixel is inside an element, not on a mesh line
     fig = plt.figure(figsize=(3, 3))
     ax = fig.add_axes([0, 0, 1, 1])
     # the sheet sits at the top of the colour scale: yellow in viridis, far from the body's grey

@@ -1,4 +1,4 @@
-"""Command line: ``solidshell scenes | mesh | run | sweep`` (also ``python -m solidshell ...``).
+"""Command line: ``solidshell scenes | mesh | run | sweep | verify | figures`` (also ``python -m solidshell ...``).
 
     solidshell scenes
     solidshell mesh SCENE [--mesh 48x16x4] [--out DIR] [--force] [--allow-large]
@@ -7,6 +7,7 @@
     solidshell sweep SWEEP [--scheduler tcp://HOST:PORT] [--workers N] [--threads N] [--out DIR]
                            [--retries N] [--limit N] [--list]     (solidshell.sweep; needs dask)
     solidshell verify [NAME ...] [--quick] [--out DIR] [--list] [--references] [--fenicsx]
+    solidshell figures [FIG ...] [--quick] [--out DIR]     (the paper's figures, paper_figures/)
 
 SCENE is a packaged scene name (``solidshell scenes`` lists them) or the path of a .toml scene
 file.  ``--set`` overrides any scene key by its dotted name (``--set solver.static.c=2e-3``,
@@ -117,6 +118,10 @@ def _parser() -> argparse.ArgumentParser:
     w.add_argument("--no-progress", action="store_true", help="no progress bar or lines")
     from .verify.cli import add_parser as _add_verify
     _add_verify(sub)
+    f = sub.add_parser("figures", help="render the paper's figures (paper_figures/): Figs. 4-13, 19-22")
+    f.add_argument("figs", nargs="*", metavar="FIG", help="figure numbers, e.g. 5 12 (default: all)")
+    f.add_argument("--quick", action="store_true", help="coarser meshes and faster relaxation (minutes)")
+    f.add_argument("--out", metavar="DIR", default="figures", help="output folder (default: figures)")
     return p
 
 
@@ -231,6 +236,16 @@ def _cmd_sweep(args) -> int:
     if res.interrupted:
         return EXIT_INTERRUPTED
     return EXIT_NOT_CONVERGED if res.failed or res.recorded + res.skipped < res.total else EXIT_OK
+def _cmd_figures(args) -> int:
+    try:
+        from paper_figures.registry import make_figures, module_name
+    except ImportError:
+        raise InputError("the paper_figures package is not importable here: run from the source tree "
+                         "(or install it with pip install -e .)") from None
+    for f in args.figs:              # every name checked before any figure runs
+        module_name(f)
+    make_figures(args.figs, quick=args.quick, out_dir=args.out)
+    return EXIT_OK
 
 
 def main(argv=None) -> int:
@@ -252,6 +267,8 @@ def main(argv=None) -> int:
         if args.command == "verify":
             from .verify.cli import run as _cmd_verify
             return _cmd_verify(args)
+        if args.command == "figures":
+            return _cmd_figures(args)
         return _cmd_run(args)
     except InputError as e:
         _say(f"solidshell: error: {e}")

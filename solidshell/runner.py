@@ -44,6 +44,7 @@ class RunOutput:
     result: Any = None                      # the solver's SolveResult (None for a mesh-only run)
     files: list = field(default_factory=list)
     run_id: str = ""                        # uuid4 hex, also in summary.json and every file
+    series: list | None = None              # adaptive runs: [(t, ShellMesh, U)], each frame on its own mesh
 
     @property
     def converged(self):
@@ -577,7 +578,7 @@ def _run(sc, kind, mesh_arg, out_dir, cb, settings, timings, t_start, overrides=
     cb(1.0, "interrupted" if summary["interrupted"] else "done")
     summary = sio.to_jsonable(summary)
     return RunOutput(summary=summary, U=U, mesh=mesh, out_dir=folder.path if folder else None, scene=sc,
-                     result=result, files=[Path(f) for f in files], run_id=run_id)
+                     result=result, files=[Path(f) for f in files], run_id=run_id, series=series)
 
 
 def adapt_settings(scene: Scene, kind: str):

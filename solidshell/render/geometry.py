@@ -1,0 +1,235 @@
+"""What a picture shows, independent of the renderer: polygon surfaces in 3-D and an orthographic
+camera.
+
+A :class:`Surface` is the deformed sheet (coloured by height z, mesh lines optional) or a rigid
+body (one solid colour, tessellated finely enough for a depth-sorting painter).  A
+:class:`Camera` is a view direction and an up vector; every picture is an orthographic
+(parallel) projection, so a top or side view has true lengths in cm on its axes.  Both
+renderers (solidshell.render.vtk_backend, solidshell.render.mpl_backend) take the same surfaces
+and camera and draw into the same 2-D screen coordinates ``(p . right, p . up)`` [cm].
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass
+class Surface:
+    """Polygons sharing a point array.
+
+    points : (P,3) [cm];  quads : (M,4) int;  tris : (K,3) int
+    scalars: (P,) values mapped through the colour map (the sheet's height), or None
+    color  : RGB in [0,1] for a solid body (used when scalars is None)
+    edges  : draw the polygon outlines (the mesh)
+    solid  : a closed body seen from outside (its back faces may be culled); a sheet is two-sided
+    """
+
+    points: np.ndarray
+    quads: np.ndarray
+    tris: np.ndarray
+    scalars: np.ndarray | None = None
+    color: tuple = (0.72, 0.72, 0.74)
+    edges: bool = False
+    solid: bool = False
+
+    def polygons(self):
+        """(corner points (n,k,3), cell index into faces) for quads then triangles."""
+        out = []
+        if len(self.quads):
+            out.append(self.points[self.quads])
+        if len(self.tris):
+            out.append(self.points[self.tris])
+        return out
+
+
+@dataclass(frozen=True)
+class Camera:
+    """Orthographic camera: ``direction`` from the eye into the scene, ``up`` the screen's up.
+    Screen right = direction x up; depth = p . direction (larger is farther)."""
+
+    direction: tuple
+    up: tuple
+
+    def frame(self):
+        d = np.asarray(self.direction, float)
+        d = d / np.linalg.norm(d)
+        u = np.asarray(self.up, float)
+        u = u - (u @ d) * d
+        u = u / np.linalg.norm(u)
+        r = np.cross(d, u)
+        return r, u, d
+
+    def project(self, P):
+        """(screen x, screen y, depth) of points P (...,3) [cm]."""
+        r, u, d = self.frame()
+        P = np.asarray(P, float)
+        return P @ r, P @ u, P @ d
+
+
+def oblique(elev_deg: float, azim_deg: float) -> Camera:
+    """matplotlib's (elev, azim) convention: the eye sits along (cos e cos a, cos e sin a, sin e)."""
+    e, a = np.radians(elev_deg), np.radians(azim_deg)
+    eye = np.array([np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)])
+    return Camera(tuple(-eye), (0.0, 0.0, 1.0))
+
+
+# One camera per view name: the same picture of a figure looks the same in every run.
+CAMERAS = {
+    "top": Camera((0.0, 0.0, -1.0), (0.0, 1.0, 0.0)),       # x right, y up
+    "iso": oblique(30.0, -60.0),
+    "side": Camera((0.0, 1.0, 0.0), (0.0, 0.0, 1.0)),       # looking along +y: x right, z up
+    "side_yz": Camera((-1.0, 0.0, 0.0), (0.0, 0.0, 1.0)),   # looking along -x: y right, z up
+    "bottom": Camera((0.0, 0.0, 1.0), (0.0, 1.0, 0.0)),
+}
+
+
+# --------------------------------------------------------------------------- the sheet
+def cloth_surface(mesh, X, edges: bool = True) -> Surface:
+    """The deformed mid-surface (X = nodal positions (N,3) [cm]) coloured by height z."""
+    quads = np.asarray(mesh.quads, int).reshape(-1, 4)
+    tris = np.asarray(mesh.tris, int).reshape(-1, 3)
+    return Surface(np.asarray(X, float), quads, tris, scalars=np.asarray(X, float)[:, 2], edges=edges)
+
+
+def _grid_quads(nu: int, nv: int, closed_u: bool = False) -> np.ndarray:
+    """Quads of a (nv+1) x (nu+1) point grid (row-major, u fastest); closed_u wraps u."""
+    i, j = np.meshgrid(np.arange(nv), np.arange(nu), indexing="ij")
+    w = nu if closed_u else nu + 1
+    a = i * w + j
+    b = i * w + (j + 1) % w if closed_u else a + 1
+    return np.stack([a, b, b + w, a + w], axis=-1).reshape(-1, 4)
+
+
+def sphere_surface(centre, radius, n_around: int = 72, n_up: int = 36) -> Surface:
+    """A UV sphere; quads outward (counter-clockwise seen from outside)."""
+    c = np.asarray(centre, float)
+    th = np.linspace(0.0, np.pi, n_up + 1)               # from the south pole up
+    ph = np.linspace(0.0, 2 * np.pi, n_around, endpoint=False)
+    T, P = np.meshgrid(th, ph, indexing="ij")
+    pts = np.stack([np.sin(T) * np.cos(P), np.sin(T) * np.sin(P), -np.cos(T)], -1).reshape(-1, 3)
+    q = _grid_quads(n_around, n_up, closed_u=True)
+    return Surface(c + radius * pts, q, np.zeros((0, 3), int), solid=True)
+
+
+def _outline(shape: str, size: float, n: int):
+    """Closed outline (n,2) of the pedestal top, counter-clockwise."""
+    if shape == "disc":
+        t = np.linspace(0.0, 2 * np.pi, n, endpoint=False)
+        return 0.5 * size * np.stack([np.cos(t), np.sin(t)], -1)
+    a = 0.5 * size
+    k = max(n // 4, 1)
+    s = np.linspace(-a, a, k, endpoint=False)
+    return np.concatenate([np.stack([s, np.full(k, -a)], -1), np.stack([np.full(k, a), s], -1),
+                           np.stack([-s, np.full(k, a)], -1), np.stack([np.full(k, -a), -s], -1)])
+
+
+def pedestal_surfaces(body: dict, bottom: float, cap_gap: float = 0.0):
+    """(side wall, top) of a pedestal from its top at centre[2] down to ``bottom`` [cm]; the wall
+    and the top are tessellated in cells no larger than ~1/24 of the pedestal (the painter sorts
+    polygons by their centroids, which needs polygons about the size of the sheet's)."""
+    c = np.asarray(body.get("centre", (0.0, 0.0, 0.0)), float)
+    shape = body.get("shape", "square")
+    size = body["diameter"] if shape == "disc" else body["size"]
+    ring = _outline(shape, size, 96)
+    n = len(ring)
+    top = c[2] - cap_gap
+    nz = max(4, int(np.ceil((top - bottom) / (size / 12.0))))
+    zs = np.linspace(top, bottom, nz + 1)
+    wall = np.concatenate([np.column_stack([ring + c[:2], np.full(n, z)]) for z in zs])
+    wq = _grid_quads(n, nz, closed_u=True)[:, ::-1]       # outward
+    side = Surface(wall, wq, np.zeros((0, 3), int), solid=True)
+    # top: concentric rings (disc) / a grid clipped to the square; a fan of rings works for both
+    rings = [c[:2] + f * ring for f in np.linspace(1.0, 0.0, 9)[:-1]]
+    pts = np.concatenate([np.column_stack([r_, np.full(n, top)]) for r_ in rings] + [[[c[0], c[1], top]]])
+    tq = _grid_quads(n, len(rings) - 1, closed_u=True)          # rings inwards: normals up
+    centre_idx = len(pts) - 1
+    inner = (len(rings) - 1) * n + np.arange(n)
+    tt = np.stack([inner, (inner - inner[0] + 1) % n + inner[0], np.full(n, centre_idx)], -1)
+    cap = Surface(pts, tq, tt, solid=True)
+    return side, cap
+
+
+def covered_top(body: dict, z: float) -> Surface:
+    """The part of a sheet lying flat on a pedestal's top (the pedestal scenes mesh only the
+    hanging part and clamp its edge there): a flat, cloth-coloured patch at height z."""
+    side, cap = pedestal_surfaces(body, z - 1.0)
+    pts = cap.points.copy()
+    pts[:, 2] = z
+    return Surface(pts, cap.quads, cap.tris, scalars=np.full(len(pts), z), edges=False)
+
+
+def bodies_of(scene) -> list:
+    """The rigid bodies a scene's pictures show: its sphere/pedestal contact bodies, else the
+    pedestal its recipe implies."""
+    if scene is None:
+        return []
+    out = [dict(c) for c in scene.contact if c["type"] in ("sphere", "pedestal")]
+    if not any(c["type"] == "pedestal" for c in out):
+        p = scene.pedestal()
+        if p is not None:
+            out.append(p)
+    return out
+
+
+def scene_surfaces(mesh, X, bodies, mesh_lines: bool = True, cover_pedestal: bool = True) -> list:
+    """The sheet and the bodies of a picture: [cloth, (flat cloth on the pedestal top), bodies...]."""
+    cloth = cloth_surface(mesh, X, edges=mesh_lines)
+    out = [cloth]
+    zmin = float(np.min(X[:, 2])) if len(X) else 0.0
+    for b in bodies:
+        if b["type"] == "sphere":
+            out.append(sphere_surface(b["centre"], b["radius"] - chord_sag(mesh, X, b["radius"])))
+        elif b["type"] == "pedestal":
+            top = float(b.get("centre", (0, 0, 0))[2])
+            size = b["diameter"] if b.get("shape") == "disc" else b["size"]
+            bottom = min(zmin - 0.1 * size, top - 0.6 * size)      # a column standing below the sheet
+            # a pedestal scene meshes only the hanging part; the sheet lies flat on the top, which
+            # hides the pedestal's own top
+            if cover_pedestal and _sheet_around(mesh, X, b):
+                out.append(covered_top(b, top))
+                side, _ = pedestal_surfaces(b, bottom, cap_gap=0.01 * size)
+                out.append(side)
+            else:
+                out += list(pedestal_surfaces(b, bottom))
+    return out
+
+
+def chord_sag(mesh, X, radius: float) -> float:
+    """How far a flat element lying on a sphere of ``radius`` dips below the sphere between its
+    nodes [cm]: d^2 / (8 R) for its diagonal d (the 90th percentile over the sheet).  Contact acts
+    at the nodes, so the drawn sphere is made this much smaller; else it would show through the
+    middle of every element resting on it."""
+    cells = np.asarray(mesh.quads, int).reshape(-1, 4)
+    if not len(cells):
+        cells = np.asarray(mesh.tris, int).reshape(-1, 3)[:, [0, 1, 2, 1]]
+    if not len(cells):
+        return 0.0
+    P = np.asarray(X, float)[cells]
+    d = np.maximum(np.linalg.norm(P[:, 2] - P[:, 0], axis=1), np.linalg.norm(P[:, 3] - P[:, 1], axis=1))
+    return float(np.percentile(d, 90) ** 2 / (8.0 * radius))
+
+
+def _sheet_around(mesh, X, body) -> bool:
+    """True when the undeformed sheet has a hole over the pedestal's top (the pedestal recipes)."""
+    c = np.asarray(body.get("centre", (0.0, 0.0, 0.0)), float)
+    X0 = np.asarray(mesh.nodes, float)
+    r = np.linalg.norm(X0[:, :2] - c[:2], axis=1) if body.get("shape") == "disc" \
+        else np.max(np.abs(X0[:, :2] - c[:2]), axis=1)
+    half = 0.5 * (body["diameter"] if body.get("shape") == "disc" else body["size"])
+    return bool(len(r)) and float(r.min()) >= half * (1.0 - 1e-6)
+
+
+def screen_extent(surfaces, camera: Camera, pad: float = 0.04):
+    """(xmin, xmax, ymin, ymax) of all surfaces on the screen [cm], padded by ``pad`` of the span."""
+    xs, ys = [], []
+    for s in surfaces:
+        x, y, _ = camera.project(s.points)
+        xs.append(x)
+        ys.append(y)
+    x, y = np.concatenate(xs), np.concatenate(ys)
+    span = max(float(x.max() - x.min()), float(y.max() - y.min()), 1e-9)
+    p = pad * span
+    return float(x.min() - p), float(x.max() + p), float(y.min() - p), float(y.max() + p)

@@ -1,0 +1,125 @@
+"""Pictures: depth order (a sheet above a body hides it, whatever the renderer), the warp-label
+rule, and a run picture written as a sane PNG."""
+
+import numpy as np
+import pytest
+
+from solidshell.mesh import ShellMesh
+from solidshell.render import axis_labels, draw_view, height_norm, renderer, scene_warp_deg
+from solidshell.render import vtk_backend
+
+
+def _sheet(n=8, size=10.0, z=0.0):
+    s = np.linspace(-size / 2, size / 2, n + 1)
+    Xg, Yg = np.meshgrid(s, s)
+    nodes = np.column_stack([Xg.ravel(), Yg.ravel(), np.full(Xg.size, z)])
+    i, j = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
+    a = (i * (n + 1) + j).ravel()
+    quads = np.column_stack([a, a + 1, a + n + 2, a + n + 1])
+    return ShellMesh(nodes, quads=quads)
+
+
+# a box (pedestal) under the sheet's centre, its top 1 cm below the sheet; a sphere touching it
+BOX = {"type": "pedestal", "shape": "square", "size": 4.0, "centre": (0.0, 0.0, -1.0)}
+BALL = {"type": "sphere", "centre": (0.0, 0.0, -3.05), "radius": 3.0}
+
+
+def _centre_pixel(backend, monkeypatch, tmp_path, view, body):
+    """RGB in [0,1] at the centre of a picture of the flat sheet above ``body``."""
+    import matplotlib
+
+    matplotlib.use("Agg", force=True)
+    import matplotlib.pyplot as plt
+    import matplotlib.image as mimg
+
+    monkeypatch.setenv("SOLIDSHELL_RENDERER", backend)
+    mesh = _sheet(7)                 # odd: the centre pixel is inside an element, not on a mesh line
+    fig = plt.figure(figsize=(3, 3))
+    ax = fig.add_axes([0, 0, 1, 1])
+    # the sheet sits at the top of the colour scale: yellow in viridis, far from the body's grey
+    draw_view(ax, mesh, mesh.nodes, view, bodies=[body], norm=height_norm(mesh.nodes - [0, 0, 1], mesh.nodes),
+              labels=False, height_px=200)
+    ax.set_axis_off()
+    p = tmp_path / f"{backend}-{view}.png"
+    fig.savefig(p, dpi=80)
+    plt.close(fig)
+    img = mimg.imread(p)
+    h, w = img.shape[:2]
+    return img[h // 2, w // 2, :3]
+
+
+def _backends():
+    out = ["matplotlib"]
+    if vtk_backend.available()[0]:
+        out.append("vtk")
+    return out
+
+
+@pytest.mark.parametrize("backend", _backends())
+@pytest.mark.parametrize("view", ["top", "iso"])
+@pytest.mark.parametrize("body", [BOX, BALL], ids=["box", "sphere"])
+def test_sheet_above_body_hides_it(backend, view, body, monkeypatch, tmp_path):
+    # The body is grey (R = G = B); the sheet is viridis' yellow (blue far below red and green),
+    # dimmed by its shading.  The old painter drew the body over the sheet (grey at the centre).
+    r, g, b = _centre_pixel(backend, monkeypatch, tmp_path, view, body)
+    assert b < 0.5 * g and r > 0.3, f"centre pixel {r:.2f},{g:.2f},{b:.2f} is not the sheet's yellow"
+
+
+def test_warp_labels_follow_the_warp_angle():
+    assert axis_labels(0.0)["x"].endswith("(warp)") and axis_labels(0.0)["y"].endswith("(weft)")
+    assert axis_labels(180.0)["x"].endswith("(warp)")
+    assert axis_labels(90.0)["x"].endswith("(weft)") and axis_labels(90.0)["y"].endswith("(warp)")
+    assert axis_labels(-90.0)["x"].endswith("(weft)")
+    lab = axis_labels(30.0)
+    assert "warp" not in lab["x"] and "weft" not in lab["y"] and "30" in lab["note"]
+    assert axis_labels(None) == {"x": "x [cm]", "y": "y [cm]", "z": "z [cm]", "note": ""}
+
+
+def test_scene_warp_angle_reaches_the_labels():
+    from solidshell.scenes import load
+
+    assert scene_warp_deg(load("strip-weft")) == pytest.approx(90.0)
+    assert axis_labels(scene_warp_deg(load("strip-weft")))["x"] == "x [cm]  (weft)"
+    assert scene_warp_deg(None) is None
+
+
+def test_run_picture_is_a_sane_png(tmp_path):
+    import matplotlib.image as mimg
+
+    from solidshell.plotting import render
+    from solidshell.scenes import load
+
+    mesh = _sheet(4, 20.0)
+    p = render(tmp_path / "iso.png", mesh, None, view="iso", title="t", scene=load("square-pedestal"))
+    img = mimg.imread(p)
+    assert 300 < img.shape[0] < 2000 and 300 < img.shape[1] < 2000    # ~7x6 in at 130 dpi
+    assert p.stat().st_size > 10_000                                  # not a blank image
+    assert renderer() in ("vtk", "matplotlib")
+
+
+def test_figures_cli_refuses_an_unknown_figure(capsys):
+    from solidshell.cli import main
+
+    assert main(["figures", "4", "3"]) == 2           # checked before any figure runs
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "unknown figure '3'" in err[0] and "4, 5, 6" in err[0] and "22" in err[0]
+
+
+def test_fig04_quick_renders_over_the_elastica(tmp_path):
+    # Fig. 4 in quick mode (four static strips, seconds): the PNG exists with a sane size, and its
+    # json carries each strip's tip error against the elastica; the 10x1/20x1 tips are within 0.5 %
+    # / 0.2 % of the 5 cm length (verification/strip.py measures 0.45 % and 0.12 %).
+    import json
+
+    import matplotlib.image as mimg
+
+    from paper_figures.registry import make_figures
+
+    make_figures(["fig4"], quick=True, out_dir=tmp_path, say=lambda *_: None)
+    img = mimg.imread(tmp_path / "fig04.png")
+    assert 500 < img.shape[1] < 3000 and 300 < img.shape[0] < 2000
+    info = json.loads((tmp_path / "fig04.json").read_text())
+    errs = {(r["scene"], r["mesh"]): abs(r["tip_z_error_vs_elastica"]) for r in info["runs"]}
+    assert len(errs) == 4
+    for (scene, mesh), e in errs.items():
+        assert e < (0.025 if mesh == "10x1" else 0.01), (scene, mesh, e)

@@ -214,6 +214,14 @@ class Shell:
         Pi = psi_b * dx_f + alpha * (psi_m + psi_s) * dx_f
         if psri:
             Pi += (1.0 - alpha) * (psi_m + psi_s) * dx_r
+        # proximal (implicit gradient-flow) term c/2 |w - w_p|^2: c = 0 is the plain energy; c > 0
+        # shifts the tangent by c (positive definite for c large enough) and limits each step
+        # -- see solve() for how c is driven to 0 so that the end state is an equilibrium of Pi
+        self.w_p = fem.Function(self.W)
+        self.cprox = fem.Constant(msh, PETSc.ScalarType(0.0))
+        up, thp = ufl.split(self.w_p)
+        ell2 = float(job.get("prox", {}).get("length", 1.0)) ** 2
+        Pi += 0.5 * self.cprox * (ufl.dot(u - up, u - up) + ell2 * ufl.dot(theta - thp, theta - thp)) * dx_r
         if job.get("gravity", False):
             Pi += self.lam * float(sec["weight_per_area"]) * u[2] * dx_f
         self.facet_sets = {}
@@ -313,10 +321,16 @@ def make_snes(shell, opts):
     snes.setOptionsPrefix("shell_")
     snes.setType(opts.get("type", "newtonls"))
     popts = PETSc.Options()
+    # the first Newton correction from a flat sheet stretches the mid-surface and raises the residual
+    # by orders of magnitude before Newton settles: no divergence test on the residual norm
+    if not popts.hasName("shell_snes_divergence_tolerance"):
+        popts["shell_snes_divergence_tolerance"] = -1.0
     if not popts.hasName("shell_snes_linesearch_type"):  # the environment may override
         popts["shell_snes_linesearch_type"] = opts.get("linesearch", "basic")
-    snes.setTolerances(rtol=opts.get("rtol", 1e-9), atol=opts.get("atol", 1e-10),
-                       stol=0.0, max_it=opts.get("max_it", 25))
+    # rtol on the residual of the load increment; stol stops a Newton that has reached round-off
+    # (its correction below 1e-10 of the state), where the residual can no longer fall by rtol
+    snes.setTolerances(rtol=opts.get("rtol", 1e-8), atol=opts.get("atol", 1e-14),
+                       stol=opts.get("stol", 1e-10), max_it=opts.get("max_it", 25))
     ksp = snes.getKSP()
     ksp.setType("preonly")
     pc = ksp.getPC()
@@ -373,11 +387,27 @@ def solve(job):
     x_prev = x.copy()
     history, n_newton, n_lin, n_fail = [], 0, 0, 0
     status = "converged"
+    # proximal continuation (job["prox"], used for the drapes): every step minimises
+    # Pi_lambda(w) + c/2 |w - w_prev|^2; c falls by `relax` after each easy step and grows by 4 after a
+    # failed one; once lambda = 1 and c < c_min * c0 a last step with c = 0 makes the end state an
+    # equilibrium of Pi itself (so the inertia test below speaks about the model, not the shift).
+    prox = job.get("prox")
+    c0 = float(prox.get("c0", 1.0)) if prox else 0.0
+    c_min = c0 * float(prox.get("c_min_ratio", 1e-6)) if prox else 0.0
+    relax = float(prox.get("relax", 0.5)) if prox else 1.0
+    max_steps = int(st.get("max_steps", 2000))
+    c = c0
     t0 = time.perf_counter()
-    first = True
-    while lam < 1.0 - 1e-14 or first:
-        target = min(1.0, lam + dlam)
+    done = False
+    while not done:
+        if len(history) + n_fail >= max_steps:
+            status = f"stopped after {max_steps} steps at lambda={lam:.6g}, c={c:.3g}"
+            break
+        target = min(1.0, lam + dlam) if lam < 1.0 - 1e-14 else 1.0
         shell.lam.value = target
+        shell.cprox.value = c
+        x_prev.copy(shell.w_p.vector)
+        shell.w_p.x.scatter_forward()
         x_prev.copy(x)  # PETSc: a.copy(b) writes a into b
         snes.solve(None, x)
         its = snes.getIterationNumber()
@@ -387,17 +417,24 @@ def solve(job):
         if reason > 0 and np.all(np.isfinite(x.array)):
             lam = target
             x.copy(x_prev)
-            history.append(dict(lam=lam, iterations=its, reason=int(reason)))
-            _say(f"lambda {lam:.4f}: {its} iterations")
-            first = False
+            history.append(dict(lam=lam, c=c, iterations=its, reason=int(reason)))
+            _say(f"lambda {lam:.4f} c {c:.3g}: {its} iterations")
+            if lam >= 1.0 - 1e-14 and c == 0.0:
+                done = True
             if its <= grow_below:
                 dlam = min(dmax, 1.5 * dlam)
+                c *= relax
+            if prox and lam >= 1.0 - 1e-14 and c < c_min:
+                c = 0.0
         else:
-            _say(f"lambda {target:.4f}: not converged (reason {reason}, {its} iterations), halving")
+            _say(f"lambda {target:.4f} c {c:.3g}: not converged (reason {reason}, {its} iterations)")
             n_fail += 1
             x_prev.copy(x)
-            dlam *= 0.5
-            if dlam < dmin:
+            if prox:
+                c = 4.0 * c if c > 0.0 else 4.0 * c_min
+            if lam < 1.0 - 1e-14:
+                dlam *= 0.5
+            if dlam < dmin or (prox and c > 1e6 * c0):
                 status = f"step to lambda={target:.6g} failed (reason {reason}) below the minimum increment"
                 break
     wall = time.perf_counter() - t0

@@ -14,6 +14,8 @@ the two -- a ratio inside one run, which shared machines do not distort as much 
 load), the loop with the fused lane-kernel path (solvers/explicit/fused.py) against the previous
 path (Model.internal_force + scatter + kernels.central_step, still used for models without element
 blocks), and prints the ratio and the largest relative difference of the states after the steps.
+Run it from the repository root with ``PYTHONPATH=.`` when another checkout is installed in the
+environment (the path of the imported package is printed first).
 """
 
 from __future__ import annotations
@@ -117,6 +119,8 @@ def main(argv=None):
     ap.add_argument("--compare", action="store_true", help="old vs fused loop, interleaved in one run")
     ap.add_argument("--rounds", type=int, default=5, help="--compare: interleaved rounds per pass")
     a = ap.parse_args(argv)
+    import solidshell
+    print(f"solidshell from {solidshell.__file__}", flush=True)
     out = []
     if a.compare:
         import os

@@ -5,62 +5,64 @@ One step is two compiled passes and no allocation:
 1. the element pass: every element's force and energy into one flat buffer -- quadrilaterals with
    the compatible membrane by the lane kernel (``elements/lanes.py``, elements in SIMD lanes),
    other blocks (triangles, the assumed-membrane quadrilateral) by ``elements/core.energy_force``;
-2. the node pass, parallel over nodes: each dof sums its elements' contributions in the order of
-   ``assembly.scatter_add_vec`` (block by block, elements in mesh order), so the assembled force
-   equals the model's whenever the element forces do, then R = P - F (+ C), D_n+1 of Eq. (23), the
-   prescribed values, finiteness and the nodal parts of v_n.M.v_n.
+2. assembly and update, serial: the element forces are summed into the dofs in
+   ``assembly.scatter_add_vec``'s order (elements in mesh order, block by block), so the assembled
+   force equals the model's whenever the element forces do; then R = P - F (+ C), D_n+1 of Eq. (23)
+   with the operation order of ``kernels.central_step``, the prescribed values, finiteness and
+   v_n.M.v_n in one pass.  (A node-ordered gather, parallel over nodes, took 24 % of a one-thread
+   step against 62 % for the element pass -- a node's contributions sit 128 bytes apart in the lane
+   layout -- and on 2 threads of the loaded machine a second parallel region per step made the
+   loop 0.95x the previous path: every region waits for its slowest thread.)
 
 Nothing here depends on the thread count: elements are evaluated block by block by the same
-instructions, every sum has a fixed order, and the per-node parts of v.M.v are added serially.
+instructions and every sum is serial in a fixed order.
 """
 
 from __future__ import annotations
 
 import numpy as np
-from numba import get_num_threads, njit, prange
+from numba import get_num_threads, njit
 
+from ...assembly import scatter_add_vec
 from ...elements import core, lanes, quad4
 
 
-@njit(cache=True, parallel=True)
-def node_pass(fe, ptr, off, stride, P, C, has_C, F, R, Dn1, D, Dp, cF, cD, cDp, fixed, presc, Mf, inv2dt,
-              part, bad, step):
-    """Assemble F from the element forces (no fastmath: the sums keep scatter_add_vec's order);
-    R = P - F (+ C when has_C); when ``step``, D_n+1 = cF R + cD D + cDp Dp with prescribed values
-    where ``fixed``, and per node n the part of v.M.v (part[n]) and a non-finite flag (bad[n])."""
-    N = ptr.size - 1
-    for n in prange(N):
-        acc = 0.0
-        nf = 0
-        for c in range(6):
-            s = 0.0
-            for j in range(ptr[n], ptr[n + 1]):
-                s += fe[off[j] + c * stride[j]]
-            i = 6 * n + c
-            F[i] = s
-            r = P[i] - s
-            if has_C:
-                r += C[i]
-            R[i] = r
-            if step:
-                x = cF[i] * r + cD * D[i] + cDp * Dp[i]
-                if fixed[i]:
-                    x = presc[i]
-                Dn1[i] = x
-                if x - x != 0.0:  # inf - inf and nan - nan are nan
-                    nf = 1
-                w = (x - Dp[i]) * inv2dt
-                acc += Mf[i] * w * w
-        part[n] = acc
-        bad[n] = nf
+@njit(cache=True)
+def scatter_lanes(conn, M, fe, F):
+    """F[6 p + c] += element forces of the lane layout (lanes.pack), elements in mesh order and
+    within an element dof 6 i + c in order: scatter_add_vec's order, so the same sums bit for bit.
+    The block being read is 3 KB (in L1); F takes the scattered writes."""
+    L = conn.shape[2]
+    for b in range(conn.shape[0]):
+        for k in range(L):
+            if b * L + k >= M:
+                break
+            for i in range(4):
+                o = 6 * conn[b, i, k]
+                for c in range(6):
+                    F[o + c] += fe[b, (6 * i + c) * L + k]
 
 
 @njit(cache=True)
-def _serial_sum(a):
-    s = 0.0
-    for i in range(a.size):
-        s += a[i]
-    return s
+def update(F, P, C, has_C, R, Dn1, D, Dp, cF, cD, cDp, fixed, presc, Mf, inv2dt):
+    """R = P - F (+ C when has_C); D_n+1 = cF R + cD D + cDp Dp (kernels.central_step's operation
+    order, no fast-math), prescribed values where ``fixed``; returns (v_n.M.v_n, finite)."""
+    vMv = 0.0
+    finite = True
+    for i in range(F.size):
+        r = P[i] - F[i]
+        if has_C:
+            r += C[i]
+        R[i] = r
+        x = cF[i] * r + cD * D[i] + cDp * Dp[i]
+        if fixed[i]:
+            x = presc[i]
+        Dn1[i] = x
+        if x - x != 0.0:  # inf - inf and nan - nan are nan
+            finite = False
+        w = (x - Dp[i]) * inv2dt
+        vMv += Mf[i] * w * w
+    return vMv, finite
 
 
 def _uses_lanes(b) -> bool:
@@ -78,35 +80,19 @@ class FusedForces:
         self.X = np.ascontiguousarray(model.mesh.nodes, dtype=float)
         self.Xn = np.ascontiguousarray(model.mesh.directors, dtype=float)
         self.quasi, self.mu = bool(model.quasi), float(model.mu)
-        self.parts = []          # (kind, block, views...) in the model's block order
-        sizes, entries = [], []  # flat fe sizes; per block (node, offset, stride) of each (e, i)
+        self.parts = []          # (kind, block, packed lanes or None, offset, size) in block order
         base = 0
         for b in model.blocks:
             M, nn = b.conn.shape
-            e = np.repeat(np.arange(M), nn)
-            i = np.tile(np.arange(nn), M)
             if use_lanes and _uses_lanes(b):
                 pk = lanes.pack(b.conn, b.c, b.c["r_zq"])
-                L = lanes.LANES
-                size = pk["B"] * 24 * L
-                off = base + (e // L) * 24 * L + 6 * i * L + e % L
+                size = pk["B"] * 24 * lanes.LANES
                 self.parts.append(("lanes", b, pk, base, size))
-                entries.append((b.conn.ravel(), off, np.full(off.size, L)))
             else:
                 size = M * nn * 6
-                off = base + e * nn * 6 + 6 * i
                 self.parts.append(("core", b, None, base, size))
-                entries.append((b.conn.ravel(), off, np.ones(off.size, np.int64)))
-            sizes.append(size)
             base += size
         self.fe = np.zeros(base)
-        node = np.concatenate([x[0] for x in entries])
-        off = np.concatenate([x[1] for x in entries])
-        stride = np.concatenate([x[2] for x in entries])
-        order = np.argsort(node, kind="stable")   # per node: block order, then element order
-        self.ptr = np.searchsorted(node[order], np.arange(N + 1)).astype(np.int64)
-        self.off = off[order].astype(np.int64)
-        self.stride = stride[order].astype(np.int64)
         self.views = []
         for kind, b, pk, o, size in self.parts:
             if kind == "lanes":
@@ -118,12 +104,7 @@ class FusedForces:
                 self.views.append((self.fe[o:o + size].reshape(M, nn, 6), np.zeros(M)))
         self.needs_current = any(kind == "core" for kind, *_ in self.parts)
         self.F = np.zeros(6 * N)
-        self.part = np.zeros(N)
-        self.bad = np.zeros(N, np.int8)
         self._zero = np.zeros(0)
-        self._z6 = np.zeros(6 * N)
-        self._R6 = np.zeros(6 * N)
-        self._nofix = np.zeros(6 * N, np.bool_)
 
     # ------------------------------------------------------------ element pass
     def element_pass(self, D6):
@@ -146,12 +127,20 @@ class FusedForces:
         return float(W)
 
     # ------------------------------------------------------------ public
+    def assemble(self):
+        """F = the element forces of the last element pass summed into the dofs (self.F)."""
+        F = self.F
+        F[:] = 0.0
+        for (kind, b, pk, _, _), (fe, _) in zip(self.parts, self.views):
+            if kind == "lanes":
+                scatter_lanes(pk["conn"], pk["M"], fe, F)
+            else:
+                scatter_add_vec(b.dofs, fe.reshape(len(fe), -1), F)
+
     def internal(self, D, want_energy):
         """(F(D) flat, a new array; strain energy or None) -- Forces.internal's contract."""
         self.element_pass(np.ascontiguousarray(D, dtype=float).reshape(self.N, 6))
-        z, R = self._z6, self._R6
-        node_pass(self.fe, self.ptr, self.off, self.stride, z, z, False, self.F, R, R, z, z, z, 0.0, 0.0,
-                  self._nofix, z, z, 0.0, self.part, self.bad, False)
+        self.assemble()
         return self.F.copy(), (self.energy() if want_energy else None)
 
     def step(self, D, Dp, Dn1, R, P, C, cF, cD, cDp, fixed, presc, Mf, inv2dt, want_energy):
@@ -159,9 +148,8 @@ class FusedForces:
         (prescribed where ``fixed``, a (6N,) bool mask, values ``presc`` (6N,)).  Returns (v_n.M.v_n,
         finite, strain energy or None)."""
         self.element_pass(D.reshape(self.N, 6))
+        self.assemble()
         has_C = C is not None
-        node_pass(self.fe, self.ptr, self.off, self.stride, P, C if has_C else self._zero, has_C, self.F, R, Dn1,
-                  D, Dp, cF, cD, cDp, fixed, presc, Mf, inv2dt, self.part, self.bad, True)
-        vMv = _serial_sum(self.part)
-        finite = not self.bad.any()
+        vMv, finite = update(self.F, P, C if has_C else self._zero, has_C, R, Dn1, D, Dp, cF, cD, cDp, fixed, presc,
+                             Mf, inv2dt)
         return vMv, finite, (self.energy() if want_energy else None)

@@ -6,19 +6,23 @@ Measures, for quads and for triangles on a randomly deformed flat sheet: the int
 (energy + force, the explicit solver's hot path), the force + tangent kernel, and the whole
 Model.force_and_tangent including CSR assembly.  Numba's first-call (compile or cache load) time is
 reported separately; figures are medians over repeats.  Compare figures within one run: the machine
-is shared.
+is shared.  For the quadrilateral with the compatible membrane the lane kernel of the explicit
+solver (elements/lanes.py, elements in SIMD lanes) is timed beside core.energy_force, interleaved,
+with the ratio, its flop rate (lanes.FLOPS_PER_ELEMENT) and the largest relative force difference.
+``--passes 2`` runs everything twice; the load average is printed with each pass.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import time
 
 import numpy as np
 from numba import get_num_threads
 
 from solidshell import IsotropicShell, ShellMesh
-from solidshell.elements import core
+from solidshell.elements import core, lanes
 from solidshell.model import Model
 
 
@@ -48,8 +52,46 @@ def main(argv=None):
     ap.add_argument("--repeats", type=int, default=7)
     ap.add_argument("--membrane", default="full,ans",
                     help="quadrilateral membrane variants to measure (solidshell/elements/quad4.py)")
+    ap.add_argument("--passes", type=int, default=1)
     args = ap.parse_args(argv)
-    print(f"numba threads: {get_num_threads()}")
+    for p in range(args.passes):
+        print(f"pass {p + 1}: numba threads {get_num_threads()}, load average {os.getloadavg()}", flush=True)
+        one_pass(args)
+
+
+def lane_comparison(mesh, model, U, repeats):
+    """core.energy_force vs lanes.quad_forces on the same quads, interleaved (wall and CPU medians)."""
+    b = model.blocks[0]
+    M = len(b.conn)
+    xo, xn, Uc = model._current(U)
+    fe, we = np.empty((M, 4, 6)), np.empty(M)
+    pk = lanes.pack(b.conn, b.c, b.c["r_zq"])
+    L = lanes.LANES
+    xs, fs, ws = np.empty((pk["B"], 48 * L)), np.empty((pk["B"], 24 * L)), np.empty((pk["B"], L))
+    nth = get_num_threads()
+    old = lambda: core.energy_force(*b.args(xo, xn, Uc, False, 0.5), fe, we, nth)
+    new = lambda: lanes.quad_forces(mesh.nodes, mesh.directors, Uc, pk["conn"], pk["Cmb"], pk["Cs"], pk["Cz"],
+                                    pk["r_z"], False, 0.5, xs, fs, ws)
+    old()
+    new()
+    t = {"core": [], "lanes": []}
+    c = {"core": [], "lanes": []}
+    for _ in range(repeats):
+        for k, fn in (("core", old), ("lanes", new)):
+            t0, c0 = time.perf_counter(), time.process_time()
+            fn()
+            t[k].append(time.perf_counter() - t0)
+            c[k].append(time.process_time() - c0)
+    diff = np.abs(lanes.unpack_forces(fs, M) - fe).max() / np.abs(fe).max()
+    for k in t:
+        tw, tc = float(np.median(t[k])), float(np.median(c[k]))
+        print(f"  {k:5s} force kernel   {M / tw / 1e6:8.3f} M elem/s wall, {M / tc / 1e6:6.3f} M elem/s per CPU-s"
+              + (f", {lanes.FLOPS_PER_ELEMENT * M / tw / 1e9:5.2f} GFLOP/s wall" if k == "lanes" else ""))
+    print(f"  lanes / core: {np.median(t['core']) / np.median(t['lanes']):.2f} (wall), "
+          f"{np.median(c['core']) / np.median(c['lanes']):.2f} (CPU); max |f_lanes - f_core| / max |f| = {diff:.1e}")
+
+
+def one_pass(args):
     cases = [(False, m) for m in args.membrane.split(",")] + [(True, "full")]
     for tri, membrane in cases:
         n = int(round(np.sqrt(args.elements / (2 if tri else 1))))
@@ -73,6 +115,9 @@ def main(argv=None):
         tF = median_time(lambda: model.internal_force(U), args.repeats)
         tA = median_time(lambda: model.force_and_tangent(U), args.repeats)
         name = "tri3 " if tri else f"quad4 membrane={membrane}"
+        if not tri and membrane == "full":
+            print(f"{name} M={M:6d}: lane kernel vs core kernel (interleaved)")
+            lane_comparison(mesh, model, U, args.repeats)
         print(f"{name} M={M:6d}  first call (compile/cache load) {first:6.2f} s")
         print(f"  force kernel          {M / tf / 1e6:8.3f} M elem/s   ({tf * 1e3:7.2f} ms)")
         print(f"  force+tangent kernel  {M / tk / 1e3:8.1f} k elem/s   ({tk * 1e3:7.2f} ms)")

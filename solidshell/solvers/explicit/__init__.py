@@ -4,7 +4,8 @@ friction, Eq. (24) jumps and mass scaling are described, with their measurements
 docs/explicit.md.
 
 Modules: ``settings`` (typed settings), ``state`` (the integrator state), ``kernels`` (the compiled
-step), ``forces`` (internal, contact, friction), ``stepcontrol`` (critical step), ``ledger`` (energy
+step), ``forces`` (internal, contact, friction), ``fused`` (preallocated element and node passes with
+the step fused in), ``stepcontrol`` (critical step), ``ledger`` (energy
 balance), ``observers`` (frames, checkpoints, progress, steady state), ``checkpoint`` (files and
 the run's fingerprint), ``integrator`` (``Integrator``).  ``run`` and ``run_relax`` below are the
 drivers the solver registry calls.

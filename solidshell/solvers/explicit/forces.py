@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...contact import contact_forces, frictional_contact
+from .fused import FusedForces
 
 
 class Forces:
@@ -27,10 +28,15 @@ class Forces:
         self.has_energy_force = hasattr(model, "energy_and_force")
         self.quasi = bool(getattr(model, "quasi", False)) and hasattr(model, "interpenetration")
         self.q_mu = float(getattr(model, "mu", 0.5))
+        # the preallocated element/node passes for the library's Model (fused.py); other models
+        # (e.g. a user's with its own internal_force) go through their methods
+        self.fused = FusedForces(model) if hasattr(model, "blocks") and hasattr(model, "mesh") else None
 
     def internal(self, D, want_energy):
         """(F(D) flat, strain energy or None)."""
         model, shape = self.model, self.shape
+        if self.fused is not None:
+            return self.fused.internal(D, want_energy)
         if want_energy:
             if self.has_energy_force:
                 E, F = model.energy_and_force(D.reshape(shape))

@@ -87,6 +87,9 @@ class Integrator:
         self.fixed_idx = np.flatnonzero(problem.fixed.ravel())
         self.free_idx = np.flatnonzero(self.free_mask.ravel())
         self.presc = problem.prescribed.ravel()[self.fixed_idx].copy()
+        self.fixed_mask = np.ascontiguousarray(problem.fixed.ravel(), dtype=np.bool_)
+        self.presc_full = np.zeros(6 * self.N)
+        self.presc_full[self.fixed_idx] = self.presc
         self.bodies = list(problem.contact or [])
         self.fric_of = [float(getattr(b, "friction", 0.0)) for b in self.bodies]
         self.n_fric = sum(1 for mu in self.fric_of if mu > 0.0)   # 0: the frictionless path
@@ -250,11 +253,9 @@ class Integrator:
             n = st.step
             sample = (n % self.sample_every == 0) or n == self.end_step - 1
             check = relax and (n % self.check_every == 0)
-            f = self._forces(n, D, sample, R)
+            f, vMv, finite = self._forces_and_step(n, D, Dp, Dn1, sample, R)
             if f is None:
                 return "failed"
-            vMv, finite = central_step(Dn1, D, Dp, R, self.cF, self.cD, self.cDp, self.fixed_idx, self.presc,
-                                       self.Mf, 0.5 / st.dt)
             if not finite:
                 return self._nonfinite(n)
             self._work(n, vMv, f, Dn1, Dp)
@@ -280,16 +281,33 @@ class Integrator:
                 return status
         return "running"
 
-    def _forces(self, n, D, sample, R):
-        """P - F + C at D_n into R; a dict of what the step's books need, None if the kernel failed."""
-        st = self.state
+    def _forces_and_step(self, n, D, Dp, Dn1, sample, R):
+        """Forces at D_n (R = P - F + C) and the step of Eq. (23) into Dn1: (dict of what the step's
+        books need, v_n.M.v_n, finite); (None, 0, True) if the force kernel failed.  With the fused
+        evaluator (fused.py) force, assembly and update are two compiled passes; contact comes first
+        (it depends on D_n only) and is added in the node pass as R = (P - F) + C."""
+        st, fused = self.state, self.forces.fused
         try:
-            F, Es = self.forces.internal(D, sample)
+            if fused is None:
+                F, Es = self.forces.internal(D, sample)
+            else:
+                f = {}
+                C = self._contact(n, D, f)
+                vMv, finite, Es = fused.step(D, Dp, Dn1, R, self.P, C, self.cF, self.cD, self.cDp, self.fixed_mask,
+                                             self.presc_full, self.Mf, 0.5 / st.dt, sample)
+                F = fused.F
         except (FloatingPointError, ZeroDivisionError, SolverError) as exc:
             self.message = f"internal force failed at step {n} (t = {self.time_of(n):.6g} s): {exc}"
-            return None
-        np.subtract(self.P, F, out=R)
-        f = {"F": F, "Es": Es}
+            return None, 0.0, True
+        if fused is None:
+            np.subtract(self.P, F, out=R)
+            f = {}
+            C = self._contact(n, D, f)
+            if C is not None:
+                R += C
+            vMv, finite = central_step(Dn1, D, Dp, R, self.cF, self.cD, self.cDp, self.fixed_idx, self.presc,
+                                       self.Mf, 0.5 / st.dt)
+        f["F"], f["Es"] = F, Es
         if self.quasi and n > 0:
             # work of the internal forces along the path actually taken, trapezoidal rule per
             # step: sum 1/2 (F_m-1 + F_m).(D_m - D_m-1) up to D_n (the same end points as
@@ -297,18 +315,22 @@ class Integrator:
             st.w_int += 0.5 * float(np.add.reduce((F + st.q_F) * (D - st.q_D)))
             st.q_F[:] = F
             st.q_D[:] = D
+        return f, vMv, finite
+
+    def _contact(self, n, D, f):
+        """Contact (and friction) forces at D_n, their books into f; C (6N,) or None without bodies."""
+        st = self.state
         if self.n_fric:
             C, f["Ec"], f["nact"], pen, f["fr"], f["Et"], f["anchors"], f["nslip"] = \
                 self.forces.contact_friction(D, st.anchors)
         elif self.bodies:
             C, f["Ec"], f["nact"], pen = self.forces.contact(D)
         else:
-            return f
-        R += C
+            return None
         f["C"] = C
         if pen > st.max_pen:
             st.max_pen = pen
-        return f
+        return C
 
     def _nonfinite(self, n) -> str:
         st = self.state

@@ -25,8 +25,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.sparse import diags
-from scipy.sparse.linalg import splu
+
+from ..solvers.linear import Cholesky
 
 
 _SHIFTS = (0.0, 1e-3, 1e-1, 10.0)   # Levenberg shifts, in units of the mean diagonal of K_nn
@@ -64,18 +64,19 @@ class DirectorSettler:
         self.fixed = np.asarray(fixed, dtype=bool)
         self.P = np.asarray(loads, dtype=float).ravel()
         self.idx = director_dofs(self.fixed)
+        self._chol = Cholesky()          # CHOLMOD; one symbolic analysis for all steps (one pattern)
+        self._K = None
 
     def _step(self, U, r, shift):
-        """K_nn^-1 r at U, or (K_nn + shift mean|diag K_nn| I)^-1 r; None if singular or not finite."""
-        K = self.model.tangent(U).tocsr()[self.idx][:, self.idx].tocsc() if shift == 0.0 else self._K
-        self._K = K if shift == 0.0 else self._K
-        if shift:
-            d = K.diagonal()
-            K = K + diags(np.full(d.size, shift * float(np.mean(np.abs(d)))), format="csc")
-        try:
-            x = splu(K.tocsc(), permc_spec="MMD_AT_PLUS_A").solve(r)   # symmetric: a symmetric ordering
-        except RuntimeError:
+        """K_nn^-1 r at U, or (K_nn + shift mean|diag K_nn| I)^-1 r; None where that matrix is not
+        positive definite (then Newton's step need not descend: the next shift is tried)."""
+        if shift == 0.0:
+            self._K = self.model.tangent(U).tocsc()[self.idx][:, self.idx].tocsc()
+        K = self._K
+        s = shift * float(np.mean(np.abs(K.diagonal()))) if shift else None
+        if not self._chol.factor(K, s):
             return None
+        x = self._chol.solve(r)
         return x if np.all(np.isfinite(x)) else None
 
     def _descend(self, U, flat, r, pi):

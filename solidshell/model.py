@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 from numba import get_num_threads
 
-from .assembly import SparsePattern, element_dofs, scatter_add_vec
+from .assembly import FreeLowerPattern, SparsePattern, element_dofs, scatter_add_vec
 from .elements import core, quad4, tri3
 from .errors import InputError
 from .mesh import ShellMesh
@@ -129,8 +129,8 @@ class Model:
             self._pattern = SparsePattern(self.n_dofs, [b.dofs for b in self.blocks])
         return self._pattern
 
-    def force_and_tangent(self, U):
-        """(internal force (N,6), tangent K_t (6N,6N) CSR) at U, Eq. (9)."""
+    def _force_and_element_tangents(self, U):
+        """(internal force (6N,), [element tangents (M, 6nn, 6nn) per block]) at U."""
         xo, xn, Uc = self._current(U)
         F = np.zeros(self.n_dofs)
         Ks = []
@@ -144,7 +144,22 @@ class Model:
                                get_num_threads())
             scatter_add_vec(b.dofs, fe.reshape(M, -1), F)
             Ks.append(Ke)
+        return F, Ks
+
+    def force_and_tangent(self, U):
+        """(internal force (N,6), tangent K_t (6N,6N) CSR) at U, Eq. (9)."""
+        F, Ks = self._force_and_element_tangents(U)
         return F.reshape(-1, 6), self.pattern.assemble(Ks)
+
+    def free_lower_pattern(self, free) -> FreeLowerPattern:
+        """The lower triangle of the tangent's pattern on the dofs ``free`` (assembly.py)."""
+        return FreeLowerPattern(self.pattern, free)
+
+    def force_and_free_tangent(self, U, lower: FreeLowerPattern):
+        """(internal force (N,6), data of K_t's lower triangle on the free dofs in the CSC pattern
+        ``lower``) at U, Eq. (9): the static solver's form of the tangent (no 6N x 6N matrix)."""
+        F, Ks = self._force_and_element_tangents(U)
+        return F.reshape(-1, 6), lower.assemble(Ks)
 
     def tangent(self, U):
         """Tangent stiffness K_t = d^2 U / dD^2 (Eq. 9): scipy CSR (6N, 6N) [force/length]."""

@@ -152,8 +152,12 @@ class Model:
         return F.reshape(-1, 6), self.pattern.assemble(Ks)
 
     def free_lower_pattern(self, free) -> FreeLowerPattern:
-        """The lower triangle of the tangent's pattern on the dofs ``free`` (assembly.py)."""
-        return FreeLowerPattern(self.pattern, free)
+        """The lower triangle of the tangent's pattern on the dofs ``free`` (assembly.py).  The
+        full pattern is built for it but not kept unless it already was: the static solver needs
+        only this one, and the full one's maps are ~15 MB on square-pedestal 48x16x4."""
+        pattern = self._pattern if self._pattern is not None else \
+            SparsePattern(self.n_dofs, [b.dofs for b in self.blocks])
+        return FreeLowerPattern(pattern, free)
 
     def force_and_free_tangent(self, U, lower: FreeLowerPattern):
         """(internal force (N,6), data of K_t's lower triangle on the free dofs in the CSC pattern

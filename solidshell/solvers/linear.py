@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.sparse.linalg import splu
 
 import cvxopt
 import cvxopt.cholmod as _cholmod
@@ -43,6 +42,8 @@ def ldl_inertia(A):
     symmetric permutation and diagonal pivots the U diagonal is the D of an LDL^T), or None when the
     pivoting was not symmetric.  Raises RuntimeError when A is singular.
     """
+    from scipy.sparse.linalg import splu   # only where a tangent is indefinite: a lazy import
+
     A = as_csc(A)
     lu = splu(A, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
               options=dict(SymmetricMode=True))

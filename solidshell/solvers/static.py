@@ -88,11 +88,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.sparse.linalg import LinearOperator, eigsh
 
 from ..errors import InputError
 from ..problem import SolveResult, no_progress
-from .blas import single_threaded_blas
+from .blas import kernel_threads, single_threaded_blas
 from .linear import FACTORIZATIONS, Cholesky, LowerCSC, SuperLUDefinite, as_csc, ldl_inertia
 
 __all__ = ["StaticResult", "solve_static", "run", "METHODS"]
@@ -809,9 +808,19 @@ def _free_length(mesh, fixed_mask):
     fixed_nodes = np.flatnonzero(np.asarray(fixed_mask).reshape(len(X), 6).any(axis=1))
     if fixed_nodes.size == 0 or fixed_nodes.size == len(X):
         return float(mesh.characteristic_length())
-    from scipy.spatial import cKDTree
-    d, _ = cKDTree(X[fixed_nodes]).query(X)
-    return float(d.max())
+    Y = X[fixed_nodes]
+    if len(X) * len(Y) > 2e7:
+        from scipy.spatial import cKDTree
+        d, _ = cKDTree(Y).query(X)
+        return float(d.max())
+    # direct distances: importing scipy.spatial costs more than this on the usual meshes
+    d2 = ((X[:, None, :] - Y[None, :, :]) ** 2).sum(axis=-1).min(axis=1)
+    return float(np.sqrt(d2.max()))
+
+
+_DENSE_EIG = 600
+"""Up to this many free dofs the smallest tangent eigenvalue is computed densely (LAPACK, exact):
+faster than ARPACK there, and a small run does not import scipy.sparse.linalg at all."""
 
 
 def _stability(sys, D, eig_max_dofs):
@@ -833,7 +842,8 @@ def _stability(sys, D, eig_max_dofs):
         except RuntimeError:
             pd = False
     lmin = None
-    if 2 < n <= eig_max_dofs:
+    if _DENSE_EIG < n <= eig_max_dofs:
+        from scipy.sparse.linalg import LinearOperator, eigsh
         try:
             opinv = None
             if pd and chol.factor(A, np.full(n, s)):
@@ -843,7 +853,7 @@ def _stability(sys, D, eig_max_dofs):
             lmin = float(vals[0])
         except Exception:  # noqa: BLE001 - a diagnostic, never fatal
             lmin = None
-    elif n <= 2:
+    elif n <= _DENSE_EIG:
         lmin = float(np.linalg.eigvalsh(as_csc(A).toarray()).min())
     return pd, lmin
 
@@ -859,6 +869,7 @@ def _lowest_mode(A, k_max=6):
     if n <= 200:
         w, V = np.linalg.eigh(A.toarray())
         return float(w[0]), V[:, 0]
+    from scipy.sparse.linalg import eigsh
     s = 1e-10 * float(np.abs(A.diagonal()).mean())
     try:
         w, V = eigsh(A, k=min(k_max, n - 2), sigma=-s, which="LM", tol=1e-8, maxiter=5000)
@@ -991,6 +1002,26 @@ def solve_static(model, fixed, loads, load_factors=None, method="newton", prescr
     left) or "interrupted" (Ctrl-C: the last iterate is returned).  info["criterion"]: what ended
     the last Newton loop ("residual", "displacement", "round-off" or "zero load").
     """
+    with kernel_threads(int(getattr(getattr(model, "mesh", None), "n_elements", 1 << 30))):
+        return _solve_static(model, fixed, loads, load_factors, method, prescribed, tol=tol,
+                             energy_tol=energy_tol, disp_tol=disp_tol, max_iter=max_iter, c=c, L_f=L_f,
+                             max_step=max_step, U0=U0, predictor=predictor, increment=increment,
+                             min_increment=min_increment, max_cutbacks=max_cutbacks,
+                             curvilinear=curvilinear, line_search=line_search,
+                             trust_radius=trust_radius, arc_length_initial=arc_length_initial,
+                             max_arc_step=max_arc_step, max_arc_steps=max_arc_steps,
+                             check_stability=check_stability, eig_max_dofs=eig_max_dofs,
+                             max_saddle_escapes=max_saddle_escapes, saddle_step=saddle_step,
+                             contact=contact, contact_stiffness=contact_stiffness,
+                             factorization=factorization, progress=progress)
+
+
+def _solve_static(model, fixed, loads, load_factors, method, prescribed, *, tol, energy_tol,
+                  disp_tol, max_iter, c, L_f, max_step, U0, predictor, increment, min_increment,
+                  max_cutbacks, curvilinear, line_search, trust_radius, arc_length_initial,
+                  max_arc_step, max_arc_steps, check_stability, eig_max_dofs, max_saddle_escapes,
+                  saddle_step, contact, contact_stiffness, factorization, progress):
+    """The body of :func:`solve_static` (which sets the kernel threads around it)."""
     t0 = time.perf_counter()
     user_progress = progress or no_progress
     shown = [0.0]

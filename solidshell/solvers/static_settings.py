@@ -9,7 +9,7 @@ InputError line naming the key before any work starts.
 from __future__ import annotations
 
 import math
-from typing import Literal, Optional
+from typing import Any, Literal, Optional, Union
 
 from pydantic import Field, field_validator, model_validator
 
@@ -51,6 +51,30 @@ class StaticSettings(SettingsModel):
     saddle_step: Finite = Field(0.05, gt=0.0, description="largest escape step, fraction of L_f")
     contact_stiffness: Optional[Finite] = Field(None, gt=0.0)
     factorization: Literal["cholmod", "superlu"] = "cholmod"
+    sequence: Union[Literal["auto"], int] = Field(
+        "auto", description="coarse meshes solved first (solvers/sequence.py): 'auto' or a count >= 0")
+    U0: Optional[Any] = Field(None, description="(N, 6) starting displacements (default zero)")
+
+    @field_validator("sequence", mode="before")
+    @classmethod
+    def _sequence(cls, v):
+        if v != "auto" and (isinstance(v, bool) or not isinstance(v, int) or v < 0):
+            raise ValueError("must be 'auto' or an integer >= 0")
+        return v
+
+    @field_validator("U0")
+    @classmethod
+    def _u0(cls, v):
+        if v is None:
+            return v
+        import numpy as np
+        try:
+            a = np.asarray(v, dtype=float)
+        except (TypeError, ValueError):
+            raise ValueError("must be an (N, 6) array of numbers") from None
+        if a.size % 6 or not np.all(np.isfinite(a)):
+            raise ValueError("must be an (N, 6) array of finite numbers")
+        return a.reshape(-1, 6)
 
     @field_validator("load_factors")
     @classmethod
@@ -68,6 +92,7 @@ class StaticSettings(SettingsModel):
     def solver_kwargs(self) -> dict:
         """Keyword arguments of solve_static (load_steps turned into load_factors)."""
         d = self.as_dict()
+        d.pop("sequence")               # a run-level setting (solvers/sequence.py)
         steps = d.pop("load_steps")
         if steps is not None:
             d["load_factors"] = [(i + 1) / steps for i in range(steps)]

@@ -1,13 +1,13 @@
 """Element arrays -> global vectors and sparse matrices.
 
 The sparsity pattern of the global tangent and the position of every element entry in the CSR data
-array are computed once per mesh; afterwards assembly is a compiled scatter-add.
+array are computed once per mesh; afterwards assembly is a compiled scatter-add (Model does it, a
+chunk of elements at a time).
 """
 
 from __future__ import annotations
 
 import numpy as np
-import scipy.sparse as sp
 from numba import njit
 
 
@@ -137,20 +137,18 @@ class SparsePattern:
             start += len(k)
         self.nnz = len(uniq)
 
-    def assemble(self, K_blocks: list[np.ndarray]) -> sp.csr_matrix:
-        data = np.zeros(self.nnz)
-        for pos, Ke in zip(self.pos, K_blocks):
-            if len(Ke):
-                scatter_add_mat(pos, Ke, data)
-        return sp.csr_matrix((data, self.indices.copy(), self.indptr.copy()), shape=(self.n, self.n))
-
 
 @njit(cache=True)
 def _lower_free(indptr, indices, new, nf):
     """The lower triangle of a symmetric CSR pattern restricted to the dofs with new[dof] >= 0,
     renumbered by ``new``, in CSC: (indptr, indices, to_lower) with to_lower[k] the position of the
-    full pattern's entry k in it, or -1.  Rows come out sorted in each column because the full
-    rows are visited in increasing order and ``new`` is increasing on the free dofs."""
+    full pattern's entry k in it, or -1.
+
+    Column j of the lower triangle is filled from row j of the full matrix (its entries at and
+    right of the diagonal), i.e. with K[j, i] at (i, j): the element matrices are symmetric only
+    to round-off, and this is the triangle the solver factorised before (the free-dof CSR arrays
+    read as CSC), so the factorisations, and the Newton paths, stay the same to the last bit.
+    Rows come out sorted because the full rows are sorted and ``new`` is increasing."""
     n = indptr.size - 1
     count = np.zeros(nf + 1, dtype=np.int64)
     for r in range(n):
@@ -159,22 +157,22 @@ def _lower_free(indptr, indices, new, nf):
             continue
         for k in range(indptr[r], indptr[r + 1]):
             nc = new[indices[k]]
-            if nc >= 0 and nc <= nr:
-                count[nc + 1] += 1
+            if nc >= nr:
+                count[nr + 1] += 1
     lptr = np.cumsum(count)
-    fill = lptr[:-1].copy()
     lind = np.empty(lptr[-1], dtype=np.int32)
     to_lower = np.full(indices.size, -1, dtype=np.int64)
     for r in range(n):
         nr = new[r]
         if nr < 0:
             continue
+        q = lptr[nr]
         for k in range(indptr[r], indptr[r + 1]):
             nc = new[indices[k]]
-            if nc >= 0 and nc <= nr:
-                lind[fill[nc]] = nr
-                to_lower[k] = fill[nc]
-                fill[nc] += 1
+            if nc >= nr:
+                lind[q] = nc
+                to_lower[k] = q
+                q += 1
     return lptr, lind, to_lower
 
 
@@ -184,7 +182,8 @@ class FreeLowerPattern:
     or the upper triangle).  The static solver assembles its tangent straight into this form, the
     one CHOLMOD factorises, instead of assembling all 6N x 6N entries and gathering the free lower
     part every iteration.  Each entry sums the same element contributions in the same order as the
-    full assembly, so the values are identical to the last bit.
+    full assembly, so the values are identical to the last bit (of the upper triangle, transposed:
+    see ``_lower_free``).
 
     ``node_pos`` (N, 3, 3): the positions of the translational 3x3 block of every node (contact
     stiffness), -1 where not stored; ``diag_pos``: the diagonal entries; ``free``: the free dofs.
@@ -219,11 +218,3 @@ class FreeLowerPattern:
         keys = cols * nf + self.indices              # sorted: column-major order
         node_pos[ok] = np.searchsorted(keys, cc[ok] * nf + rr[ok])
         self.node_pos = node_pos
-
-    def assemble(self, K_blocks: list[np.ndarray]) -> np.ndarray:
-        """The data array (lower triangle, free dofs) of the sum of the element matrices."""
-        data = np.zeros(self.nnz)
-        for pos, Ke in zip(self.pos, K_blocks):
-            if len(Ke):
-                scatter_add_mat_masked(pos, Ke, data)
-        return data

@@ -55,7 +55,9 @@ def test_free_lower_assembly_is_the_restricted_lower_triangle_to_the_last_bit():
     lower = m.free_lower_pattern(free)
     F, data = m.force_and_free_tangent(U, lower)
     F0, K = m.force_and_tangent(U)
-    ref = sp.tril(K.tocsr()[free][:, free], format="csc")
+    # the lower triangle holds K[j, i] at (i, j): the upper triangle transposed (the element
+    # matrices are symmetric to round-off only; _lower_free says why this one)
+    ref = sp.triu(K.tocsr()[free][:, free], format="csr").T.tocsc()
     ref.sort_indices()
     # the same element contributions summed in the same order: identical bits, not just close
     assert np.array_equal(F, F0)
@@ -99,3 +101,18 @@ def test_cholesky_fast_path_matches_the_scipy_path():
     assert np.linalg.norm(r) <= 1e-9 * np.linalg.norm(b)
     # a second matrix with the same pattern object reuses the analysis
     assert c1.factor(A, np.full(free.size, 1.0)) and c1.n_symbolic == 1
+
+
+def test_chunked_tangent_assembly_is_bit_identical(monkeypatch):
+    """Model assembles tangents TANGENT_CHUNK elements at a time; chunks of 3 elements (16 quads
+    and triangles in 6 chunks per block) must give the very same bits as one chunk per block."""
+    import solidshell.model as model_mod
+
+    mesh = mixed_mesh()
+    m = Model(mesh, Fabric.wool())
+    U = 0.05 * np.random.default_rng(7).standard_normal((mesh.n_nodes, 6))
+    F1, K1 = m.force_and_tangent(U)
+    monkeypatch.setattr(model_mod, "TANGENT_CHUNK", 3)
+    F2, K2 = m.force_and_tangent(U)
+    assert np.array_equal(F1, F2) and np.array_equal(K1.data, K2.data)
+    assert np.array_equal(K1.indices, K2.indices) and np.array_equal(K1.indptr, K2.indptr)

@@ -44,7 +44,8 @@ def test_static_settings_sequence_and_start_state_are_checked():
     from solidshell.settings import parse
     from solidshell.solvers.static_settings import StaticSettings
 
-    assert parse(StaticSettings, {}, "s").sequence == "auto"
+    assert parse(StaticSettings, {}, "s").sequence == 0        # off unless a scene asks
+    assert load("square-pedestal").solver_settings("static")["sequence"] == "auto"
     assert parse(StaticSettings, {"sequence": 2}, "s").sequence == 2
     assert "sequence" not in parse(StaticSettings, {"sequence": 2}, "s").solver_kwargs()
     for bad in (-1, "coarse", True, 1.5):

@@ -52,7 +52,7 @@ class StaticSettings(SettingsModel):
     contact_stiffness: Optional[Finite] = Field(None, gt=0.0)
     factorization: Literal["cholmod", "superlu"] = "cholmod"
     sequence: Union[Literal["auto"], int] = Field(
-        "auto", description="coarse meshes solved first (solvers/sequence.py): 'auto' or a count >= 0")
+        0, description="coarse meshes solved first (solvers/sequence.py): 'auto' or a count >= 0")
     U0: Optional[Any] = Field(None, description="(N, 6) starting displacements (default zero)")
 
     @field_validator("sequence", mode="before")

@@ -1,13 +1,13 @@
 """Element arrays -> global vectors and sparse matrices.
 
 The sparsity pattern of the global tangent and the position of every element entry in the CSR data
-array are computed once per mesh; afterwards assembly is a compiled scatter-add.
+array are computed once per mesh; afterwards assembly is a compiled scatter-add (Model does it, a
+chunk of elements at a time).
 """
 
 from __future__ import annotations
 
 import numpy as np
-import scipy.sparse as sp
 from numba import njit
 
 
@@ -33,11 +33,93 @@ def scatter_add_mat(pos, Ke, data):
                 data[pos[e, a, b]] += Ke[e, a, b]
 
 
+@njit(cache=True)
+def scatter_add_mat_masked(pos, Ke, data):
+    """``scatter_add_mat`` skipping the entries with pos < 0 (fixed dofs, upper triangle)."""
+    M, nd, _ = Ke.shape
+    for e in range(M):
+        for a in range(nd):
+            for b in range(nd):
+                k = pos[e, a, b]
+                if k >= 0:
+                    data[k] += Ke[e, a, b]
+
+
+@njit(cache=True)
+def _expand_node_pattern(nindptr, nindices):
+    """Dof-level CSR (indptr, indices) of a node-level pattern with 6x6 blocks: row 6i+k holds the
+    columns 6j..6j+5 of every neighbour j of node i, in increasing order."""
+    N = nindptr.size - 1
+    indptr = np.empty(6 * N + 1, dtype=np.int64)
+    indptr[0] = 0
+    for i in range(N):
+        deg = nindptr[i + 1] - nindptr[i]
+        for k in range(6):
+            indptr[6 * i + k + 1] = indptr[6 * i + k] + 6 * deg
+    indices = np.empty(indptr[-1], dtype=np.int32)
+    for i in range(N):
+        deg = nindptr[i + 1] - nindptr[i]
+        for k in range(6):
+            r0 = indptr[6 * i + k]
+            for s in range(deg):
+                j = nindices[nindptr[i] + s]
+                for m in range(6):
+                    indices[r0 + 6 * s + m] = 6 * j + m
+    return indptr, indices
+
+
+@njit(cache=True)
+def _node_block_positions(conn, nindptr, nindices, indptr):
+    """pos (M, 6nn, 6nn) of every element-matrix entry in the data array of the expanded pattern."""
+    M, nn = conn.shape
+    nd = 6 * nn
+    pos = np.empty((M, nd, nd), dtype=np.int64)
+    for e in range(M):
+        for p in range(nn):
+            i = conn[e, p]
+            lo = nindptr[i]
+            deg = nindptr[i + 1] - lo
+            for q in range(nn):
+                j = conn[e, q]
+                s = np.searchsorted(nindices[lo:lo + deg], j)
+                for ka in range(6):
+                    base = indptr[6 * i + ka] + 6 * s
+                    for kb in range(6):
+                        pos[e, 6 * p + ka, 6 * q + kb] = base + kb
+    return pos
+
+
 class SparsePattern:
-    """CSR pattern of the union of element blocks; ``pos[k]`` maps block k's (M,nd,nd) entries."""
+    """CSR pattern of the union of element blocks; ``pos[k]`` maps block k's (M,nd,nd) entries.
+
+    Built at the node level (node-pair graph, then 6x6 dof blocks) when the blocks' dofs are
+    node-major (``element_dofs``), as all of solidshell's are: the element-entry-level construction
+    (np.unique over every element entry) peaked at ~100 MB above the result on square-pedestal
+    48x16x4; both give the same arrays."""
 
     def __init__(self, n_dofs: int, dof_blocks: list[np.ndarray]):
         self.n = n_dofs
+        conns = [d[:, ::6] // 6 for d in dof_blocks]
+        if n_dofs % 6 == 0 and all(d.shape[1] % 6 == 0 and np.array_equal(d, element_dofs(c))
+                                   for d, c in zip(dof_blocks, conns)):
+            self._from_nodes(n_dofs // 6, [np.ascontiguousarray(c, dtype=np.int64) for c in conns])
+        else:
+            self._from_entries(n_dofs, dof_blocks)
+
+    def _from_nodes(self, N, conns):
+        keys = [(c[:, :, None] * N + c[:, None, :]).ravel() for c in conns]
+        uniq = np.unique(np.concatenate(keys)) if keys else np.zeros(0, np.int64)
+        nindices = (uniq % N).astype(np.int64)
+        nindptr = np.searchsorted(uniq // N, np.arange(N + 1)).astype(np.int64)
+        indptr, self.indices = _expand_node_pattern(nindptr, nindices)
+        self.nnz = int(indptr[-1])
+        small = self.nnz < 2**31
+        self.pos = [_node_block_positions(c, nindptr, nindices, indptr) for c in conns]
+        if small:    # int32 positions: half the memory of the (M, nd, nd) maps
+            self.pos = [p.astype(np.int32) for p in self.pos]
+        self.indptr = indptr.astype(np.int32) if self.nnz < 2**31 else indptr
+
+    def _from_entries(self, n_dofs, dof_blocks):
         keys = []
         for d in dof_blocks:
             r = np.broadcast_to(d[:, :, None], d.shape + (d.shape[1],))
@@ -55,9 +137,84 @@ class SparsePattern:
             start += len(k)
         self.nnz = len(uniq)
 
-    def assemble(self, K_blocks: list[np.ndarray]) -> sp.csr_matrix:
-        data = np.zeros(self.nnz)
-        for pos, Ke in zip(self.pos, K_blocks):
-            if len(Ke):
-                scatter_add_mat(pos, Ke, data)
-        return sp.csr_matrix((data, self.indices.copy(), self.indptr.copy()), shape=(self.n, self.n))
+
+@njit(cache=True)
+def _lower_free(indptr, indices, new, nf):
+    """The lower triangle of a symmetric CSR pattern restricted to the dofs with new[dof] >= 0,
+    renumbered by ``new``, in CSC: (indptr, indices, to_lower) with to_lower[k] the position of the
+    full pattern's entry k in it, or -1.
+
+    Column j of the lower triangle is filled from row j of the full matrix (its entries at and
+    right of the diagonal), i.e. with K[j, i] at (i, j): the element matrices are symmetric only
+    to round-off, and this is the triangle the solver factorised before (the free-dof CSR arrays
+    read as CSC), so the factorisations, and the Newton paths, stay the same to the last bit.
+    Rows come out sorted because the full rows are sorted and ``new`` is increasing."""
+    n = indptr.size - 1
+    count = np.zeros(nf + 1, dtype=np.int64)
+    for r in range(n):
+        nr = new[r]
+        if nr < 0:
+            continue
+        for k in range(indptr[r], indptr[r + 1]):
+            nc = new[indices[k]]
+            if nc >= nr:
+                count[nr + 1] += 1
+    lptr = np.cumsum(count)
+    lind = np.empty(lptr[-1], dtype=np.int32)
+    to_lower = np.full(indices.size, -1, dtype=np.int64)
+    for r in range(n):
+        nr = new[r]
+        if nr < 0:
+            continue
+        q = lptr[nr]
+        for k in range(indptr[r], indptr[r + 1]):
+            nc = new[indices[k]]
+            if nc >= nr:
+                lind[q] = nc
+                to_lower[k] = q
+                q += 1
+    return lptr, lind, to_lower
+
+
+class FreeLowerPattern:
+    """The lower triangle (CSC, diagonal included) of a :class:`SparsePattern` restricted to the
+    free dofs, with the position of every element-matrix entry in its data array (-1: a fixed dof
+    or the upper triangle).  The static solver assembles its tangent straight into this form, the
+    one CHOLMOD factorises, instead of assembling all 6N x 6N entries and gathering the free lower
+    part every iteration.  Each entry sums the same element contributions in the same order as the
+    full assembly, so the values are identical to the last bit (of the upper triangle, transposed:
+    see ``_lower_free``).
+
+    ``node_pos`` (N, 3, 3): the positions of the translational 3x3 block of every node (contact
+    stiffness), -1 where not stored; ``diag_pos``: the diagonal entries; ``free``: the free dofs.
+    """
+
+    def __init__(self, pattern: SparsePattern, free: np.ndarray):
+        n = pattern.n
+        free = np.asarray(free, dtype=np.int64)
+        nf = free.size
+        new = np.full(n, -1, dtype=np.int64)
+        new[free] = np.arange(nf)
+        lptr, self.indices, to_lower = _lower_free(pattern.indptr.astype(np.int64), pattern.indices,
+                                                   new, nf)
+        small = to_lower.size < 2**31
+        self.pos = [to_lower[p].astype(np.int32) if small else to_lower[p] for p in pattern.pos]
+        del to_lower
+        self.indptr = lptr.astype(np.int32)
+        self.nnz = int(lptr[-1])
+        self.n = nf
+        self.free = free
+        cols = np.repeat(np.arange(nf, dtype=np.int64), np.diff(lptr))
+        self.diag_pos = np.flatnonzero(self.indices == cols)
+        if self.diag_pos.size != nf:
+            raise RuntimeError("the tangent pattern lacks a diagonal entry of a free dof")
+        # the translational block of each node: (row 6i+a, column 6i+b) with a >= b, free dofs
+        N = n // 6
+        a = np.arange(3)
+        rr = new[(6 * np.arange(N))[:, None, None] + a[None, :, None]].repeat(3, axis=2)
+        cc = new[(6 * np.arange(N))[:, None, None] + a[None, None, :]].repeat(3, axis=1)
+        ok = (rr >= 0) & (cc >= 0) & (rr >= cc)
+        node_pos = np.full((N, 3, 3), -1, dtype=np.int64)
+        keys = cols * nf + self.indices              # sorted: column-major order
+        node_pos[ok] = np.searchsorted(keys, cc[ok] * nf + rr[ok])
+        self.node_pos = node_pos

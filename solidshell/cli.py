@@ -3,7 +3,7 @@
     solidshell scenes
     solidshell mesh SCENE [--mesh 48x16x4] [--out DIR] [--force] [--allow-large]
     solidshell run  SCENE [--mesh M] [--solver static|explicit|relax] [--set key=value ...] [--out DIR]
-                          [--checkpoint FILE] [--restart FILE] [--force] [--allow-large]
+                          [--checkpoint FILE] [--restart FILE] [--no-pictures] [--force] [--allow-large]
     solidshell sweep SWEEP [--scheduler tcp://HOST:PORT] [--workers N] [--threads N] [--out DIR]
                            [--retries N] [--limit N] [--list]     (solidshell.sweep; needs dask)
     solidshell verify [NAME ...] [--quick] [--out DIR] [--list] [--references] [--fenicsx]
@@ -100,6 +100,9 @@ def _parser() -> argparse.ArgumentParser:
                    help="reversible adaptive 1-to-4 subdivision (paper §5; explicit/relax only), from the "
                         "scene's mesh.adaptive_level0 or --mesh; settings: --set adapt.KEY=VALUE")
     r.add_argument("--no-progress", action="store_true", help="no progress bar")
+    r.add_argument("--no-pictures", action="store_true",
+                   help="write no PNG pictures (the same as --set output.pictures=[] --set "
+                        "output.snapshots=[]): a small run then never loads matplotlib")
     _common(r)
 
     w = sub.add_parser("sweep", help="an ensemble of runs on dask.distributed (solidshell.sweep); "
@@ -173,8 +176,11 @@ def _cmd_run(args) -> int:
 
     out_dir = args.out or _default_out(args.scene)
     extra = {k: getattr(args, k) for k in ("checkpoint", "restart") if getattr(args, k)}
+    overrides = parse_overrides(args.set)
+    if args.no_pictures:
+        overrides.update({"output.pictures": [], "output.snapshots": []})
     res = run_scene(args.scene, mesh=args.mesh, solver=args.solver, out_dir=out_dir,
-                    progress=not args.no_progress, overrides=parse_overrides(args.set),
+                    progress=not args.no_progress, overrides=overrides,
                     force=args.force, allow_large=args.allow_large,
                     adaptive=True if args.adaptive else None, **extra)
     s = res.summary

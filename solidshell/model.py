@@ -8,14 +8,19 @@ matrix (6N, 6N) with dof index 6*node + k.
 from __future__ import annotations
 
 import numpy as np
+import scipy.sparse as sp
 from numba import get_num_threads
 
-from .assembly import SparsePattern, element_dofs, scatter_add_vec
+from .assembly import (FreeLowerPattern, SparsePattern, element_dofs, scatter_add_mat,
+                       scatter_add_mat_masked, scatter_add_vec)
 from .elements import core, quad4, tri3
 from .errors import InputError
 from .mesh import ShellMesh
 
 _THICKNESS_STRAINS = ("green", "quasi")
+
+TANGENT_CHUNK = 1024
+"""Elements per kernel call when tangents are assembled (Model._force_and_tangent_into)."""
 
 
 class _Block:
@@ -37,12 +42,13 @@ class _Block:
         self.tie = np.ascontiguousarray(c["tie"], dtype=float)
         self.gp_membrane = bool(np.any(c["Cmb"][:, :, 0]))
 
-    def args(self, xo, xn, U, quasi, mu):
+    def args(self, xo, xn, U, quasi, mu, sl=slice(None)):
         """Kernel arguments: current positions/directors xo, xn (N,3) and the displacements U (N,6)
-        from which the strains are formed (displacement form, elements/core.py)."""
+        from which the strains are formed (displacement form, elements/core.py); ``sl`` selects a
+        range of elements (the per-element arrays are sliced, views)."""
         c = self.c
-        return (xo, xn, U, self.conn, self.dN, self.alpha, self.beta, self.tie, c["Cmb"], c["Cs"],
-                c["Cz"], c["r_zq"], quasi, mu)
+        return (xo, xn, U, self.conn[sl], self.dN, self.alpha, self.beta, self.tie, c["Cmb"][sl],
+                c["Cs"][sl], c["Cz"][sl], c["r_zq"][sl], quasi, mu)
 
 
 class Model:
@@ -129,22 +135,54 @@ class Model:
             self._pattern = SparsePattern(self.n_dofs, [b.dofs for b in self.blocks])
         return self._pattern
 
-    def force_and_tangent(self, U):
-        """(internal force (N,6), tangent K_t (6N,6N) CSR) at U, Eq. (9)."""
+    def _force_and_tangent_into(self, U, pos_maps, nnz, masked):
+        """(internal force (6N,), tangent data (nnz,)) at U: the element tangents of each block,
+        computed ``TANGENT_CHUNK`` elements at a time, scattered through ``pos_maps`` (one
+        (M, nd, nd) position map per block; ``masked``: negative positions are skipped).  Chunks
+        follow the element order, so every entry sums the same terms in the same order as one
+        whole-mesh call would; only a chunk's element matrices are held at a time (the whole
+        mesh's were 14 MB on square-pedestal 48x16x4, alive next to the last factorisation)."""
+        scatter = scatter_add_mat_masked if masked else scatter_add_mat
         xo, xn, Uc = self._current(U)
         F = np.zeros(self.n_dofs)
-        Ks = []
-        for b in self.blocks:
+        data = np.zeros(nnz)
+        nth = get_num_threads()
+        for b, pos in zip(self.blocks, pos_maps):
             M = len(b.conn)
             nd = 6 * b.nn
-            fe = np.empty((M, b.nn, 6))
-            we = np.empty(M)
-            Ke = np.empty((M, nd, nd))
-            core.force_tangent(*b.args(xo, xn, Uc, self.quasi, self.mu), b.gp_membrane, fe, we, Ke,
-                               get_num_threads())
-            scatter_add_vec(b.dofs, fe.reshape(M, -1), F)
-            Ks.append(Ke)
-        return F.reshape(-1, 6), self.pattern.assemble(Ks)
+            step = min(M, TANGENT_CHUNK)
+            fe = np.empty((step, b.nn, 6))
+            we = np.empty(step)
+            Ke = np.empty((step, nd, nd))
+            for s0 in range(0, M, step):
+                sl = slice(s0, min(M, s0 + step))
+                m = sl.stop - sl.start
+                core.force_tangent(*b.args(xo, xn, Uc, self.quasi, self.mu, sl), b.gp_membrane,
+                                   fe[:m], we[:m], Ke[:m], nth)
+                scatter_add_vec(b.dofs[sl], fe[:m].reshape(m, -1), F)
+                scatter(pos[sl], Ke[:m], data)
+        return F, data
+
+    def force_and_tangent(self, U):
+        """(internal force (N,6), tangent K_t (6N,6N) CSR) at U, Eq. (9)."""
+        p = self.pattern
+        F, data = self._force_and_tangent_into(U, p.pos, p.nnz, False)
+        return F.reshape(-1, 6), sp.csr_matrix((data, p.indices.copy(), p.indptr.copy()),
+                                               shape=(p.n, p.n))
+
+    def free_lower_pattern(self, free) -> FreeLowerPattern:
+        """The lower triangle of the tangent's pattern on the dofs ``free`` (assembly.py).  The
+        full pattern is built for it but not kept unless it already was: the static solver needs
+        only this one, and the full one's maps are ~15 MB on square-pedestal 48x16x4."""
+        pattern = self._pattern if self._pattern is not None else \
+            SparsePattern(self.n_dofs, [b.dofs for b in self.blocks])
+        return FreeLowerPattern(pattern, free)
+
+    def force_and_free_tangent(self, U, lower: FreeLowerPattern):
+        """(internal force (N,6), data of K_t's lower triangle on the free dofs in the CSC pattern
+        ``lower``) at U, Eq. (9): the static solver's form of the tangent (no 6N x 6N matrix)."""
+        F, data = self._force_and_tangent_into(U, lower.pos, lower.nnz, True)
+        return F.reshape(-1, 6), data
 
     def tangent(self, U):
         """Tangent stiffness K_t = d^2 U / dD^2 (Eq. 9): scipy CSR (6N, 6N) [force/length]."""

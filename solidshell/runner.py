@@ -511,7 +511,14 @@ def _run(sc, kind, mesh_arg, out_dir, cb, settings, timings, t_start, overrides=
                 model = problem.model
                 timings["setup"] = time.perf_counter() - t
                 t = time.perf_counter()
-                result = fn(problem, dict(solver_s), _phase(cb, 0.08, 0.9))
+                if kind == "static":
+                    # coarse meshes of the recipe first (solvers/sequence.py; "sequence" setting)
+                    from .solvers.sequence import solve_sequenced
+                    result = solve_sequenced(
+                        fn, problem, dict(solver_s), _phase(cb, 0.08, 0.9), sc, mesh_name,
+                        lambda d: build_problem(sc, build_scene_mesh(sc, d, kind, allow_large)[0]))
+                else:
+                    result = fn(problem, dict(solver_s), _phase(cb, 0.08, 0.9))
             else:
                 timings["setup"] = time.perf_counter() - t
                 t = time.perf_counter()
@@ -698,9 +705,9 @@ def _write_outputs(folder, sc, kind, mesh, mesh_name, U, result, summary, snaps,
                 f.writelines(f"{x:.6g},{y:.6g}\n" for x, y in boundary)
             return p
         files.append(folder.write("projected_boundary.csv", csv))
-    from .plotting import render
-
     def picture(p, *a, **kw):
+        from .plotting import render      # matplotlib only when a picture is drawn
+
         return sio.stamp_png(render(p, *a, **kw), rid)
 
     state = U if finite else None

@@ -230,10 +230,10 @@ def test_with_overrides():
     s = scenes.load("square-pedestal")
     t = s.with_overrides({"mesh.density": "24x8x4", "solver.static.c": 2e-3, "material.warp_angle": 90,
                           "solver.kind": "relax", "solver.relax.alpha": 1.0})
-    assert t.density == "24x8x4" and t.solver["static"] == {"c": 2e-3} and t.solver["kind"] == "relax"
+    assert t.density == "24x8x4" and t.solver["static"] == {"sequence": "auto", "c": 2e-3} and t.solver["kind"] == "relax"
     assert t.material_object().warp_angle == 90.0
     assert t.solver_settings() == {"alpha": 1.0, "mass_scaling": 100}
-    assert s.density == "48x16x4" and s.solver["static"] == {}          # the original is unchanged
+    assert s.density == "48x16x4" and s.solver["static"] == {"sequence": "auto"}          # the original is unchanged
     c = scenes.load("sphere").with_overrides({"contact.0.radius": 6.0})
     assert c.contact[0]["radius"] == 6.0
     assert s.with_overrides({}) is s

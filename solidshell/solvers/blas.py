@@ -1,4 +1,4 @@
-"""Keep BLAS single-threaded inside the solvers.
+"""Keep BLAS single-threaded inside the solvers (and the element kernels serial on small meshes).
 
 The solvers' parallel work runs in the numba element kernels (their own threads) and in SuperLU
 (serial); BLAS only sees level-1 calls (dot products, norms) and ARPACK's small dense work.  A
@@ -10,9 +10,18 @@ the solver call (threadpoolctl), so the user's own process settings are left alo
 
 from __future__ import annotations
 
+import contextlib
 import functools
 
 from threadpoolctl import threadpool_limits
+
+SERIAL_KERNEL_ELEMENTS = 1000
+"""Below this many elements the static solver runs the element kernels on one numba thread: a
+parallel region costs a hand-off to the other thread, which on a shared machine waits for a time
+slice.  Measured on the 20-element strip at load ~11 on 2 cores: a force + force-tangent call pair
+took 15-60 ms wall (4-16 ms CPU, spinning OpenMP workers) on 2 threads and 1-2 ms (0.3 ms CPU) on
+one; on square-pedestal 48x16x4 (3072 quads) one thread was still faster at that load (104-115 ms
+against 129-156 ms), but on a quiet machine two threads halve the kernel time of a large mesh."""
 
 
 def single_threaded_blas(fn):
@@ -24,3 +33,20 @@ def single_threaded_blas(fn):
             return fn(*args, **kwargs)
 
     return wrapper
+
+
+@contextlib.contextmanager
+def kernel_threads(n_elements: int):
+    """numba threads for the element kernels of a solve on ``n_elements`` elements: one below
+    ``SERIAL_KERNEL_ELEMENTS``, else the process setting; restored afterwards."""
+    if n_elements >= SERIAL_KERNEL_ELEMENTS:
+        yield
+        return
+    import numba
+
+    old = numba.get_num_threads()
+    numba.set_num_threads(1)
+    try:
+        yield
+    finally:
+        numba.set_num_threads(old)

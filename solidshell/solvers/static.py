@@ -88,12 +88,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.sparse.linalg import LinearOperator, eigsh
 
 from ..errors import InputError
 from ..problem import SolveResult, no_progress
-from .blas import single_threaded_blas
-from .linear import FACTORIZATIONS, Cholesky, SuperLUDefinite, ldl_inertia
+from .blas import kernel_threads, single_threaded_blas
+from .linear import FACTORIZATIONS, Cholesky, LowerCSC, SuperLUDefinite, as_csc, ldl_inertia
 
 __all__ = ["StaticResult", "solve_static", "run", "METHODS"]
 
@@ -193,10 +192,12 @@ class _System:
 
     # -- contact (mid-surface nodes; forces on U_o only)
     def _contact(self, D, want_tangent=False):
+        """(penalty energy, its gradient (6N,), tangent blocks): the blocks are a list of (active
+        nodes (A,), k n n^T (A,3,3)) per body, None without ``want_tangent``."""
         x = self.model.mesh.nodes + D.reshape(self.n, 6)[:, :3]
         f = np.zeros((self.n, 6))
         e = 0.0
-        rows, cols, vals = [], [], []
+        blocks = [] if want_tangent else None
         k = self.k_contact
         for b in self.contact:
             fb, eb = b.forces(x, k)              # penalty force k p n on the sheet, energy k p^2/2
@@ -205,19 +206,23 @@ class _System:
             if want_tangent:
                 gap, nrm = b.penetration(x)
                 act = np.flatnonzero(gap < 0.0)
-                if act.size == 0:
-                    continue
-                nn = k * nrm[act][:, :, None] * nrm[act][:, None, :]    # (A,3,3)
-                base = 6 * act
-                r = (base[:, None, None] + np.arange(3)[None, :, None]).repeat(3, axis=2)
-                c = (base[:, None, None] + np.arange(3)[None, None, :]).repeat(3, axis=1)
-                rows.append(r.ravel()); cols.append(c.ravel()); vals.append(nn.ravel())
-        Kc = None
-        if want_tangent and rows:
-            m = 6 * self.n
-            Kc = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-                               shape=(m, m))
-        return e, f.ravel(), Kc
+                if act.size:
+                    blocks.append((act, k * nrm[act][:, :, None] * nrm[act][:, None, :]))
+        return e, f.ravel(), blocks
+
+    def _contact_matrix(self, blocks):
+        """The contact tangent blocks as a (6N, 6N) CSR matrix, or None."""
+        if not blocks:
+            return None
+        rows, cols, vals = [], [], []
+        for act, nn in blocks:
+            base = 6 * act
+            r = (base[:, None, None] + np.arange(3)[None, :, None]).repeat(3, axis=2)
+            c = (base[:, None, None] + np.arange(3)[None, None, :]).repeat(3, axis=1)
+            rows.append(r.ravel()); cols.append(c.ravel()); vals.append(nn.ravel())
+        m = 6 * self.n
+        return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                             shape=(m, m))
 
     # -- evaluations
     def potential_and_gradient(self, D, lam):
@@ -242,11 +247,36 @@ class _System:
         F = np.asarray(F, dtype=float).ravel()
         K = sp.csr_matrix(K)
         if self.contact:
-            _, fc, Kc = self._contact(D, want_tangent=True)
+            _, fc, blocks = self._contact(D, want_tangent=True)
             F = F + fc
+            Kc = self._contact_matrix(blocks)
             if Kc is not None:
                 K = K + Kc
         return F, K
+
+    def free_tangent(self, D):
+        """(F internal (+contact) full vector, K_t on the free dofs as a :class:`LowerCSC`).
+
+        The tangent is assembled straight into the lower triangle of its free-dof pattern, the
+        form CHOLMOD factorises (assembly.FreeLowerPattern): no 6N x 6N matrix, no restriction
+        and no conversion per iteration.  Same values, to the last bit, as ``Kff(force_tangent)``."""
+        if not hasattr(self.model, "force_and_free_tangent"):
+            F, K = self.force_tangent(D)
+            return F, LowerCSC.from_symmetric(self.Kff(K))
+        self.n_tangent += 1
+        lw = getattr(self, "_lower", None)
+        if lw is None:
+            lw = self._lower = self.model.free_lower_pattern(self.free)
+        F, data = self.model.force_and_free_tangent(self.U(D), lw)
+        F = np.asarray(F, dtype=float).ravel()
+        if self.contact:
+            _, fc, blocks = self._contact(D, want_tangent=True)
+            F = F + fc
+            for act, nn in blocks:
+                pos = lw.node_pos[act]
+                m = pos >= 0
+                np.add.at(data, pos[m], nn[m])
+        return F, LowerCSC(lw.indptr, lw.indices, data, lw.diag_pos, lw)
 
     def reference_norm(self, F, lam):
         """max(|lam P|, |reactions|, |F_int on the free dofs|, tiny): the scale of the relative
@@ -374,8 +404,7 @@ def _newton_level(sys, D, lam, o, stats):
         it += 1
         stats["iterations"] += 1
         if refresh or lu is None or since >= o.reuse:
-            _, K = sys.force_tangent(D)
-            A = sys.Kff(K)
+            _, A = sys.free_tangent(D)
             scale = np.abs(A.diagonal())
             scale[scale == 0.0] = max(float(scale.max(initial=0.0)), 1.0)
             try:
@@ -519,7 +548,7 @@ def _paper_level(sys, D, lam, o, stats):
     best = np.inf
     since_best = 0
     for it in range(o.max_iter + 1):
-        F, K = sys.force_tangent(D)
+        F, A = sys.free_tangent(D)
         stats["D_last"] = D
         r = lam * sys.P[f] - F[f]
         rel = float(np.linalg.norm(r)) / sys.reference_norm(F, lam)
@@ -537,7 +566,6 @@ def _paper_level(sys, D, lam, o, stats):
             since_best += 1
         stats["iterations"] += 1
         try:
-            A = sys.Kff(K)
             # Cholesky where K_t is positive definite (most iterations), SuperLU LDL^T elsewhere
             if sys.factorization == "cholmod" and sys.chol.factor(A):
                 dD = sys.chol.solve(r)
@@ -566,14 +594,17 @@ def _paper_level(sys, D, lam, o, stats):
 # ============================================================================ drivers
 def _predictor(sys, D, lam0, lam1):
     """Linearised first guess for a load/prescribed increment lam0 -> lam1 (tangent at D)."""
-    F, K = sys.force_tangent(D)
     f, c = sys.free, sys.fixd
     dl = lam1 - lam0
     rhs = dl * sys.P[f]
     dc = (sys.prescribed_at(lam1) - sys.prescribed_at(lam0))[c]
     if c.size and np.any(dc):
+        # the free-fixed coupling of K_t is needed: the full tangent
+        F, K = sys.force_tangent(D)
         rhs = rhs - K[f][:, c] @ dc
-    A = sys.Kff(K)
+        A = sys.Kff(K)
+    else:
+        F, A = sys.free_tangent(D)
     scale = np.abs(A.diagonal())
     scale[scale == 0.0] = 1.0
     lu, _, nf = _shifted_factor(sys.chol, A, scale, 0.0)
@@ -682,8 +713,8 @@ def _arc_length(sys, D, lam_target, o, stats, progress, path, dlam0, max_steps, 
     if sys.presc_fn is not None or np.any(sys.presc):
         raise InputError("arc-length supports dead loads only (prescribed values must be zero)")
     lam = stats["load_factor"]
-    F, K = sys.force_tangent(D)
-    lu, _ = ldl_inertia(sys.Kff(K))
+    F, A = sys.free_tangent(D)
+    lu, _ = ldl_inertia(as_csc(A))
     sys.n_solves += 1
     sys.n_factor += 1
     dt = lu.solve(Pf)
@@ -694,9 +725,9 @@ def _arc_length(sys, D, lam_target, o, stats, progress, path, dlam0, max_steps, 
     prev = None
     rel = np.nan
     for step in range(max_steps):
-        F, K = sys.force_tangent(D)
+        F, A = sys.free_tangent(D)
         try:
-            lu, neg = ldl_inertia(sys.Kff(K))
+            lu, neg = ldl_inertia(as_csc(A))
         except RuntimeError:
             return D, False, f"singular tangent at load factor {lam:.4g} (bifurcation point?)", rel
         if neg is not None:
@@ -713,7 +744,7 @@ def _arc_length(sys, D, lam_target, o, stats, progress, path, dlam0, max_steps, 
             stats["D_last"] = D
             Dt[f] += dD
             lt = lam + dlam
-            F, K = sys.force_tangent(Dt)
+            F, A = sys.free_tangent(Dt)
             R = F[f] - lt * Pf
             rel = float(np.linalg.norm(R)) / sys.reference_norm(F, lt)
             if not np.isfinite(rel):
@@ -723,7 +754,7 @@ def _arc_length(sys, D, lam_target, o, stats, progress, path, dlam0, max_steps, 
                 break
             stats["iterations"] += 1
             try:
-                lu, _ = ldl_inertia(sys.Kff(K))
+                lu, _ = ldl_inertia(as_csc(A))
             except RuntimeError:
                 break
             sys.n_solves += 2
@@ -777,9 +808,19 @@ def _free_length(mesh, fixed_mask):
     fixed_nodes = np.flatnonzero(np.asarray(fixed_mask).reshape(len(X), 6).any(axis=1))
     if fixed_nodes.size == 0 or fixed_nodes.size == len(X):
         return float(mesh.characteristic_length())
-    from scipy.spatial import cKDTree
-    d, _ = cKDTree(X[fixed_nodes]).query(X)
-    return float(d.max())
+    Y = X[fixed_nodes]
+    if len(X) * len(Y) > 2e7:
+        from scipy.spatial import cKDTree
+        d, _ = cKDTree(Y).query(X)
+        return float(d.max())
+    # direct distances: importing scipy.spatial costs more than this on the usual meshes
+    d2 = ((X[:, None, :] - Y[None, :, :]) ** 2).sum(axis=-1).min(axis=1)
+    return float(np.sqrt(d2.max()))
+
+
+_DENSE_EIG = 600
+"""Up to this many free dofs the smallest tangent eigenvalue is computed densely (LAPACK, exact):
+faster than ARPACK there, and a small run does not import scipy.sparse.linalg at all."""
 
 
 def _stability(sys, D, eig_max_dofs):
@@ -789,8 +830,7 @@ def _stability(sys, D, eig_max_dofs):
     LDL^T says so (None when its pivoting was not symmetric).  The smallest eigenvalue comes from
     ARPACK in shift-invert mode about -s (s = 1e-10 of the mean diagonal), with the inverse applied
     by the Cholesky factor of A + s I when it exists."""
-    _, K = sys.force_tangent(D)
-    A = sys.Kff(K)
+    _, A = sys.free_tangent(D)
     n = A.shape[0]
     s = 1e-10 * float(np.abs(A.diagonal()).mean())
     chol = sys.chol if isinstance(sys.chol, Cholesky) else Cholesky()   # reuse its analysis
@@ -802,18 +842,19 @@ def _stability(sys, D, eig_max_dofs):
         except RuntimeError:
             pd = False
     lmin = None
-    if 2 < n <= eig_max_dofs:
+    if _DENSE_EIG < n <= eig_max_dofs:
+        from scipy.sparse.linalg import LinearOperator, eigsh
         try:
             opinv = None
             if pd and chol.factor(A, np.full(n, s)):
                 opinv = LinearOperator((n, n), matvec=chol.solve, dtype=float)
-            vals = eigsh(A, k=1, sigma=-s, which="LM", return_eigenvectors=False, tol=1e-8,
+            vals = eigsh(as_csc(A), k=1, sigma=-s, which="LM", return_eigenvectors=False, tol=1e-8,
                          maxiter=2000, OPinv=opinv)
             lmin = float(vals[0])
         except Exception:  # noqa: BLE001 - a diagnostic, never fatal
             lmin = None
-    elif n <= 2:
-        lmin = float(np.linalg.eigvalsh(A.toarray()).min())
+    elif n <= _DENSE_EIG:
+        lmin = float(np.linalg.eigvalsh(as_csc(A).toarray()).min())
     return pd, lmin
 
 
@@ -823,10 +864,12 @@ def _lowest_mode(A, k_max=6):
     or (None, None).  ARPACK in shift-invert mode about -s (s = 1e-10 of the mean |diagonal|; the
     LU of A + s I is indefinite-safe) with a few eigenpairs so that a small positive eigenvalue near
     the shift does not hide the negative one; LOBPCG (smallest algebraic) if ARPACK fails."""
+    A = as_csc(A)
     n = A.shape[0]
     if n <= 200:
         w, V = np.linalg.eigh(A.toarray())
         return float(w[0]), V[:, 0]
+    from scipy.sparse.linalg import eigsh
     s = 1e-10 * float(np.abs(A.diagonal()).mean())
     try:
         w, V = eigsh(A, k=min(k_max, n - 2), sigma=-s, which="LM", tol=1e-8, maxiter=5000)
@@ -853,8 +896,7 @@ def _leave_saddle(sys, D, lam, o, stats, step_frac):
     energy falls as lam_min t^2 / 2 near D and the quartic terms turn it up again further out, so
     the lowest of these ten candidates (below Pi(D)) is kept.  Returns (D_new or None, lam_min)."""
     f = sys.free
-    _, K = sys.force_tangent(D)
-    A = sys.Kff(K)
+    _, A = sys.free_tangent(D)
     lmin, v = _lowest_mode(A)
     if lmin is None:
         return None, None
@@ -879,8 +921,8 @@ def _seek_minimum(sys, D, lam, o, stats, max_escapes, step_frac, info_w):
     (Cholesky succeeds), continuing the energy Newton from each escape.  Returns (D, ok, message)."""
     stats.setdefault("saddle_eigenvalues", [])
     for _ in range(max_escapes + 1):
-        _, K = sys.force_tangent(D)
-        if sys.chol.factor(sys.Kff(K)):
+        _, A = sys.free_tangent(D)
+        if sys.chol.factor(A):
             return D, True, ""
         if len(stats["saddle_eigenvalues"]) >= max_escapes:
             break
@@ -960,6 +1002,26 @@ def solve_static(model, fixed, loads, load_factors=None, method="newton", prescr
     left) or "interrupted" (Ctrl-C: the last iterate is returned).  info["criterion"]: what ended
     the last Newton loop ("residual", "displacement", "round-off" or "zero load").
     """
+    with kernel_threads(int(getattr(getattr(model, "mesh", None), "n_elements", 1 << 30))):
+        return _solve_static(model, fixed, loads, load_factors, method, prescribed, tol=tol,
+                             energy_tol=energy_tol, disp_tol=disp_tol, max_iter=max_iter, c=c, L_f=L_f,
+                             max_step=max_step, U0=U0, predictor=predictor, increment=increment,
+                             min_increment=min_increment, max_cutbacks=max_cutbacks,
+                             curvilinear=curvilinear, line_search=line_search,
+                             trust_radius=trust_radius, arc_length_initial=arc_length_initial,
+                             max_arc_step=max_arc_step, max_arc_steps=max_arc_steps,
+                             check_stability=check_stability, eig_max_dofs=eig_max_dofs,
+                             max_saddle_escapes=max_saddle_escapes, saddle_step=saddle_step,
+                             contact=contact, contact_stiffness=contact_stiffness,
+                             factorization=factorization, progress=progress)
+
+
+def _solve_static(model, fixed, loads, load_factors, method, prescribed, *, tol, energy_tol,
+                  disp_tol, max_iter, c, L_f, max_step, U0, predictor, increment, min_increment,
+                  max_cutbacks, curvilinear, line_search, trust_radius, arc_length_initial,
+                  max_arc_step, max_arc_steps, check_stability, eig_max_dofs, max_saddle_escapes,
+                  saddle_step, contact, contact_stiffness, factorization, progress):
+    """The body of :func:`solve_static` (which sets the kernel threads around it)."""
     t0 = time.perf_counter()
     user_progress = progress or no_progress
     shown = [0.0]

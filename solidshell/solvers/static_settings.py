@@ -9,7 +9,7 @@ InputError line naming the key before any work starts.
 from __future__ import annotations
 
 import math
-from typing import Literal, Optional
+from typing import Literal, Optional, Union
 
 from pydantic import Field, field_validator, model_validator
 
@@ -51,7 +51,16 @@ class StaticSettings(SettingsModel):
     saddle_step: Finite = Field(0.05, gt=0.0, description="largest escape step, fraction of L_f")
     contact_stiffness: Optional[Finite] = Field(None, gt=0.0)
     factorization: Literal["cholmod", "superlu"] = "cholmod"
+    sequence: Union[Literal["auto"], int] = Field(
+        0, description="coarse meshes solved first (solvers/sequence.py): 'auto' or a count >= 0")
     U0: StateArray = None     # (N, 6) starting state [length] (e.g. a scene's [perturbation])
+
+    @field_validator("sequence", mode="before")
+    @classmethod
+    def _sequence(cls, v):
+        if v != "auto" and (isinstance(v, bool) or not isinstance(v, int) or v < 0):
+            raise ValueError("must be 'auto' or an integer >= 0")
+        return v
 
     @field_validator("load_factors")
     @classmethod
@@ -69,6 +78,7 @@ class StaticSettings(SettingsModel):
     def solver_kwargs(self) -> dict:
         """Keyword arguments of solve_static (load_steps turned into load_factors)."""
         d = self.as_dict()
+        d.pop("sequence")               # a run-level setting (solvers/sequence.py)
         steps = d.pop("load_steps")
         if steps is not None:
             d["load_factors"] = [(i + 1) / steps for i in range(steps)]

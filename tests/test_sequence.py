@@ -1,0 +1,102 @@
+"""Mesh sequencing of the static solver (solidshell/solvers/sequence.py), the static ``sequence``
+setting, serial kernels on small meshes and ``solidshell run --no-pictures``."""
+
+import numpy as np
+import pytest
+
+from solidshell.errors import InputError
+from solidshell.meshing import build_mesh
+from solidshell.scenes import load
+from solidshell.solvers import sequence
+
+
+def test_plan_halves_the_letter_fields_of_the_recipe_form():
+    sp = load("square-pedestal")          # form AxBx4: the 4 panels stay
+    assert sequence.plan(sp, "48x16x4", 3072, "auto") == ["12x4x4", "24x8x4"]
+    assert sequence.plan(sp, "48x16x4", 3072, 1) == ["24x8x4"]
+    assert sequence.plan(sp, "48x16x4", 3072, 0) == []
+    # below AUTO_MIN_ELEMENTS "auto" does nothing; an explicit count still stops at MIN_ELEMENTS
+    assert sequence.plan(sp, "24x8x4", 768, "auto") == []
+    assert sequence.plan(sp, "24x8x4", 768, 5) == ["12x4x4"]
+    # an odd field cannot be halved: no coarse level (large-square-pedestal 45x15x4, strip 20x1)
+    assert sequence.plan(load("large-square-pedestal"), "45x15x4", 2700, "auto") == []
+    assert sequence.plan(load("strip-warp"), "20x1", 20, 3) == []
+    assert sequence.plan(load("square-on-disc"), "30x240", 7200, "auto") == ["15x120"]
+
+
+def test_prolong_reproduces_linear_fields_exactly():
+    # the interpolation is linear on the coarse triangles, so a field linear in (X, Y) is carried
+    # over to every fine node exactly (round-off only: 1e-12 of its size), including the nodes on
+    # the edges and at the centres of the coarse quads
+    coarse = build_mesh("square_on_square", "6x2x4")
+    fine = build_mesh("square_on_square", "12x4x4")
+
+    def field(X):
+        x, y = X[:, 0], X[:, 1]
+        return np.column_stack([0.1 * x - 0.3 * y + 1.0, 0.2 * y, -0.05 * x, 0.01 * x * 0 + 0.3,
+                                0.02 * y, 0.5 - 0.01 * x])
+
+    U = sequence.prolong(coarse, field(coarse.nodes), fine)
+    assert np.abs(U - field(fine.nodes)).max() <= 1e-12 * np.abs(field(fine.nodes)).max()
+
+
+def test_static_settings_sequence_and_start_state_are_checked():
+    from solidshell.settings import parse
+    from solidshell.solvers.static_settings import StaticSettings
+
+    assert parse(StaticSettings, {}, "s").sequence == 0        # off unless a scene asks
+    assert load("square-pedestal").solver_settings("static")["sequence"] == "auto"
+    assert parse(StaticSettings, {"sequence": 2}, "s").sequence == 2
+    assert "sequence" not in parse(StaticSettings, {"sequence": 2}, "s").solver_kwargs()
+    for bad in (-1, "coarse", True, 1.5):
+        with pytest.raises(InputError, match="sequence"):
+            parse(StaticSettings, {"sequence": bad}, "s")
+    with pytest.raises(InputError, match="U0"):
+        parse(StaticSettings, {"U0": [[0.0, 1.0, float("nan"), 0.0, 0.0, 0.0]]}, "s")
+
+
+def test_sequenced_solve_reaches_the_direct_equilibrium(monkeypatch):
+    """square-pedestal 12x4x4 from its 6x2x4 coarse mesh (MIN_ELEMENTS lowered to allow 48
+    quads): the same stable equilibrium as the direct solve from the flat sheet."""
+    from solidshell.runner import run_scene
+
+    monkeypatch.setattr(sequence, "MIN_ELEMENTS", 40)
+    direct = run_scene("square-pedestal", mesh="12x4x4", solver="static", out_dir=None,
+                       progress=False, sequence=0)
+    seq = run_scene("square-pedestal", mesh="12x4x4", solver="static", out_dir=None,
+                    progress=False, sequence=1)
+    rec = seq.summary["sequence"]
+    assert [r["mesh"] for r in rec] == ["6x2x4", "12x4x4"] and rec[-1]["from_coarse"]
+    assert "sequence" not in direct.summary
+    assert seq.converged and direct.converged
+    assert seq.summary["positive_definite"] and direct.summary["positive_definite"]
+    # both end at the tolerance of the Newton iteration (relative residual 1e-8, Newton
+    # correction 1e-10 of |U|) on the same minimum; 1e-6 of max|U| separates "the same state"
+    # from a different fold pattern (those differ by ~10 % of max|U|)
+    du = np.abs(seq.U - direct.U).max() / np.abs(direct.U).max()
+    assert du <= 1e-6
+    assert seq.summary["fold_count"] == direct.summary["fold_count"]
+
+
+def test_small_meshes_run_the_kernels_on_one_thread():
+    import numba
+
+    from solidshell.solvers.blas import SERIAL_KERNEL_ELEMENTS, kernel_threads
+
+    before = numba.get_num_threads()
+    with kernel_threads(20):
+        assert numba.get_num_threads() == 1
+    assert numba.get_num_threads() == before
+    with kernel_threads(SERIAL_KERNEL_ELEMENTS):
+        assert numba.get_num_threads() == before
+
+
+def test_run_without_pictures_writes_no_png(tmp_path):
+    from solidshell.cli import main
+
+    out = tmp_path / "strip"
+    assert main(["run", "strip-warp", "--mesh", "10x1", "--out", str(out), "--no-progress",
+                 "--no-pictures"]) == 0
+    names = {p.name for p in out.iterdir()}
+    assert "summary.json" in names and "result.vtu" in names
+    assert not [n for n in names if n.endswith(".png")]

@@ -1,32 +1,6 @@
 """Patch tests (small deflection) on the distorted five-element patch of MacNeal & Harder (1985).
 
-Patch 0.24 x 0.12, outer corners 1-4 at (0,0), (0.24,0), (0.24,0.12), (0,0.12); interior nodes 5-8 at
-(0.04,0.02), (0.18,0.03), (0.16,0.08), (0.08,0.08); E = 1e6, nu = 0.25, h = 0.001 (MacNeal-Harder's
-data).  Meshes: the five quads; each quad split into two triangles ("tris"); the outer four quads
-split and the inner one kept ("mixed"); each of these also rotated rigidly into a general plane
-("...-rot", rotation about the axis (1,2,3) by 0.7 rad) to exercise the local frames.
-
-Prescribed fields (in the patch plane's coordinates x, y, z = normal; for "-rot" meshes every vector
-field is rotated with the patch):
-* membrane:   U_o = 1e-3 (x + y/2, y + x/2, 0),  U_n = 0
-              -> eps_xx = eps_yy = gamma_xy = 1e-3, no bending, no shear, no thickness strain;
-* bending:    w = 1e-3 (x^2 + x y + y^2)/2,  U_o = (0, 0, w),
-              U_n = -grad w = -1e-3 (x + y/2, y + x/2, 0)  (the rotated normal of the Kirchhoff field,
-              to first order) -> bending strains (dU_n,x/dx, dU_n,y/dy, dU_n,x/dy + dU_n,y/dx) =
-              -1e-3 (1, 1, 1), zero transverse shear (along every edge w_s + U_n.t = 0 pointwise, and the
-              tying values are exact for a quadratic w and linear U_n), no thickness strain.
-All six dofs of the four outer nodes are prescribed from the field; all six dofs of the four
-interior nodes are free and solved for with K(0) u = 0.  Checks:
-  (1) interior nodal U equals the field:   max|U - U_exact| / max|U_exact|;
-  (2) the field is in equilibrium at the interior nodes: max|(K u_exact)_interior| / max|K u_exact|;
-  (3) strain energy 1/2 u^T K u equals the constant-strain value 1/2 A e^T C e (C = C_m or C_b);
-  (4) flat meshes: the bending strain norm of every element (Model.bending_strain) equals
-      sqrt(3) 1e-3 (bending) or 0 (membrane).
-A passing element gives (1)-(4) to round-off; a failing one is off by O(1e-3..1), independent of h.
-The round-off floor of (2) grows like eps (L/h)^2 (the shear and membrane stiffnesses ~h cancel in
-K u_exact against a bending response ~h^3): ~1e-9 at L/h = 240; ``thickness_scan`` shows it.
-
-Run: ``python -m verification.patch`` -> table and verification/out/patch.json.
+The table printer over solidshell.verify.elements, where the computation and its description live.
 """
 
 from __future__ import annotations

@@ -1,38 +1,6 @@
 """Square plate under uniform pressure: solid-shell centre deflection vs the Kirchhoff series.
 
-Plate [0,a]^2, a = 1, nu = 0.3, thickness h = a/100 and a/1000, E chosen so that D = E h^3/(12(1-nu^2))
-= 1 and q = 1, so the Kirchhoff centre deflection is w_c = alpha (reference/plates.json:
-SS 0.00406235, clamped 0.00126532).  Full plate, N x N quads (N = 4, 8, 16, 32), the same quads split
-into two triangles along one diagonal ("/"), and along alternating diagonals ("x"); and distorted
-quads ("quad~": interior nodes moved randomly by up to a quarter element, fixed seed).
-
-Small deflection: one linear solve K(0) u = f.  Load: pressure q on the U_o,z dofs, lumped by the
-nodal areas (q A/4 per quad corner, q A/3 per triangle corner; for bilinear/linear interpolation of
-w on a flat uniform mesh this equals the consistent load).
-
-Boundary conditions (director-based shell, U_n ~ (-w_x, -w_y, 0) in the Kirchhoff limit):
-* clamped: U_o = 0 and U_n = 0 on the edge nodes;
-* simply supported, "hard" (primary): U_o = 0 and the tangential component of U_n = 0 (on x = const
-  edges U_n,y = 0, on y = const edges U_n,x = 0).  This is the Reissner-Mindlin hard support: the
-  rotation about the edge normal is zero, like the Kirchhoff plate along a straight supported edge
-  (w = 0 along the edge => dw/ds = 0), and it has no boundary layer, so it converges to Navier;
-* simply supported, "soft": U_o = 0 only, U_n free (the rotation about the normal is free).  For a
-  Reissner-Mindlin plate this has a boundary layer of width ~h and converges to Navier only as
-  h/a -> 0; reported for comparison (its differences from "hard" measure that layer, not an error).
-Membrane dofs are fixed in both SS cases; in a linear solve of a flat plate membrane and bending are
-uncoupled, so the in-plane constraint does not change w.
-
-The shear deformation of a Reissner-Mindlin plate adds to w_c, for the hard SS plate exactly
-Marcus' moment sum M_c/(kappa G h) (reference/plates.json "mindlin_ss_shear_coefficient"): a relative
-5.2 (h/a)^2, i.e. 5e-4 at a/h = 100 and 5e-6 at a/h = 1000 -- below the errors measured here; the
-comparison is with the Kirchhoff value.
-
-The triangle: ``triangle_vs_mitc3`` compares it with an independent MITC3 plate code written here
-(same shear interpolation, Eqs. 12-14 on a flat mesh); they agree to round-off, so the strong
-thin-plate locking of the triangle on these structured meshes (error growing with a/h at fixed N)
-is a property of the formulation (MITC3 is known not to be locking-free), not a coding error.
-
-Run: ``python -m verification.plates [--quick]`` -> table, verification/out/plates.json, plates.png.
+The table printer over solidshell.verify.plates, where the computation and its description live.
 """
 
 from __future__ import annotations

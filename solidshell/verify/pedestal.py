@@ -33,7 +33,9 @@ from . import references
 from .record import check, measure, observed_order, skipped, timed
 
 SCENE = "square-pedestal"
-CONVERGED = {"model.membrane": "ans", "geometry.grading": 8.0}
+# every mesh from the flat sheet (sequence 0): from the 12x4x4 state, mesh sequencing lands 48x16x4
+# in another stable state (DC 0.5307 with 19 interpenetrated nodes, against 0.5515 from flat)
+CONVERGED = {"model.membrane": "ans", "geometry.grading": 8.0, "solver.static.sequence": 0}
 SELF = "Richardson limit of 24x8x4, 48x16x4, 96x32x4 (our own meshes: self-convergence)"
 
 

@@ -1,6 +1,6 @@
 """VTK renderer through PyVista, off-screen: z-buffered, lit, anti-aliased pictures.
 
-PyVista is optional (``pip install 'solidshell[render]'``).  Whether VTK can render on this
+PyVista is a dependency, but VTK may still be unable to render (no GL library).  Whether VTK can render on this
 machine is asked once per process in a child process (:func:`available`): a VTK build that finds
 no OpenGL (no X server, no EGL or OSMesa library) can crash its process outright instead of
 raising, so the probe must not run in ours.  With no X display the EGL window is chosen (then
@@ -53,7 +53,7 @@ def available(timeout: float = 180.0) -> tuple[bool, str]:
     except (ImportError, ValueError):
         missing = True
     if missing:
-        _STATE.update(ok=False, why="PyVista is not installed (pip install 'solidshell[render]')")
+        _STATE.update(ok=False, why="PyVista is not installed (pip install pyvista)")
         return False, _STATE["why"]
     why = "VTK found no OpenGL to render with"
     for win in _windows():

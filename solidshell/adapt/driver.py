@@ -245,10 +245,9 @@ class AdaptiveRun:
     def _settle(self, problem, D, Dp):
         """The directors of both time levels put at equilibrium with their positions (settle.py): the
         director velocity becomes the quasi-static director's rate, which drops the director
-        oscillation the previous remeshes' out-of-balance forces left in the velocity.  (Shifting
-        D_n-1 with D_n instead, which keeps that velocity, went non-finite on the paper's path at
-        step 10300; settling both reached t = 3.3 s with no failure.)  D_n-1 starts from the settled
-        D_n's directors, one step away."""
+        oscillation the previous remeshes' out-of-balance forces left in the velocity (keeping that
+        velocity is not enough: docs/adaptivity.md).  D_n-1 starts from the settled D_n's
+        directors, one step away."""
         settler = DirectorSettler(problem.model, problem.loads, problem.fixed)
         D_s, rep = settler(D)
         Dp_s, rep_p = settler(Dp, start=D_s)

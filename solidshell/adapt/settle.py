@@ -6,18 +6,16 @@ transverse shear, the stiffest and lightest dofs of the sheet: they set the top 
 director that is kinematically sound but not in equilibrium with the new elements around it, and the
 old nodes' directors were in equilibrium with the old, larger elements.  Each remesh therefore starts a
 director oscillation at the top of the spectrum, which mass-proportional damping (Eq. 20) hardly
-touches (damping ratio alpha / (2 omega_max) ~ 1e-4).  On the paper's relaxation path (alpha 5 1/s,
-masses x100) the remeshes of one square-pedestal run raised the directors' step-to-step oscillation
-from 1e-8 to 3e-2 in eight remeshes; the Green thickness strain stiffens as (1 + v)^2 with the
-stretch v, so near v ~ 0.1 the top mode passes the stability limit and the run went non-finite
-(docs/adaptivity.md).  The uniform mesh's directors oscillate at 1e-7 throughout.
+touches (damping ratio alpha / (2 omega_max) ~ 1e-4).  The Green thickness strain stiffens with the
+director stretch, so a large enough oscillation passes the stability limit of Eq. (23): the cause of
+the paper-path blow-up measured in docs/adaptivity.md.
 
 What.  With the positions U_o held, the directors minimise the total potential Pi = U(D) - P.D; a
 few Newton steps on the director block K_nn of the tangent (Eq. 9), each backtracked until Pi falls,
 reach that minimum.  The driver settles both time levels D_n and D_n-1 of the central-difference
 state: the director velocity becomes the rate of the quasi-static director, so the fast director
-oscillation is removed and the slow rotation with the sheet is kept.  Positions and every translational dof are untouched, so DK's placement of the new nodes (§5.4)
-stands.
+oscillation is removed and the slow rotation with the sheet is kept.  Positions and every
+translational dof are untouched, so DK's placement of the new nodes (§5.4) stands.
 """
 
 from __future__ import annotations
@@ -54,10 +52,9 @@ class DirectorSettler:
     """Settles the directors of states on one problem (``model``, ``loads`` (N,6) [force], ``fixed``
     (N,6) bool) by Newton steps on the director block K_nn of the tangent, each backtracked until Pi
     falls, with Levenberg shifts where K_nn is not convex there (the Newton step is then not a descent
-    direction).  A modified Newton that kept K_nn from the first state needed more than 8 steps for
-    two digits on the square pedestal (the Green thickness strain makes the block strongly
-    nonlinear), so K_nn is refreshed every step; a second state (the other time level) may start
-    from the first one's settled directors, one step away."""
+    direction).  K_nn is refreshed every step: the Green thickness strain makes the block strongly
+    nonlinear.  A second state (the other time level) may start from the first one's settled
+    directors, one step away."""
 
     def __init__(self, model, loads, fixed):
         self.model = model

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..solvers.linear import Cholesky
+from ..solvers.linear import Cholesky, LowerCSC
 
 
 _SHIFTS = (0.0, 1e-3, 1e-1, 10.0)   # Levenberg shifts, in units of the mean diagonal of K_nn
@@ -62,15 +62,22 @@ class DirectorSettler:
         self.P = np.asarray(loads, dtype=float).ravel()
         self.idx = director_dofs(self.fixed)
         self._chol = Cholesky()          # CHOLMOD; one symbolic analysis for all steps (one pattern)
+        self._lower = None               # K_nn's lower-triangle pattern, built at the first step
         self._K = None
 
     def _step(self, U, r, shift):
         """K_nn^-1 r at U, or (K_nn + shift mean|diag K_nn| I)^-1 r; None where that matrix is not
-        positive definite (then Newton's step need not descend: the next shift is tried)."""
+        positive definite (then Newton's step need not descend: the next shift is tried).  K_nn is
+        assembled straight into its lower-triangle pattern, as the static solver assembles its
+        free-dof tangent (Model.force_and_free_tangent), not cut from a 6N x 6N matrix."""
         if shift == 0.0:
-            self._K = self.model.tangent(U).tocsc()[self.idx][:, self.idx].tocsc()
+            if self._lower is None:
+                self._lower = self.model.free_lower_pattern(self.idx)
+            lw = self._lower
+            _, data = self.model.force_and_free_tangent(U, lw)
+            self._K = LowerCSC(lw.indptr, lw.indices, data, lw.diag_pos, lw)
         K = self._K
-        s = shift * float(np.mean(np.abs(K.diagonal()))) if shift else None
+        s = shift * float(np.mean(np.abs(K.data[K.diag_pos]))) if shift else None
         if not self._chol.factor(K, s):
             return None
         x = self._chol.solve(r)

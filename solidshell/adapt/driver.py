@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import json
 import time
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from types import SimpleNamespace
 
@@ -35,6 +36,7 @@ from ..solvers.blas import single_threaded_blas
 from ..solvers.explicit import Integrator, checkpoint, parse_settings, threads_for
 
 _STATE_PREFIX = "adapt_"
+_PHASES = ("mark", "mesh", "problem", "transfer", "settle", "integrator")
 _REMESH_KEYS = ("t", "step", "splits", "merges", "nodes_in", "nodes_out", "active_nodes", "energy_jump",
                 "kinetic_before")
 
@@ -76,6 +78,7 @@ class AdaptiveRun:
         self.history = []          # (t, active nodes, elements) after every mesh change and at the start
         self.remeshes = []         # per remesh: t, splits, merges, nodes in/out, energy jump
         self.remesh_seconds = 0.0
+        self.phase_seconds = dict.fromkeys(_PHASES, 0.0)   # remeshing time by phase (the profile's rows)
         self.settle_failures = 0   # director settlings whose residual did not fall by three digits
         self.integ = None
         self.restart_path = restart
@@ -102,6 +105,8 @@ class AdaptiveRun:
                                                   for k, x in zip(_REMESH_KEYS, row))))
                          for row in extra[_STATE_PREFIX + "remeshes"]]
         self.remesh_seconds = float(extra[_STATE_PREFIX + "remesh_seconds"])
+        phases = np.asarray(extra.get(_STATE_PREFIX + "phase_seconds", np.zeros(len(_PHASES))), dtype=float)
+        self.phase_seconds = dict(zip(_PHASES, map(float, phases)))
         self.forest = AdaptiveMesh.from_state_arrays(self.bg, self.segments[-1].leaves)
         act = self.segments[-1].active
         self._check_same_adapt(extra, path)
@@ -140,6 +145,7 @@ class AdaptiveRun:
                _STATE_PREFIX + "remeshes": np.array([[r[k] for k in _REMESH_KEYS] for r in self.remeshes],
                                                     dtype=float).reshape(-1, len(_REMESH_KEYS)),
                _STATE_PREFIX + "remesh_seconds": np.asarray(self.remesh_seconds),
+               _STATE_PREFIX + "phase_seconds": np.array([self.phase_seconds[k] for k in _PHASES]),
                _STATE_PREFIX + "settings": np.asarray(json.dumps(self._adapt_key(), sort_keys=True))}
         for j, i in enumerate(keep):
             out.update({f"{_STATE_PREFIX}s{j}_{k}": v for k, v in self.segments[i].leaves.items()})
@@ -171,6 +177,14 @@ class AdaptiveRun:
         """The solver's thread rule (solvers.explicit.threads_for) for a mesh of this size."""
         return threads_for(SimpleNamespace(model=SimpleNamespace(mesh=mesh)), self.settings.threads)
 
+    @contextmanager
+    def _timed(self, phase: str):
+        t0 = time.perf_counter()
+        try:
+            yield
+        finally:
+            self.phase_seconds[phase] += time.perf_counter() - t0
+
     def _marks(self):
         st = self.integ.state
         U = st.D.reshape(-1, 6)
@@ -180,17 +194,19 @@ class AdaptiveRun:
 
     def _adapt_pass(self) -> None:
         """Steps d-f: mark, split/merge, and when the mesh changed continue on the new one."""
-        marks, leaves = self._marks()
+        with self._timed("mark"):
+            marks, leaves = self._marks()
         n_split = int(np.count_nonzero(marks.split))
         n_merge = len(marks.merge)
         if not n_split and not n_merge:
             return
-        before = self.forest.state_arrays()
-        if n_merge:
-            self.forest.merge(marks.merge)
-        if n_split:
-            self.forest.split(leaves[marks.split])
-        new = self.forest.active_mesh()
+        with self._timed("mesh"):
+            before = self.forest.state_arrays()
+            if n_merge:
+                self.forest.merge(marks.merge)
+            if n_split:
+                self.forest.split(leaves[marks.split])
+            new = self.forest.active_mesh()
         if np.array_equal(new.nodes, self.active.nodes) and _same_leaves(before, self.forest.state_arrays()):
             return
         self._switch(new, n_split, n_merge)
@@ -204,14 +220,19 @@ class AdaptiveRun:
         inserted = np.setdiff1d(new.nodes, old.nodes, assume_unique=True)
         known = np.zeros(Nb, dtype=bool)
         known[old.nodes] = True
-        problem = self.make_problem(new.mesh)
-        st.D, st.D_prev = self._transfer(st.D, st.D_prev, old, new, inserted, known)
+        with self._timed("problem"):
+            problem = self.make_problem(new.mesh)
+        with self._timed("transfer"):
+            st.D, st.D_prev = self._transfer(st.D, st.D_prev, old, new, inserted, known)
+            st.anchors = _remap_anchors(st.anchors, old.nodes, new.nodes, Nb)
         if self.adapt.settle_directors:
-            st.D, st.D_prev = self._settle(problem, st.D, st.D_prev)
-        st.anchors = _remap_anchors(st.anchors, old.nodes, new.nodes, Nb)
+            with self._timed("settle"):
+                st.D, st.D_prev = self._settle(problem, st.D, st.D_prev)
         jump0 = st.remesh_energy_jump
-        self.integ = self.cls.from_state(problem, st, self.settings, reestimate_step=self._needs_new_step(old, new),
-                                         progress=self.progress, relax=self.relax)
+        with self._timed("integrator"):
+            self.integ = self.cls.from_state(problem, st, self.settings,
+                                             reestimate_step=self._needs_new_step(old, new),
+                                             progress=self.progress, relax=self.relax)
         self.integ.restarted_from = integ.restarted_from
         self.integ.steps_done, self.integ.t_loop = integ.steps_done, integ.t_loop
         self.integ.wall0 = integ.wall0
@@ -296,6 +317,7 @@ class AdaptiveRun:
             "active_nodes_history": [[round(t, 6), n, m] for t, n, m in self.history],
             "remesh_count": len(self.remeshes),
             "remesh_time_s": float(self.remesh_seconds),
+            "remesh_phase_s": {k: round(v, 4) for k, v in self.phase_seconds.items()},
             "remesh_energy_jumps": [r["energy_jump"] for r in self.remeshes],
             "remeshes": self.remeshes,
             "max_level_reached": int(max(s.active.elem_leaf[:, 0].max() for s in self.segments)),

@@ -51,6 +51,26 @@ class _Block:
                 c["Cs"][sl], c["Cz"][sl], c["r_zq"][sl], quasi, mu)
 
 
+def _membrane_runs(membrane, n_quads: int) -> list:
+    """[(first, end, membrane)]: the quads' membrane choice as runs of equal values (one element
+    block each); InputError for an unknown value or a per-quad sequence of the wrong length."""
+    if isinstance(membrane, str):
+        per = np.full(n_quads, membrane, dtype=object)
+    else:
+        per = np.asarray(membrane, dtype=object).ravel()
+        if per.size != n_quads:
+            raise InputError(f"membrane per quadrilateral needs {n_quads} values, got {per.size}")
+    bad = sorted({str(m) for m in per} - set(quad4.MEMBRANES))
+    if bad or (isinstance(membrane, str) and membrane not in quad4.MEMBRANES):
+        raise InputError(f"membrane must be one of {quad4.MEMBRANES}, got {(bad or [membrane])[0]!r}")
+    if not n_quads:
+        return []
+    cut = np.flatnonzero(per[1:] != per[:-1]) + 1
+    starts = np.concatenate([[0], cut])
+    ends = np.concatenate([cut, [n_quads]])
+    return [(int(a), int(b), str(per[a])) for a, b in zip(starts, ends)]
+
+
 class Model:
     """Total-Lagrangian solid-shell model of a :class:`ShellMesh` with a section (Fabric or
     IsotropicShell).
@@ -61,25 +81,28 @@ class Model:
     mu : the threshold of Eq. (24), 0 < mu < 1 (only with thickness_strain="quasi")
     membrane : quadrilateral membrane strains, "full" (compatible, 2x2 Gauss: the paper's element)
         or "ans" (assumed strains from edge and centre tying values, free of membrane locking;
-        see solidshell/elements/quad4.py)
+        see solidshell/elements/quad4.py); or one of those per quadrilateral (a sequence of
+        ``mesh.quads``' length), e.g. the adaptive mesh's coarse elements "ans" and its finest
+        "full".  Each run of equal values becomes one element block, so the element order (quads in
+        mesh order, then triangles) is kept.
     """
 
     def __init__(self, mesh: ShellMesh, material, thickness_strain: str = "green", mu: float = 0.5,
                  membrane: str = "full"):
         if thickness_strain not in _THICKNESS_STRAINS:
             raise InputError(f"thickness_strain must be one of {_THICKNESS_STRAINS}, got {thickness_strain!r}")
-        if membrane not in quad4.MEMBRANES:
-            raise InputError(f"membrane must be one of {quad4.MEMBRANES}, got {membrane!r}")
+        runs = _membrane_runs(membrane, len(mesh.quads))
         if not (0.0 < float(mu) < 1.0):
             raise InputError(f"mu of Eq. (24) must lie in (0, 1), got {mu!r}")
         self.mesh = mesh
         self.material = material
         self.quasi = thickness_strain == "quasi"
         self.mu = float(mu)
-        self.membrane = membrane
+        self.membrane = membrane if isinstance(membrane, str) else tuple(membrane)
         Xo, Xn = mesh.nodes, mesh.directors
-        self.blocks = [_Block(mod, conn, Xo, Xn, material, membrane)
-                       for mod, conn in ((quad4, mesh.quads), (tri3, mesh.tris)) if len(conn)]
+        self.blocks = [_Block(quad4, mesh.quads[a:b], Xo, Xn, material, m) for a, b, m in runs]
+        if len(mesh.tris):
+            self.blocks.append(_Block(tri3, mesh.tris, Xo, Xn, material, "full"))
         self._pattern = None
         self._mass = None
 

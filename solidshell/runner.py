@@ -261,11 +261,12 @@ def check_initial_contact(scene: Scene, mesh, fixed, bodies=None, U0=None) -> No
                          f"they start apart or just touching{more}")
 
 
-def build_problem(scene: Scene, mesh, fixed=None):
+def build_problem(scene: Scene, mesh, fixed=None, membrane=None):
     """The solidshell.problem.Problem of a scene on a mesh: the Model (section, thickness-strain
     model), supports, loads (self-weight, point, line, surface) and contact bodies -- everything a
     solver needs.  Unknown or empty node sets raise InputError.  The adaptive driver calls this for
-    every new mesh."""
+    every new mesh.  ``membrane``: the quads' membrane strains (Model's argument: one choice or one
+    per quad) instead of the scene's ``model.membrane``."""
     from .model import Model
     from .problem import Problem
 
@@ -273,8 +274,10 @@ def build_problem(scene: Scene, mesh, fixed=None):
     if fixed is None:
         fixed = support_mask(sc, mesh)
     check_load_sets(sc, mesh)
+    if membrane is None:
+        membrane = sc.model.get("membrane", "full")
     model = Model(mesh, sc.material_object(), thickness_strain=sc.model["thickness_strain"],
-                  mu=sc.model["mu"], membrane=sc.model.get("membrane", "full"))
+                  mu=sc.model["mu"], membrane=membrane)
     return Problem(model, fixed, scene_loads(sc, model), contact=contact_bodies(sc), name=sc.name)
 
 
@@ -622,7 +625,13 @@ def _adaptive_run(sc: Scene, level0, settings: dict, adapt, kind: str, cb):
 
     s = dict(settings)
     restart = s.pop("restart", None)
-    run = AdaptiveRun(level0, lambda m: build_problem(sc, m), Integrator, parse_settings(s, kind == "relax"),
+    def make_problem(mesh, coarse_quads=None):
+        # coarse_quads: quads below the finest level, given "ans" membranes (adapt.coarse_membrane)
+        membrane = None if coarse_quads is None else \
+            np.where(coarse_quads, "ans", sc.model.get("membrane", "full")).tolist()
+        return build_problem(sc, mesh, membrane=membrane)
+
+    run = AdaptiveRun(level0, make_problem, Integrator, parse_settings(s, kind == "relax"),
                       adapt, relax=kind == "relax", curves=boundary_curves(sc), progress=_phase(cb, 0.08, 0.9),
                       restart=restart)
     return run

@@ -191,6 +191,29 @@ def test_restart_of_an_adaptive_run_is_bit_for_bit(tmp_path):
         _driver({"restart": str(ck), "alpha": 1.0}, **RESTART).run()
 
 
+def test_coarse_membrane_ans_gives_the_quads_below_the_finest_level_assumed_membrane_strains():
+    """adapt.coarse_membrane = "ans": after the splits (one level here, so the split corners are the
+    finest level), every quad below the finest level -- level-0 leaves and the transition patches
+    beside the split corners -- has the assumed membrane, every finest quad the scene's compatible
+    one: each element's energy is the one-formulation model's, element by element (1e-12 relative:
+    the same kernels on other block boundaries), and the two formulations do differ there."""
+    from solidshell.model import Model
+
+    run = _driver({}, t_end=0.0275, const=0.1, eps=0.05, levels=1, coarse_membrane="ans")
+    out = run.run()
+    assert run.remeshes and out.result.info["adapt_coarse_membrane"] == "ans"
+    act, model = run.active, run.integ.model
+    nq = len(act.mesh.quads)
+    coarse = act.elem_leaf[:nq, 0] < run.bg.levels
+    assert coarse.any() and (~coarse).any()
+    U = out.result.U.reshape(-1, 6)
+    e = model.element_energies(U)[:nq]
+    e_full, e_ans = (Model(act.mesh, model.material, membrane=m).element_energies(U)[:nq] for m in ("full", "ans"))
+    np.testing.assert_allclose(e[coarse], e_ans[coarse], rtol=1e-12)
+    np.testing.assert_allclose(e[~coarse], e_full[~coarse], rtol=1e-12)
+    assert np.max(np.abs(e_ans - e_full) / np.abs(e_full)) > 1e-6
+
+
 @pytest.mark.skipif(numba.config.NUMBA_NUM_THREADS < 2, reason="one numba thread: nothing to restrict")
 def test_remeshing_runs_on_one_thread_on_small_meshes():
     """The critical-step estimate of every new mesh runs on the solver's thread count (one thread on

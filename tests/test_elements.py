@@ -7,6 +7,7 @@ from scipy.spatial.transform import Rotation
 
 from solidshell import Fabric, IsotropicShell, ShellMesh
 from solidshell.boundary import gravity_loads, line_load, point_load, surface_load
+from solidshell.errors import InputError
 from solidshell.model import Model
 from solidshell.verify.elements import mixed_curved_mesh  # two quads + two triangles, doubly curved
 
@@ -224,3 +225,27 @@ def test_assumed_membrane_sees_no_stretch_where_the_edges_keep_their_lengths(sha
         assert full > 1e-6
         assert ans <= (1e-12 if shape != "distorted" else 0.1) * full
 
+
+
+def test_membrane_per_quadrilateral():
+    """A per-quad membrane choice (the adaptive mesh's coarse quads "ans", its finest "full") is
+    each element's own formulation: the mixed model's element energies are the single-choice
+    models' element by element (1e-13 relative: the same kernels on other block boundaries) in
+    the mesh's element order; one choice for every quad is the plain model bit for bit."""
+    mesh = mixed_curved_mesh()
+    rng = np.random.default_rng(3)
+    U = 0.05 * rng.standard_normal((mesh.n_nodes, 6))
+    full, ans = Model(mesh, WOOL30, membrane="full"), Model(mesh, WOOL30, membrane="ans")
+    choice = ["ans", "full"][: len(mesh.quads)]
+    mixed = Model(mesh, WOOL30, membrane=choice)
+    assert [len(b.conn) for b in mixed.blocks] == [1, 1, len(mesh.tris)]
+    nq = len(mesh.quads)
+    want = np.concatenate([ans.element_energies(U)[:1], full.element_energies(U)[1:nq],
+                           full.element_energies(U)[nq:]])
+    np.testing.assert_allclose(mixed.element_energies(U), want, rtol=1e-13)
+    same = Model(mesh, WOOL30, membrane=["full"] * nq)
+    assert np.array_equal(same.internal_force(U), full.internal_force(U))   # one block: bitwise
+    with pytest.raises(InputError, match="needs 2 values"):
+        Model(mesh, WOOL30, membrane=["ans"])
+    with pytest.raises(InputError, match="'sri'"):
+        Model(mesh, WOOL30, membrane=["ans", "sri"])

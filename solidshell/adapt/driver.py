@@ -6,7 +6,8 @@
     f. a new problem on the new mesh (masses, loads, critical step)  g. back to c.
 
 The driver knows the solver only through the integrator's small interface (``advance``,
-``state``, ``from_state``, ``energies``) and the scene only through ``make_problem(mesh)``; the
+``state``, ``from_state``, ``energies``) and the scene only through ``make_problem(mesh)`` (with
+``coarse_quads=`` a per-quad mask when ``adapt.coarse_membrane = "ans"``); the
 solvers never import this package.  A new node's position comes from the DK condition (§5.4) and its
 velocity (the step increment D_n - D_n-1) from linear / serendipity interpolation; friction anchors
 follow the background nodes (a new node starts with no stick anchor).  The energy the transfer adds or removes is booked by the integrator
@@ -84,9 +85,17 @@ class AdaptiveRun:
         self.restart_path = restart
 
     # ------------------------------------------------------------------ start / restart
+    def _problem(self, act: ActiveMesh):
+        """The scene's problem on an active mesh; with ``coarse_membrane = "ans"`` the quads below
+        the finest level (transition patches included) get the assumed membrane strains."""
+        if self.adapt.coarse_membrane == "scene":
+            return self.make_problem(act.mesh)
+        nq = len(act.mesh.quads)
+        return self.make_problem(act.mesh, coarse_quads=act.elem_leaf[:nq, 0] < self.bg.levels)
+
     def start(self) -> None:
         act = self.forest.active_mesh()
-        integ = self.cls(self.make_problem(act.mesh), self.settings, self.progress, relax=self.relax)
+        integ = self.cls(self._problem(act), self.settings, self.progress, relax=self.relax)
         self._enter(integ, act)
 
     def restart(self, path) -> None:
@@ -110,7 +119,7 @@ class AdaptiveRun:
         self.forest = AdaptiveMesh.from_state_arrays(self.bg, self.segments[-1].leaves)
         act = self.segments[-1].active
         self._check_same_adapt(extra, path)
-        integ = self.cls.resume(self.make_problem(act.mesh), state, self.settings, source=path,
+        integ = self.cls.resume(self._problem(act), state, self.settings, source=path,
                                 progress=self.progress, relax=self.relax)
         self._enter(integ, act, new_segment=False)
 
@@ -221,7 +230,7 @@ class AdaptiveRun:
         known = np.zeros(Nb, dtype=bool)
         known[old.nodes] = True
         with self._timed("problem"):
-            problem = self.make_problem(new.mesh)
+            problem = self._problem(new)
         with self._timed("transfer"):
             st.D, st.D_prev = self._transfer(st.D, st.D_prev, old, new, inserted, known)
             st.anchors = _remap_anchors(st.anchors, old.nodes, new.nodes, Nb)
@@ -311,6 +320,7 @@ class AdaptiveRun:
             "adapt_eps": float(self.adapt.eps), "adapt_every": int(self.adapt.every),
             "adapt_transfer": self.adapt.transfer,
             "adapt_settle_directors": bool(self.adapt.settle_directors),
+            "adapt_coarse_membrane": self.adapt.coarse_membrane,
             "settle_failures": int(self.settle_failures),
             "level0_elements": int(self.bg.n_elements(0)), "background_nodes": int(len(self.bg.Xo)),
             "max_active_nodes": int(max(counts)), "final_active_nodes": int(counts[-1]),
@@ -353,6 +363,8 @@ def _remap_anchors(anchors, old_nodes, new_nodes, Nb):
 def run_adaptive(level0, make_problem, settings, adapt: AdaptSettings, *, relax: bool, curves=None,
                  progress=no_progress, restart=None) -> AdaptiveOutput:
     """Run an adaptive explicit (``relax=False``) or relaxation (``relax=True``) drape from the
-    level-0 mesh ``level0``; ``make_problem(mesh) -> Problem`` poses the scene on any active mesh."""
+    level-0 mesh ``level0``; ``make_problem(mesh) -> Problem`` poses the scene on any active mesh
+    (and accepts ``coarse_quads=`` (n_quads,) bool, the quads to give "ans" membranes, when
+    ``adapt.coarse_membrane = "ans"``)."""
     return AdaptiveRun(level0, make_problem, Integrator, parse_settings(settings, relax), adapt, relax=relax,
                        curves=curves, progress=progress, restart=restart).run()

@@ -30,6 +30,9 @@ class AdaptSettings(SettingsModel):
     project_boundary : place new nodes on a curved boundary (a circular sheet or rim) on the true curve
     settle_directors : after each transfer, put the director dofs of both time levels at equilibrium
                 with the positions (settle.py); False keeps the bare DK directors of Eq. (32)
+    coarse_membrane : "scene" (every quad has the scene's ``model.membrane``) or "ans" (quads below
+                the finest level, transition patches included, take the assumed membrane strains,
+                free of the membrane locking that stiffens large elements; docs/adaptivity.md)
 
     The background mesh itself refuses a level count whose memory estimate exceeds half of the
     available memory (``background.estimate_background_bytes``), with the estimate.
@@ -43,6 +46,7 @@ class AdaptSettings(SettingsModel):
     transfer: Literal["dk", "linear"] = "dk"
     project_boundary: bool = True
     settle_directors: bool = True
+    coarse_membrane: Literal["scene", "ans"] = "scene"
 
     @model_validator(mode="after")
     def _hysteresis(self):

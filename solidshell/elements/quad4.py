@@ -186,8 +186,14 @@ def _assumed_membrane(Xo, Cm_gp, Jw):
         E = mean.copy()
         E[:, 0, 12:17] += (eg - eta_c)[:, None] * b45[:, 0]
         E[:, 1, 12:17] += (xg - xi_c)[:, None] * b45[:, 1]
-        S[:, g] = np.einsum("mab,mbt->mat", W[:, g], E)
-    return np.einsum("mgat,mgab,mgbu->mtu", S, Cm_gp, S)
+        S[:, g] = W[:, g] @ E
+    return _sum_gauss_quadratic(S, Cm_gp)
+
+
+def _sum_gauss_quadratic(S, C):
+    """sum_g S_g^T C_g S_g per element: S (M,G,a,t), C (M,G,a,a) or broadcastable -> (M,t,t), by
+    batched matrix products (a multi-operand einsum loops over every index at once: 10x slower)."""
+    return (np.swapaxes(S, -1, -2) @ (C @ S)).sum(1)
 
 
 def precompute(Xo, Xn, C_m, C_b, C_t, E_z, warp_angle, membrane="full"):
@@ -211,8 +217,8 @@ def precompute(Xo, Xn, C_m, C_b, C_t, E_z, warp_angle, membrane="full"):
     Jw = J * GAUSS_W
     Cmb = np.stack([fold(T, C_m, Jw), fold(T, C_b, Jw)], axis=2)
     QS = np.einsum("mgab,gbt->mgat", Q, S_GP)                  # local shear from tying values
-    Cs = np.einsum("mgat,ab,mgbu,mg->mtu", QS, C_t, QS, Jw)
-    Cz = E_z * np.einsum("gi,gj,mg->mij", N_GP, N_GP, Jw)
+    Cs = _sum_gauss_quadratic(QS, C_t * Jw[:, :, None, None])
+    Cz = E_z * (Jw @ (N_GP[:, :, None] * N_GP[:, None, :]).reshape(len(N_GP), -1)).reshape(-1, 4, 4)
     r_mb, r_s, r_z = raw_strains(Xo, Xn)
     alpha, beta, tie = ALPHA, BETA, TIE
     if membrane == "ans":

@@ -64,6 +64,7 @@ class DirectorSettler:
         self._chol = Cholesky()          # CHOLMOD; one symbolic analysis for all steps (one pattern)
         self._lower = None               # K_nn's lower-triangle pattern, built at the first step
         self._K = None
+        self._factored = False           # the last factorisation succeeded (chord steps may reuse it)
 
     def _step(self, U, r, shift):
         """K_nn^-1 r at U, or (K_nn + shift mean|diag K_nn| I)^-1 r; None where that matrix is not
@@ -78,28 +79,38 @@ class DirectorSettler:
             self._K = LowerCSC(lw.indptr, lw.indices, data, lw.diag_pos, lw)
         K = self._K
         s = shift * float(np.mean(np.abs(K.data[K.diag_pos]))) if shift else None
-        if not self._chol.factor(K, s):
+        self._factored = self._chol.factor(K, s)
+        if not self._factored:
             return None
         x = self._chol.solve(r)
         return x if np.all(np.isfinite(x)) else None
 
-    def _descend(self, U, flat, r, pi):
-        """One backtracked step; (Pi, force) after it, or None (flat restored) if none lowers Pi."""
-        idx, P = self.idx, self.P
-        base = flat[idx].copy()
+    def _descend(self, U, flat, r, pi, chord=False):
+        """One backtracked step; (Pi, force) after it, or None (flat restored) if none lowers Pi.
+        ``chord``: only the last factor's step (no new tangent), for a state next to the last one."""
+        base = flat[self.idx].copy()
+        if chord:
+            step = self._chol.solve(r) if self._factored else None
+            return self._backtrack(U, flat, base, step, r, pi)
         for shift in _SHIFTS:
-            step = self._step(U, r, shift)
-            if step is None or not float(r @ step) > 0.0:
-                continue
-            s = 1.0
-            for _ in range(8):          # backtrack on Pi: a full step may overshoot
-                flat[idx] = base + s * step
-                E_t, F_t = self.model.energy_and_force(U)
-                pi_t = float(E_t) - float(P @ flat)
-                if np.isfinite(pi_t) and pi_t < pi:
-                    return pi_t, F_t
-                s *= 0.5
-            flat[idx] = base
+            got = self._backtrack(U, flat, base, self._step(U, r, shift), r, pi)
+            if got is not None:
+                return got
+        return None
+
+    def _backtrack(self, U, flat, base, step, r, pi):
+        """(Pi, force) at the first of base + step, base + step/2, ... that lowers Pi, or None."""
+        if step is None or not np.all(np.isfinite(step)) or not float(r @ step) > 0.0:
+            return None
+        idx, P, s = self.idx, self.P, 1.0
+        for _ in range(8):          # a full step may overshoot
+            flat[idx] = base + s * step
+            E_t, F_t = self.model.energy_and_force(U)
+            pi_t = float(E_t) - float(P @ flat)
+            if np.isfinite(pi_t) and pi_t < pi:
+                return pi_t, F_t
+            s *= 0.5
+        flat[idx] = base
         return None
 
     def __call__(self, D, *, start=None, max_iter: int = 8, rtol: float = 1e-3):
@@ -107,7 +118,9 @@ class DirectorSettler:
         not modified; ``start``: a state whose free directors to start from (taken only if they give
         the lower Pi).  Stops when the director residual is below ``rtol`` times that of D (three digits:
         the rest is then far below the translational out-of-balance force the transfer leaves), after
-        ``max_iter`` steps, or when no step lowers Pi."""
+        ``max_iter`` steps, or when no step lowers Pi.  With ``start``, the steps first reuse the
+        last factor of K_nn (chord steps: the other time level's positions are one step away, so
+        its K_nn is nearly the same) and assemble a new tangent only when a chord step fails."""
         idx, P = self.idx, self.P
         U = np.array(D, dtype=float).reshape(self.fixed.shape)
         flat = U.ravel()
@@ -125,8 +138,12 @@ class DirectorSettler:
             else:
                 flat[idx] = base
         rn, it = float(np.linalg.norm(r)), 0
+        chord = start is not None
         while it < max_iter and rn > rtol * r0 and r0 > 0.0:
-            got = self._descend(U, flat, r, pi)
+            got = self._descend(U, flat, r, pi, chord)
+            if got is None and chord:
+                chord = False
+                continue
             if got is None:
                 break
             pi, F = got

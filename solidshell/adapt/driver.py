@@ -236,7 +236,7 @@ class AdaptiveRun:
             st.anchors = _remap_anchors(st.anchors, old.nodes, new.nodes, Nb)
         if self.adapt.settle_directors:
             with self._timed("settle"):
-                st.D, st.D_prev = self._settle(problem, st.D, st.D_prev)
+                st.D, st.D_prev = self._settle(problem, st.D, st.D_prev, new, inserted)
         jump0 = st.remesh_energy_jump
         with self._timed("integrator"):
             self.integ = self.cls.from_state(problem, st, self.settings,
@@ -272,13 +272,14 @@ class AdaptiveRun:
         step = fill(D - Dp, "linear", "serendipity")
         return D_new, D_new - step
 
-    def _settle(self, problem, D, Dp):
+    def _settle(self, problem, D, Dp, new: ActiveMesh, inserted):
         """The directors of both time levels put at equilibrium with their positions (settle.py): the
         director velocity becomes the quasi-static director's rate, which drops the director
         oscillation the previous remeshes' out-of-balance forces left in the velocity (keeping that
         velocity is not enough: docs/adaptivity.md).  D_n-1 starts from the settled D_n's
         directors, one step away."""
-        settler = DirectorSettler(problem.model, problem.loads, problem.fixed)
+        nodes = np.searchsorted(new.nodes, inserted) if self.adapt.settle_new_nodes else None
+        settler = DirectorSettler(problem.model, problem.loads, problem.fixed, nodes)
         D_s, rep = settler(D)
         Dp_s, rep_p = settler(Dp, start=D_s)
         self.settle_failures += (not rep.converged) + (not rep_p.converged)
@@ -320,6 +321,7 @@ class AdaptiveRun:
             "adapt_eps": float(self.adapt.eps), "adapt_every": int(self.adapt.every),
             "adapt_transfer": self.adapt.transfer,
             "adapt_settle_directors": bool(self.adapt.settle_directors),
+            "adapt_settle_new_nodes": bool(self.adapt.settle_new_nodes),
             "adapt_coarse_membrane": self.adapt.coarse_membrane,
             "settle_failures": int(self.settle_failures),
             "level0_elements": int(self.bg.n_elements(0)), "background_nodes": int(len(self.bg.Xo)),

@@ -30,6 +30,9 @@ class AdaptSettings(SettingsModel):
     project_boundary : place new nodes on a curved boundary (a circular sheet or rim) on the true curve
     settle_directors : after each transfer, put the director dofs of both time levels at equilibrium
                 with the positions (settle.py); False keeps the bare DK directors of Eq. (32)
+    settle_new_nodes : settle the positions of the inserted nodes with the directors (from the DK
+                placement, their neighbours held): the membrane stretch a DK mid-edge node on the cubic
+                leaves, and the out-of-balance force and oscillation that follow, go (docs/adaptivity.md)
     coarse_membrane : "scene" (every quad has the scene's ``model.membrane``) or "ans" (quads below
                 the finest level, transition patches included, take the assumed membrane strains,
                 free of the membrane locking that stiffens large elements; docs/adaptivity.md)
@@ -46,6 +49,7 @@ class AdaptSettings(SettingsModel):
     transfer: Literal["dk", "linear"] = "dk"
     project_boundary: bool = True
     settle_directors: bool = True
+    settle_new_nodes: bool = False
     coarse_membrane: Literal["scene", "ans"] = "scene"
 
     @model_validator(mode="after")

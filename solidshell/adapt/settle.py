@@ -41,26 +41,29 @@ class SettleReport:
     converged: bool
 
 
-def director_dofs(fixed: np.ndarray) -> np.ndarray:
-    """Flat indices of the free director dofs U_n (columns 3-5 of the (N, 6) dof table)."""
+def director_dofs(fixed: np.ndarray, nodes=None) -> np.ndarray:
+    """Flat indices of the free director dofs U_n (columns 3-5 of the (N, 6) dof table), and of
+    every free dof of ``nodes`` (the nodes a remesh inserted, when their positions settle too)."""
     sel = np.zeros(fixed.shape, dtype=bool)
     sel[:, 3:] = True
+    if nodes is not None:
+        sel[np.asarray(nodes, dtype=np.int64)] = True
     return np.flatnonzero((sel & ~fixed).ravel())
 
 
 class DirectorSettler:
     """Settles the directors of states on one problem (``model``, ``loads`` (N,6) [force], ``fixed``
-    (N,6) bool) by Newton steps on the director block K_nn of the tangent, each backtracked until Pi
+    (N,6) bool), and the positions of ``nodes`` too when given (the inserted nodes), by Newton steps on the director block K_nn of the tangent, each backtracked until Pi
     falls, with Levenberg shifts where K_nn is not convex there (the Newton step is then not a descent
     direction).  K_nn is refreshed every step: the Green thickness strain makes the block strongly
     nonlinear.  A second state (the other time level) may start from the first one's settled
     directors, one step away."""
 
-    def __init__(self, model, loads, fixed):
+    def __init__(self, model, loads, fixed, nodes=None):
         self.model = model
         self.fixed = np.asarray(fixed, dtype=bool)
         self.P = np.asarray(loads, dtype=float).ravel()
-        self.idx = director_dofs(self.fixed)
+        self.idx = director_dofs(self.fixed, nodes)
         self._chol = Cholesky()          # CHOLMOD; one symbolic analysis for all steps (one pattern)
         self._lower = None               # K_nn's lower-triangle pattern, built at the first step
         self._K = None

@@ -34,7 +34,12 @@ RELAX = {"solver.relax.damping": "kinetic", "solver.relax.mass_scaling": 1e4,
          "solver.relax.mass_scaling_mode": "director"}
 KEYS = ("converged", "drape_coefficient", "fold_count", "max_interpenetrated_nodes", "interpenetrated_nodes",
         "steps", "t_final", "energy_balance_error", "max_active_nodes", "final_active_nodes", "remesh_count",
-        "remesh_time_s", "remesh_share", "remesh_energy_jump", "max_level_reached", "message")
+        "remesh_time_s", "remesh_share", "remesh_phase_s", "remesh_energy_jump", "max_level_reached", "message")
+
+
+def threads() -> int:
+    import numba
+    return numba.config.NUMBA_NUM_THREADS
 
 
 def load() -> str:
@@ -109,7 +114,8 @@ def main(argv=None):
         jpath.write_text(json.dumps(results, indent=1, default=str))
         (out / f"{args.tag}.md").write_text(
             f"# Paper §6: adaptive against uniform meshes\n\n`python benchmarks/adaptive_vs_uniform.py "
-            f"{' '.join('--set ' + s for s in args.set)}` (2 CPUs, shared; 1/5/15-min load averages per case).\n\n"
+            f"{' '.join('--set ' + s for s in args.set)}` (2 CPUs, shared, {threads()} numba thread(s); 1/5/15-min "
+            f"load averages per case).\n\n"
             + table(results))
 
 

@@ -277,7 +277,8 @@ class AdaptiveRun:
         director velocity becomes the quasi-static director's rate, which drops the director
         oscillation the previous remeshes' out-of-balance forces left in the velocity (keeping that
         velocity is not enough: docs/adaptivity.md).  D_n-1 starts from the settled D_n's
-        directors, one step away."""
+        directors, one step away.  With ``adapt.settle_new_nodes`` the inserted nodes' positions
+        settle too (from their DK placement, the old nodes held)."""
         nodes = np.searchsorted(new.nodes, inserted) if self.adapt.settle_new_nodes else None
         settler = DirectorSettler(problem.model, problem.loads, problem.fixed, nodes)
         D_s, rep = settler(D)

@@ -23,7 +23,9 @@ class AdaptSettings(SettingsModel):
     levels    : n, the number of 1-to-4 splittings of the level-0 mesh (§5.1; 3 in the paper)
     const     : the dimensionless threshold of Eq. (25), split where ||eps_b|| L_i > const
     eps       : the hysteresis of Eq. (26), merge where every sibling has ||eps_b|| L_(i-1) <= const - eps
-    every     : integration steps between two adaptive passes (§5.5 c)
+    every     : integration steps between two adaptive passes (§5.5 c); a remesh costs about as much
+                as a few hundred steps, so 200 made remeshing 24-30 % of the paper-path run and 1000
+                makes it 5-10 % (docs/adaptivity.md)
     transfer  : new mid-edge nodes by the discrete-Kirchhoff condition (Eqs. 27-34, "dk") or by linear
                 interpolation ("linear", for comparison); centre nodes always by the 8-node serendipity
                 functions
@@ -32,7 +34,10 @@ class AdaptSettings(SettingsModel):
                 with the positions (settle.py); False keeps the bare DK directors of Eq. (32)
     settle_new_nodes : settle the positions of the inserted nodes with the directors (from the DK
                 placement, their neighbours held): the membrane stretch a DK mid-edge node on the cubic
-                leaves, and the out-of-balance force and oscillation that follow, go (docs/adaptivity.md)
+                leaves, and the out-of-balance force and oscillation that follow, go
+                (docs/adaptivity.md).  Unset: on in relaxation runs (a path to a static state), off in
+                explicit dynamics, where a falling sheet is not in static equilibrium and the new
+                nodes' inertia is part of the motion
     coarse_membrane : "scene" (every quad has the scene's ``model.membrane``) or "ans" (quads below
                 the finest level, transition patches included, take the assumed membrane strains,
                 free of the membrane locking that stiffens large elements; docs/adaptivity.md)
@@ -45,11 +50,11 @@ class AdaptSettings(SettingsModel):
     levels: int = Field(3, ge=1, le=MAX_LEVELS)
     const: Finite = Field(DEFAULT_CONST, gt=0.0)
     eps: Finite = Field(DEFAULT_EPS, gt=0.0)
-    every: int = Field(200, ge=1)
+    every: int = Field(1000, ge=1)
     transfer: Literal["dk", "linear"] = "dk"
     project_boundary: bool = True
     settle_directors: bool = True
-    settle_new_nodes: bool = False
+    settle_new_nodes: bool | None = None
     coarse_membrane: Literal["scene", "ans"] = "scene"
 
     @model_validator(mode="after")

@@ -31,6 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from .jobs import DolfinxMissing, check_dolfinx, make_job
+from .state import from_fenicsx_state, max_translation_change, to_fenicsx_state
 from .jobs import run_model as _run_model
 
 _REUSE = {"on": False}
@@ -212,7 +213,66 @@ def boundary_distance(poly_a, poly_b, center=(0.0, 0.0)):
     return float(np.max(np.abs(ra - rb)))
 
 
-def pedestal_problem(work, meshes, log, ranks=1, restart=True):
+def _restart_fenicsx(job, ss_mesh, U_ss, U_fx, work, ranks, dens, log):
+    """DOLFINx started at full load from solidshell's state U_ss; a table row with where it went
+    (DC, folds, stability) and how far: from its start (the solidshell state) and from DOLFINx's
+    own state U_fx reached from the flat sheet [cm]."""
+    from solidshell.analysis import drape_summary
+
+    rjob = dict(job, name=f"{job['name']}-from-solidshell", initial_state=to_fenicsx_state(ss_mesh, U_ss))
+    rr = run_model(rjob, work, ranks=ranks, timeout=5400)
+    row = dict(problem="square-pedestal", code="fenicsx from solidshell state", mesh=dens)
+    if not (rr.get("converged") and "U" in rr):
+        log(f"square-pedestal fenicsx {dens} restart from solidshell: FAILED {rr.get('status')}")
+        return dict(row, converged=False, note=rr.get("status"))
+    Ur = np.asarray(rr["U"])
+    ds_r = drape_summary(ss_mesh, Ur, pedestal_area=100.0)
+    row.update(drape_coefficient=ds_r["drape_coefficient"], fold_count=ds_r["fold_count"], converged=True,
+               stable=rr.get("stable"), negative_eigenvalues=rr.get("negative_eigenvalues"),
+               iterations=rr["newton_iterations"], steps=rr["steps"], wall_time_s=rr["wall_time_s"],
+               n_dofs=rr["n_dofs"], moved_from_start_cm=max_translation_change(Ur, U_ss),
+               distance_to_own_state_cm=max_translation_change(Ur, U_fx))
+    log(f"square-pedestal fenicsx {dens} restarted from the solidshell state: DC {row['drape_coefficient']:.4f} "
+        f"folds {row['fold_count']} stable {row['stable']} steps {rr['steps']} its {rr['newton_iterations']} "
+        f"{rr['wall_time_s']:.1f}s; moved {row['moved_from_start_cm']:.4f} cm, ends "
+        f"{row['distance_to_own_state_cm']:.2e} cm from DOLFINx's own state")
+    return row
+
+
+def _restart_solidshell(dens, out, res, log):
+    """solidshell started at full load from the DOLFINx result ``res`` (state.from_fenicsx_state);
+    a table row as _restart_fenicsx's, distances measured to the DOLFINx state and to solidshell's
+    own state ``out.U`` [cm]."""
+    from solidshell.analysis import drape_summary
+    from solidshell.runner import run_scene
+
+    U0 = from_fenicsx_state(out.mesh, res["U"], res["director"])
+    t0 = time.perf_counter()
+    # predictor off: the start is already at the full load (as the mesh sequencing's prolonged starts)
+    r = run_scene("square-pedestal", mesh=dens, solver="static", progress=False, U0=U0, predictor=False)
+    wall = time.perf_counter() - t0
+    s = r.summary
+    row = dict(problem="square-pedestal", code="solidshell from fenicsx state", mesh=dens,
+               converged=s.get("converged"), stable=s.get("positive_definite"), iterations=s.get("iterations"),
+               wall_time_s=s.get("wall_time_s", wall))
+    if not s.get("converged"):
+        log(f"square-pedestal solidshell {dens} restart from DOLFINx: FAILED {s.get('message')}")
+        return dict(row, note=s.get("message"))
+    ds = drape_summary(r.mesh, r.U, pedestal_area=100.0)
+    row.update(drape_coefficient=ds["drape_coefficient"], fold_count=ds["fold_count"],
+               moved_from_start_cm=max_translation_change(r.U, U0),
+               distance_to_own_state_cm=max_translation_change(r.U, out.U))
+    log(f"square-pedestal solidshell {dens} restarted from the DOLFINx state: DC {row['drape_coefficient']:.4f} "
+        f"folds {row['fold_count']} pos.def. {row['stable']} its {row['iterations']} {row['wall_time_s']:.1f}s; "
+        f"moved {row['moved_from_start_cm']:.4f} cm, ends {row['distance_to_own_state_cm']:.2e} cm from "
+        f"solidshell's own state")
+    return row
+
+
+def pedestal_problem(work, meshes, log, ranks=1, restart=True, restart_both=()):
+    """Both codes on the square-pedestal meshes.  ``restart``: start DOLFINx from solidshell's
+    state where the two reached different states (fold count or stability); ``restart_both``: the
+    meshes on which each code is started from the other's state whatever they reached."""
     from solidshell.analysis import drape_summary
     from solidshell.material import Fabric
     from solidshell.meshing import build_mesh
@@ -235,6 +295,9 @@ def pedestal_problem(work, meshes, log, ranks=1, restart=True):
         log(f"square-pedestal solidshell {dens}: DC {ds_ss['drape_coefficient']:.4f} folds {ds_ss['fold_count']} "
             f"pos.def. {s.get('positive_definite')} its {s.get('iterations')} {t_ss:.1f}s")
         mesh = build_mesh("square_on_square", dens, sheet=20.0, pedestal=10.0)
+        if not np.array_equal(np.asarray(mesh.nodes), np.asarray(out.mesh.nodes)):
+            # states are exchanged node by node: both codes must number the same mesh alike
+            raise RuntimeError(f"square-pedestal {dens}: the scene's mesh and the job's mesh differ")
         # a hanging plate bends in two directions at once (Gaussian curvature stretches it): the
         # load path from the flat sheet needs smaller first increments than the strip
         job = make_job(f"square-pedestal-{dens}", mesh, Fabric.wool(), steps=PEDESTAL_STEPS,
@@ -261,25 +324,13 @@ def pedestal_problem(work, meshes, log, ranks=1, restart=True):
             f"stable {res.get('stable')} steps {res['steps']} its {res['newton_iterations']} "
             f"{res['wall_time_s']:.1f}s; boundary distance {dist:.3f} cm; nodes inside pedestal {inside}")
         same = ds_fx["fold_count"] == ds_ss["fold_count"] and bool(res.get("stable")) == bool(s.get("positive_definite"))
-        if restart and not same:
+        if dens in restart_both or (restart and not same):
             # is solidshell's state an equilibrium of the DOLFINx model?  Start DOLFINx from it at
             # the full load and see where Newton goes
-            D = np.asarray(out.mesh.directors) + np.asarray(out.U)[:, 3:6]
-            rjob = dict(job, name=f"square-pedestal-{dens}-from-solidshell",
-                        initial_state={"U": np.asarray(out.U)[:, :3].tolist(), "director": D.tolist(),
-                                       "lambda": 1.0})
-            rr = run_model(rjob, work, ranks=ranks, timeout=5400)
-            if rr.get("converged") and "U" in rr:
-                ds_r = drape_summary(mesh, np.asarray(rr["U"]), pedestal_area=ped_area)
-                table.append(dict(problem="square-pedestal", code="fenicsx from solidshell state", mesh=dens,
-                                  drape_coefficient=ds_r["drape_coefficient"], fold_count=ds_r["fold_count"],
-                                  converged=True, stable=rr.get("stable"), iterations=rr["newton_iterations"],
-                                  steps=rr["steps"], wall_time_s=rr["wall_time_s"], n_dofs=rr["n_dofs"]))
-                log(f"square-pedestal fenicsx {dens} restarted from the solidshell state: DC "
-                    f"{ds_r['drape_coefficient']:.4f} folds {ds_r['fold_count']} stable {rr.get('stable')} "
-                    f"its {rr['newton_iterations']}")
-            else:
-                log(f"square-pedestal fenicsx {dens} restart from solidshell: FAILED {rr.get('status')}")
+            table.append(_restart_fenicsx(job, out.mesh, out.U, U, work, ranks, dens, log))
+        if dens in restart_both:
+            # and the other way: solidshell started from the DOLFINx state
+            table.append(_restart_solidshell(dens, out, res, log))
         recs.append(record(f"square-pedestal {dens} DC", "solidshell", "fenicsx", "drape coefficient",
                            ds_fx["drape_coefficient"], ds_ss["drape_coefficient"], DC_TOL, res["wall_time_s"],
                            same_state=same, fold_count=ds_fx["fold_count"], fold_count_reference=ds_ss["fold_count"],
@@ -426,6 +477,9 @@ def write_report(out_dir: Path, records, table, meta):
             res = f"DC {t['drape_coefficient']:.4f}, {t['fold_count']} folds"
             if "boundary_distance_cm" in t:
                 res += f", boundary distance {t['boundary_distance_cm']:.3f} cm"
+            if "moved_from_start_cm" in t:
+                res += (f"; moved max\\|ΔU\\| {t['moved_from_start_cm']:.3f} cm from the other code's state, "
+                        f"ends {t['distance_to_own_state_cm']:.2e} cm from its own")
             if "ranks" in t:
                 res += f", {t['ranks']} rank(s)"
         elif "tip_z" in t:
@@ -458,8 +512,9 @@ def _log(msg):
 
 
 def main(out_dir, problems=("strip", "shear", "pedestal", "mpi"), quick=False, log=_log, reuse=False,
-         pedestal_meshes=("12x4x4", "24x8x4", "48x16x4")):
-    """Run the cross-check; returns the comparison records (raises DolfinxMissing without DOLFINx)."""
+         pedestal_meshes=("12x4x4", "24x8x4", "48x16x4"), restart_both=()):
+    """Run the cross-check; returns the comparison records (raises DolfinxMissing without DOLFINx).
+    ``restart_both``: pedestal meshes on which each code is also started from the other's state."""
     out = Path(out_dir)
     version = check_dolfinx()
     _REUSE["on"] = bool(reuse)
@@ -476,7 +531,8 @@ def main(out_dir, problems=("strip", "shear", "pedestal", "mpi"), quick=False, l
         records += r
         table += t
     if "pedestal" in problems:
-        r, t = pedestal_problem(work, ["12x4x4"] if quick else list(pedestal_meshes), log)
+        r, t = pedestal_problem(work, ["12x4x4"] if quick else list(pedestal_meshes), log,
+                                restart_both=tuple(restart_both))
         records += r
         table += t
     if "mpi" in problems:
@@ -498,9 +554,14 @@ def cli(argv=None):
                     help="square-pedestal meshes (the 48x16x4 DOLFINx drape takes hours on 2 busy cores)")
     ap.add_argument("--reuse", action="store_true",
                     help="reuse converged DOLFINx results of identical jobs in OUT/fenicsx_work")
+    ap.add_argument("--restart-both", nargs="*", default=None, metavar="MESH",
+                    help="start each code from the other's pedestal state (DC, folds, stability reached and "
+                         "max |dU|) on these meshes (no mesh given: every pedestal mesh)")
     a = ap.parse_args(argv)
+    rb = () if a.restart_both is None else (a.restart_both or a.pedestal_meshes)
     try:
-        recs = main(a.out, tuple(a.problems), a.quick, reuse=a.reuse, pedestal_meshes=a.pedestal_meshes)
+        recs = main(a.out, tuple(a.problems), a.quick, reuse=a.reuse, pedestal_meshes=a.pedestal_meshes,
+                    restart_both=rb)
     except DolfinxMissing as exc:
         print(str(exc), file=sys.stderr)
         return 3

@@ -53,6 +53,8 @@ PEDESTAL_STEPS = {"initial": 0.02, "max": 0.2}
 # proximal continuation of the DOLFINx drape (model.py, solve()): the shift c starts at 2.6 x the
 # weight per area per cm and halves after every easy step; the end state is solved with c = 0
 PEDESTAL_PROX = {"c0": 0.05, "relax": 0.5, "c_min_ratio": 1e-5}
+# the pedestal mesh series of both codes; the DOLFINx DC's Richardson limit uses the last three
+PEDESTAL_MESHES = ("12x4x4", "24x8x4", "36x12x4", "48x16x4")
 
 
 def _elastica():
@@ -291,6 +293,12 @@ def pedestal_problem(work, meshes, log, ranks=1, restart=True, restart_both=()):
                       converged=s.get("converged"), stable=s.get("positive_definite"),
                       iterations=s.get("iterations"),
                       wall_time_s=s.get("wall_time_s", s.get("solver_wall_time_s", t_ss)))
+        if s.get("sequence"):
+            # mesh sequencing (square-pedestal.toml, sequence = "auto"): "iterations" are the fine
+            # mesh's own; the coarse levels' come on top
+            row_ss["sequence"] = [dict(mesh=q["mesh"], iterations=q["iterations"], wall_time_s=q["wall_time_s"])
+                                  for q in s["sequence"]]
+            row_ss["iterations_all_levels"] = int(sum(q["iterations"] or 0 for q in s["sequence"]))
         table.append(row_ss)
         log(f"square-pedestal solidshell {dens}: DC {ds_ss['drape_coefficient']:.4f} folds {ds_ss['fold_count']} "
             f"pos.def. {s.get('positive_definite')} its {s.get('iterations')} {t_ss:.1f}s")
@@ -482,6 +490,9 @@ def write_report(out_dir: Path, records, table, meta):
                         f"ends {t['distance_to_own_state_cm']:.2e} cm from its own")
             if "ranks" in t:
                 res += f", {t['ranks']} rank(s)"
+            if "sequence" in t:
+                res += "; sequenced " + " -> ".join(f"{q['mesh']} ({q['iterations']} its, {q['wall_time_s']:.0f} s)"
+                                                    for q in t["sequence"])
         elif "tip_z" in t:
             res = f"tip ({t['tip_x']:.5f}, {t['tip_z']:.5f})"
             if "tip_error_vs_elastica" in t:
@@ -512,7 +523,7 @@ def _log(msg):
 
 
 def main(out_dir, problems=("strip", "shear", "pedestal", "mpi"), quick=False, log=_log, reuse=False,
-         pedestal_meshes=("12x4x4", "24x8x4", "48x16x4"), restart_both=()):
+         pedestal_meshes=PEDESTAL_MESHES, restart_both=()):
     """Run the cross-check; returns the comparison records (raises DolfinxMissing without DOLFINx).
     ``restart_both``: pedestal meshes on which each code is also started from the other's state."""
     out = Path(out_dir)
@@ -550,8 +561,8 @@ def cli(argv=None):
     ap.add_argument("--problems", nargs="+", default=["strip", "shear", "pedestal", "mpi"],
                     choices=["strip", "shear", "pedestal", "mpi"])
     ap.add_argument("--quick", action="store_true", help="coarser meshes only (about a tenth of the time)")
-    ap.add_argument("--pedestal-meshes", nargs="+", default=["12x4x4", "24x8x4", "48x16x4"],
-                    help="square-pedestal meshes (the 48x16x4 DOLFINx drape takes hours on 2 busy cores)")
+    ap.add_argument("--pedestal-meshes", nargs="+", default=list(PEDESTAL_MESHES),
+                    help="square-pedestal meshes (default %(default)s; docs/fenicsx.md has the DOLFINx run times)")
     ap.add_argument("--reuse", action="store_true",
                     help="reuse converged DOLFINx results of identical jobs in OUT/fenicsx_work")
     ap.add_argument("--restart-both", nargs="*", default=None, metavar="MESH",

@@ -434,8 +434,16 @@ def solve(job):
                 c = 4.0 * c if c > 0.0 else 4.0 * c_min
             if lam < 1.0 - 1e-14:
                 dlam *= 0.5
-            if dlam < dmin or (prox and c > 1e6 * c0):
-                status = f"step to lambda={target:.6g} failed (reason {reason}) below the minimum increment"
+                if dlam < dmin:
+                    status = f"step to lambda={target:.6g} failed (reason {reason}) below the minimum increment"
+                    break
+            elif not prox:
+                # at the full load (a restart from a given state) only the proximal shift can shorten
+                # the step: without it a retry would repeat the failure
+                status = f"the solve at lambda=1 failed (reason {reason}) and there is no proximal shift to raise"
+                break
+            if prox and c > 1e6 * c0:
+                status = f"step to lambda={target:.6g} failed (reason {reason}) with the proximal shift at its maximum"
                 break
     wall = time.perf_counter() - t0
     x_prev.copy(shell.w.vector)

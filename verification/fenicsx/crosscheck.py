@@ -47,6 +47,9 @@ REF = ROOT / "reference" / "elastica_strip.json"
 
 STRIP_TOL = 2e-3      # issue 14: strip tip within 0.2 % of each other and of the elastica
 DC_TOL = 1e-2         # issue 14: pedestal DC within 1 % where both codes reach the same state
+# a restarted code is back in its own state when within 1e-6 cm of it: three orders above solidshell's
+# stopping test (disp_tol 1e-10 x max|D| ~ 1e-9 cm), six below the 1-2 cm between the codes' states
+RESTART_TOL_CM = 1e-6
 MPI_TOL = 1e-8        # 1 vs 2 ranks: the same equations solved to rtol 1e-9 -> agreement to round-off
 SHEAR_TOL = 2e-3      # end shear vs the elliptic-integral closed form, as for the strip
 PEDESTAL_STEPS = {"initial": 0.02, "max": 0.2}
@@ -245,6 +248,18 @@ def _restart_fenicsx(job, ss_mesh, U_ss, U_fx, work, ranks, dens, log):
     return row
 
 
+def _restart_record(row, code):
+    """The comparison of a restart: how far from its own code's state it ended [cm]."""
+    if "distance_to_own_state_cm" not in row:
+        return []
+    other = "solidshell" if code == "fenicsx" else "fenicsx"
+    return [record(f"square-pedestal {row['mesh']}: {code} started from {other}'s state returns to its own state",
+                   f"{code} from the flat sheet", f"{code} from {other}'s state",
+                   "max nodal distance from its own state [cm]", row["distance_to_own_state_cm"], 0.0, RESTART_TOL_CM,
+                   row["wall_time_s"], relative=False, moved_from_start_cm=row["moved_from_start_cm"],
+                   fold_count=row["fold_count"], stable=row["stable"])]
+
+
 def _restart_solidshell(dens, out, res, log):
     """solidshell started at full load from the DOLFINx result ``res`` (state.from_fenicsx_state);
     a table row as _restart_fenicsx's, distances measured to the DOLFINx state and to solidshell's
@@ -340,9 +355,11 @@ def pedestal_problem(work, meshes, log, ranks=1, restart=True, restart_both=()):
             # is solidshell's state an equilibrium of the DOLFINx model?  Start DOLFINx from it at
             # the full load and see where Newton goes
             table.append(_restart_fenicsx(job, out.mesh, out.U, U, work, ranks, dens, log))
+            recs += _restart_record(table[-1], "fenicsx")
         if dens in restart_both:
             # and the other way: solidshell started from the DOLFINx state
             table.append(_restart_solidshell(dens, out, res, log))
+            recs += _restart_record(table[-1], "solidshell")
         recs.append(record(f"square-pedestal {dens} DC", "solidshell", "fenicsx", "drape coefficient",
                            ds_fx["drape_coefficient"], ds_ss["drape_coefficient"], DC_TOL, res["wall_time_s"],
                            same_state=same, fold_count=ds_fx["fold_count"], fold_count_reference=ds_ss["fold_count"],

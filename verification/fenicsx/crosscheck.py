@@ -169,7 +169,8 @@ def strip_problem(work, meshes_fx, meshes_ss, log):
 def shear_problem(work, meshes_fx, meshes_ss, log, alpha=4):
     from solidshell.material import IsotropicShell
     from solidshell.meshing import build_mesh
-    from verification.static_cantilevers import L, end_shear
+    from solidshell.verify.cantilevers import L
+    from solidshell.verify.cantilevers import large_end_shear as end_shear
 
     ela = _elastica()
     u_ref, w_ref, _ = ela.MATTIASSON_1981[alpha]

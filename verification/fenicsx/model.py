@@ -367,8 +367,17 @@ def _say(msg):
         print(f"fenicsx model: {msg}", flush=True)
 
 
+def _loadavg():
+    try:
+        with open("/proc/loadavg") as fh:
+            return float(fh.read().split()[0])
+    except (OSError, ValueError, IndexError):
+        return float("nan")
+
+
 def solve(job):
     t_start = time.perf_counter()
+    load_start = _loadavg()      # wall times mean little without the machine's load (shared cores)
     shell = Shell(job)
     t_setup = time.perf_counter() - t_start
     _say(f"{job.get('name', '?')}: {shell.n_dofs} dofs, forms compiled in {t_setup:.1f} s")
@@ -453,7 +462,7 @@ def solve(job):
                   failed_steps=n_fail, newton_iterations=n_newton, linear_solves=n_lin,
                   wall_time_s=wall, setup_time_s=t_setup, n_dofs=int(shell.n_dofs),
                   n_cells=int(shell.msh.topology.index_map(2).size_global), ranks=COMM.size,
-                  history=history, energy=shell.energy(),
+                  history=history, energy=shell.energy(), load_average=[load_start, _loadavg()],
                   dolfinx_version=dolfinx.__version__)
     if job.get("stability", True):
         t1 = time.perf_counter()

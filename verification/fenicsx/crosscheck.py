@@ -8,11 +8,14 @@ compares the two and the references:
 * strip 5x1 cm, warp and weft cut, self-weight: tip position vs the heavy elastica
   (reference/elastica_strip.json) and vs each other, on a mesh series of both codes;
 * isotropic end-shear cantilever (L/h = 100, P L^2/EI = 4): tip deflection vs Mattiasson (1981);
-* square-pedestal 24x8x4 and 48x16x4, static: drape coefficient, fold count, the distance between
-  the two projected boundaries, whether each state is stable (tangent inertia / positive definite);
-* 2 MPI ranks vs 1 rank (DOLFINx) on the strip.
+* square-pedestal 12x4x4 ... 48x16x4, static: drape coefficient, fold count, the distance between
+  the two projected boundaries, whether each state is stable (tangent inertia / positive definite),
+  the Richardson limit of the DOLFINx DC against solidshell's stored convergence study, and on
+  24x8x4 each code restarted from the other's state (state.py maps the states);
+* 2 MPI ranks vs 1 rank (DOLFINx) on the strip and the 12x4x4 drape.
 
     python -m verification.fenicsx.crosscheck --out DIR [--quick] [--problems strip shear pedestal mpi]
+        [--pedestal-meshes MESH ...] [--restart-both [MESH ...]] [--reuse]
 
 ``main(out_dir)`` returns the records (name, reference, source, quantity, value, reference_value,
 error, tolerance, passed, wall_time_s) and writes ``DIR/fenicsx_crosscheck.json`` and ``.md``.

@@ -18,13 +18,15 @@ def add_parser(sub) -> None:
                    help="regenerate every stored reference file and check that it has not changed")
     v.add_argument("--fenicsx", action="store_true",
                    help="run the DOLFINx cross-check (verification/fenicsx; needs dolfinx)")
+    v.add_argument("--reuse", action="store_true",
+                   help="with --fenicsx: reuse the converged DOLFINx results of identical jobs in OUT/fenicsx_work")
 
 
 def _say(msg: str) -> None:
     print(" ".join(str(msg).split()), file=sys.stderr)
 
 
-def _fenicsx(out_dir) -> int:
+def _fenicsx(out_dir, reuse: bool = False) -> int:
     """verification.fenicsx.crosscheck.main(out_dir) -> list of record dicts (solidshell.verify
     record format); printed like the other checks and written to <out>/fenicsx.json."""
     import dataclasses
@@ -51,8 +53,7 @@ def _fenicsx(out_dir) -> int:
         return EXIT_INPUT
     out = prepare_out(out_dir)
     try:
-        # 36x12x4 ends the pedestal series: DOLFINx on 48x16x4 is ~1.5 h here (docs/fenicsx.md)
-        rows = mod.main(out, pedestal_meshes=("12x4x4", "24x8x4", "36x12x4"))
+        rows = mod.main(out, reuse=reuse)
     except jobs.DolfinxMissing as e:
         _say(f"solidshell: error: {e}")
         return EXIT_INPUT
@@ -96,6 +97,6 @@ def run(args) -> int:
         rows = check_references(quick=args.quick)
         return EXIT_FAILED if any(r["passed"] is False for r in rows) else EXIT_OK
     if args.fenicsx:
-        return _fenicsx(out_dir)
+        return _fenicsx(out_dir, reuse=args.reuse)
     res = verify(args.names or None, quick=args.quick, out_dir=out_dir)
     return EXIT_FAILED if res["failed"] else EXIT_OK

@@ -8,11 +8,14 @@ compares the two and the references:
 * strip 5x1 cm, warp and weft cut, self-weight: tip position vs the heavy elastica
   (reference/elastica_strip.json) and vs each other, on a mesh series of both codes;
 * isotropic end-shear cantilever (L/h = 100, P L^2/EI = 4): tip deflection vs Mattiasson (1981);
-* square-pedestal 24x8x4 and 48x16x4, static: drape coefficient, fold count, the distance between
-  the two projected boundaries, whether each state is stable (tangent inertia / positive definite);
-* 2 MPI ranks vs 1 rank (DOLFINx) on the strip.
+* square-pedestal 12x4x4 ... 48x16x4, static: drape coefficient, fold count, the distance between
+  the two projected boundaries, whether each state is stable (tangent inertia / positive definite),
+  the Richardson limit of the DOLFINx DC against solidshell's stored convergence study, and on
+  24x8x4 each code restarted from the other's state (state.py maps the states);
+* 2 MPI ranks vs 1 rank (DOLFINx) on the strip and the 12x4x4 drape.
 
     python -m verification.fenicsx.crosscheck --out DIR [--quick] [--problems strip shear pedestal mpi]
+        [--pedestal-meshes MESH ...] [--restart-both [MESH ...]] [--reuse]
 
 ``main(out_dir)`` returns the records (name, reference, source, quantity, value, reference_value,
 error, tolerance, passed, wall_time_s) and writes ``DIR/fenicsx_crosscheck.json`` and ``.md``.
@@ -31,6 +34,7 @@ from pathlib import Path
 import numpy as np
 
 from .jobs import DolfinxMissing, check_dolfinx, make_job
+from .state import from_fenicsx_state, max_translation_change, to_fenicsx_state
 from .jobs import run_model as _run_model
 
 _REUSE = {"on": False}
@@ -46,12 +50,21 @@ REF = ROOT / "reference" / "elastica_strip.json"
 
 STRIP_TOL = 2e-3      # issue 14: strip tip within 0.2 % of each other and of the elastica
 DC_TOL = 1e-2         # issue 14: pedestal DC within 1 % where both codes reach the same state
+# a restarted code is back in its own state when within 1e-6 cm of it: three orders above solidshell's
+# stopping test (disp_tol 1e-10 x max|D| ~ 1e-9 cm), six below the 1-2 cm between the codes' states
+RESTART_TOL_CM = 1e-6
 MPI_TOL = 1e-8        # 1 vs 2 ranks: the same equations solved to rtol 1e-9 -> agreement to round-off
 SHEAR_TOL = 2e-3      # end shear vs the elliptic-integral closed form, as for the strip
 PEDESTAL_STEPS = {"initial": 0.02, "max": 0.2}
 # proximal continuation of the DOLFINx drape (model.py, solve()): the shift c starts at 2.6 x the
 # weight per area per cm and halves after every easy step; the end state is solved with c = 0
 PEDESTAL_PROX = {"c0": 0.05, "relax": 0.5, "c_min_ratio": 1e-5}
+# the pedestal mesh series of both codes; the DOLFINx DC's Richardson limit uses the last three
+PEDESTAL_MESHES = ("12x4x4", "24x8x4", "36x12x4", "48x16x4")
+# meshes on which each code is also started from the other's state (issue 14: the paper's 24x8x4,
+# where the two codes' DCs differ most on a mesh of the paper's); a restart of DOLFINx on 48x16x4
+# would cost as much as its drape
+RESTART_MESHES = ("24x8x4",)
 
 
 def _elastica():
@@ -159,7 +172,8 @@ def strip_problem(work, meshes_fx, meshes_ss, log):
 def shear_problem(work, meshes_fx, meshes_ss, log, alpha=4):
     from solidshell.material import IsotropicShell
     from solidshell.meshing import build_mesh
-    from verification.static_cantilevers import L, end_shear
+    from solidshell.verify.cantilevers import L
+    from solidshell.verify.cantilevers import large_end_shear as end_shear
 
     ela = _elastica()
     u_ref, w_ref, _ = ela.MATTIASSON_1981[alpha]
@@ -212,7 +226,87 @@ def boundary_distance(poly_a, poly_b, center=(0.0, 0.0)):
     return float(np.max(np.abs(ra - rb)))
 
 
-def pedestal_problem(work, meshes, log, ranks=1, restart=True):
+def _restart_fenicsx(job, ss_mesh, U_ss, U_fx, work, ranks, dens, log):
+    """DOLFINx started at full load from solidshell's state U_ss; a table row with where it went
+    (DC, folds, stability) and how far: from its start (the solidshell state) and from DOLFINx's
+    own state U_fx reached from the flat sheet [cm]."""
+    from solidshell.analysis import drape_summary
+
+    rjob = dict(job, name=f"{job['name']}-from-solidshell", initial_state=to_fenicsx_state(ss_mesh, U_ss))
+    rr = run_model(rjob, work, ranks=ranks, timeout=5400)
+    row = dict(problem="square-pedestal", code="fenicsx from solidshell state", mesh=dens)
+    if not (rr.get("converged") and "U" in rr):
+        log(f"square-pedestal fenicsx {dens} restart from solidshell: FAILED {rr.get('status')}")
+        return dict(row, converged=False, note=rr.get("status"))
+    Ur = np.asarray(rr["U"])
+    ds_r = drape_summary(ss_mesh, Ur, pedestal_area=100.0)
+    row.update(drape_coefficient=ds_r["drape_coefficient"], fold_count=ds_r["fold_count"], converged=True,
+               stable=rr.get("stable"), negative_eigenvalues=rr.get("negative_eigenvalues"),
+               iterations=rr["newton_iterations"], steps=rr["steps"], wall_time_s=rr["wall_time_s"],
+               n_dofs=rr["n_dofs"], moved_from_start_cm=max_translation_change(Ur, U_ss),
+               distance_to_own_state_cm=max_translation_change(Ur, U_fx), **_provenance(rr))
+    log(f"square-pedestal fenicsx {dens} restarted from the solidshell state: DC {row['drape_coefficient']:.4f} "
+        f"folds {row['fold_count']} stable {row['stable']} steps {rr['steps']} its {rr['newton_iterations']} "
+        f"{rr['wall_time_s']:.1f}s; moved {row['moved_from_start_cm']:.4f} cm, ends "
+        f"{row['distance_to_own_state_cm']:.2e} cm from DOLFINx's own state")
+    return row
+
+
+def _provenance(res):
+    """Whether a DOLFINx result was reused (--reuse) and the load average of its solve, for the report:
+    a reused result's wall time is that of the run that computed it."""
+    out = {"reused": bool(res.get("reused", False))}
+    if res.get("load_average") is not None:
+        out["load_average"] = res["load_average"]
+    return out
+
+
+def _restart_record(row, code):
+    """The comparison of a restart: how far from its own code's state it ended [cm]."""
+    if "distance_to_own_state_cm" not in row:
+        return []
+    other = "solidshell" if code == "fenicsx" else "fenicsx"
+    return [record(f"square-pedestal {row['mesh']}: {code} started from {other}'s state returns to its own state",
+                   f"{code} from the flat sheet", f"{code} from {other}'s state",
+                   "max nodal distance from its own state [cm]", row["distance_to_own_state_cm"], 0.0, RESTART_TOL_CM,
+                   row["wall_time_s"], relative=False, moved_from_start_cm=row["moved_from_start_cm"],
+                   fold_count=row["fold_count"], stable=row["stable"])]
+
+
+def _restart_solidshell(dens, out, res, log):
+    """solidshell started at full load from the DOLFINx result ``res`` (state.from_fenicsx_state);
+    a table row as _restart_fenicsx's, distances measured to the DOLFINx state and to solidshell's
+    own state ``out.U`` [cm]."""
+    from solidshell.analysis import drape_summary
+    from solidshell.runner import run_scene
+
+    U0 = from_fenicsx_state(out.mesh, res["U"], res["director"])
+    t0 = time.perf_counter()
+    # predictor off: the start is already at the full load (as the mesh sequencing's prolonged starts)
+    r = run_scene("square-pedestal", mesh=dens, solver="static", progress=False, U0=U0, predictor=False)
+    wall = time.perf_counter() - t0
+    s = r.summary
+    row = dict(problem="square-pedestal", code="solidshell from fenicsx state", mesh=dens,
+               converged=s.get("converged"), stable=s.get("positive_definite"), iterations=s.get("iterations"),
+               wall_time_s=s.get("wall_time_s", wall))
+    if not s.get("converged"):
+        log(f"square-pedestal solidshell {dens} restart from DOLFINx: FAILED {s.get('message')}")
+        return dict(row, note=s.get("message"))
+    ds = drape_summary(r.mesh, r.U, pedestal_area=100.0)
+    row.update(drape_coefficient=ds["drape_coefficient"], fold_count=ds["fold_count"],
+               moved_from_start_cm=max_translation_change(r.U, U0),
+               distance_to_own_state_cm=max_translation_change(r.U, out.U))
+    log(f"square-pedestal solidshell {dens} restarted from the DOLFINx state: DC {row['drape_coefficient']:.4f} "
+        f"folds {row['fold_count']} pos.def. {row['stable']} its {row['iterations']} {row['wall_time_s']:.1f}s; "
+        f"moved {row['moved_from_start_cm']:.4f} cm, ends {row['distance_to_own_state_cm']:.2e} cm from "
+        f"solidshell's own state")
+    return row
+
+
+def pedestal_problem(work, meshes, log, ranks=1, restart=True, restart_both=()):
+    """Both codes on the square-pedestal meshes.  ``restart``: start DOLFINx from solidshell's
+    state where the two reached different states (fold count or stability); ``restart_both``: the
+    meshes on which each code is started from the other's state whatever they reached."""
     from solidshell.analysis import drape_summary
     from solidshell.material import Fabric
     from solidshell.meshing import build_mesh
@@ -231,10 +325,19 @@ def pedestal_problem(work, meshes, log, ranks=1, restart=True):
                       converged=s.get("converged"), stable=s.get("positive_definite"),
                       iterations=s.get("iterations"),
                       wall_time_s=s.get("wall_time_s", s.get("solver_wall_time_s", t_ss)))
+        if s.get("sequence"):
+            # mesh sequencing (square-pedestal.toml, sequence = "auto"): "iterations" are the fine
+            # mesh's own; the coarse levels' come on top
+            row_ss["sequence"] = [dict(mesh=q["mesh"], iterations=q["iterations"], wall_time_s=q["wall_time_s"])
+                                  for q in s["sequence"]]
+            row_ss["iterations_all_levels"] = int(sum(q["iterations"] or 0 for q in s["sequence"]))
         table.append(row_ss)
         log(f"square-pedestal solidshell {dens}: DC {ds_ss['drape_coefficient']:.4f} folds {ds_ss['fold_count']} "
             f"pos.def. {s.get('positive_definite')} its {s.get('iterations')} {t_ss:.1f}s")
         mesh = build_mesh("square_on_square", dens, sheet=20.0, pedestal=10.0)
+        if not np.array_equal(np.asarray(mesh.nodes), np.asarray(out.mesh.nodes)):
+            # states are exchanged node by node: both codes must number the same mesh alike
+            raise RuntimeError(f"square-pedestal {dens}: the scene's mesh and the job's mesh differ")
         # a hanging plate bends in two directions at once (Gaussian curvature stretches it): the
         # load path from the flat sheet needs smaller first increments than the strip
         job = make_job(f"square-pedestal-{dens}", mesh, Fabric.wool(), steps=PEDESTAL_STEPS,
@@ -255,31 +358,21 @@ def pedestal_problem(work, meshes, log, ranks=1, restart=True):
                    converged=res["converged"], stable=res.get("stable"),
                    negative_eigenvalues=res.get("negative_eigenvalues"), iterations=res["newton_iterations"],
                    steps=res["steps"], wall_time_s=res["wall_time_s"], n_dofs=res["n_dofs"],
-                   nodes_inside_pedestal=inside, boundary_distance_cm=dist)
+                   nodes_inside_pedestal=inside, boundary_distance_cm=dist, **_provenance(res))
         table.append(row)
         log(f"square-pedestal fenicsx {dens}: DC {ds_fx['drape_coefficient']:.4f} folds {ds_fx['fold_count']} "
             f"stable {res.get('stable')} steps {res['steps']} its {res['newton_iterations']} "
             f"{res['wall_time_s']:.1f}s; boundary distance {dist:.3f} cm; nodes inside pedestal {inside}")
         same = ds_fx["fold_count"] == ds_ss["fold_count"] and bool(res.get("stable")) == bool(s.get("positive_definite"))
-        if restart and not same:
+        if dens in restart_both or (restart and not same):
             # is solidshell's state an equilibrium of the DOLFINx model?  Start DOLFINx from it at
             # the full load and see where Newton goes
-            D = np.asarray(out.mesh.directors) + np.asarray(out.U)[:, 3:6]
-            rjob = dict(job, name=f"square-pedestal-{dens}-from-solidshell",
-                        initial_state={"U": np.asarray(out.U)[:, :3].tolist(), "director": D.tolist(),
-                                       "lambda": 1.0})
-            rr = run_model(rjob, work, ranks=ranks, timeout=5400)
-            if rr.get("converged") and "U" in rr:
-                ds_r = drape_summary(mesh, np.asarray(rr["U"]), pedestal_area=ped_area)
-                table.append(dict(problem="square-pedestal", code="fenicsx from solidshell state", mesh=dens,
-                                  drape_coefficient=ds_r["drape_coefficient"], fold_count=ds_r["fold_count"],
-                                  converged=True, stable=rr.get("stable"), iterations=rr["newton_iterations"],
-                                  steps=rr["steps"], wall_time_s=rr["wall_time_s"], n_dofs=rr["n_dofs"]))
-                log(f"square-pedestal fenicsx {dens} restarted from the solidshell state: DC "
-                    f"{ds_r['drape_coefficient']:.4f} folds {ds_r['fold_count']} stable {rr.get('stable')} "
-                    f"its {rr['newton_iterations']}")
-            else:
-                log(f"square-pedestal fenicsx {dens} restart from solidshell: FAILED {rr.get('status')}")
+            table.append(_restart_fenicsx(job, out.mesh, out.U, U, work, ranks, dens, log))
+            recs += _restart_record(table[-1], "fenicsx")
+        if dens in restart_both:
+            # and the other way: solidshell started from the DOLFINx state
+            table.append(_restart_solidshell(dens, out, res, log))
+            recs += _restart_record(table[-1], "solidshell")
         recs.append(record(f"square-pedestal {dens} DC", "solidshell", "fenicsx", "drape coefficient",
                            ds_fx["drape_coefficient"], ds_ss["drape_coefficient"], DC_TOL, res["wall_time_s"],
                            same_state=same, fold_count=ds_fx["fold_count"], fold_count_reference=ds_ss["fold_count"],
@@ -411,7 +504,8 @@ def write_report(out_dir: Path, records, table, meta):
                                                                 indent=1, default=float))
     lines = ["# Cross-check: solidshell vs an independent DOLFINx Naghdi shell (issue 14)", "",
              f"DOLFINx {meta.get('dolfinx')}; generated by `python -m verification.fenicsx.crosscheck`. "
-             f"Load average at start {meta.get('load_start')}, at end {meta.get('load_end')} (2 cores, shared).", "",
+             f"Load average at start {meta.get('load_start')}, at end {meta.get('load_end')} (2 cores, shared); "
+             f"a wall time marked (reused) is that of the earlier run that computed the result (--reuse).", "",
              "## Comparisons", "",
              "| name | source | reference | quantity | value | reference value | error | tolerance | passed |",
              "|---|---|---|---|---|---|---|---|---|"]
@@ -426,8 +520,14 @@ def write_report(out_dir: Path, records, table, meta):
             res = f"DC {t['drape_coefficient']:.4f}, {t['fold_count']} folds"
             if "boundary_distance_cm" in t:
                 res += f", boundary distance {t['boundary_distance_cm']:.3f} cm"
+            if "moved_from_start_cm" in t:
+                res += (f"; moved max\\|ΔU\\| {t['moved_from_start_cm']:.3f} cm from the other code's state, "
+                        f"ends {t['distance_to_own_state_cm']:.2e} cm from its own")
             if "ranks" in t:
                 res += f", {t['ranks']} rank(s)"
+            if "sequence" in t:
+                res += "; sequenced " + " -> ".join(f"{q['mesh']} ({q['iterations']} its, {q['wall_time_s']:.0f} s)"
+                                                    for q in t["sequence"])
         elif "tip_z" in t:
             res = f"tip ({t['tip_x']:.5f}, {t['tip_z']:.5f})"
             if "tip_error_vs_elastica" in t:
@@ -439,9 +539,14 @@ def write_report(out_dir: Path, records, table, meta):
         else:
             res = t.get("note", "")
         wt = t.get("wall_time_s")
+        wts = "" if wt is None else f"{wt:.1f}"
+        if wt is not None and t.get("reused"):
+            wts += " (reused)"
+        if wt is not None and t.get("load_average"):
+            wts += " (load {:.1f}-{:.1f})".format(*t["load_average"])
         lines.append(f"| {t['problem']} | {t['code']} | {t['mesh']} | {res} | {t.get('converged', '')} | "
                      f"{t.get('stable', '')} | {t.get('steps', '')} | {t.get('iterations', '')} | "
-                     f"{'' if wt is None else f'{wt:.1f}'} | {t.get('n_dofs', '')} |")
+                     f"{wts} | {t.get('n_dofs', '')} |")
     (out_dir / "fenicsx_crosscheck.md").write_text("\n".join(lines) + "\n")
 
 
@@ -458,8 +563,9 @@ def _log(msg):
 
 
 def main(out_dir, problems=("strip", "shear", "pedestal", "mpi"), quick=False, log=_log, reuse=False,
-         pedestal_meshes=("12x4x4", "24x8x4", "48x16x4")):
-    """Run the cross-check; returns the comparison records (raises DolfinxMissing without DOLFINx)."""
+         pedestal_meshes=PEDESTAL_MESHES, restart_both=RESTART_MESHES):
+    """Run the cross-check; returns the comparison records (raises DolfinxMissing without DOLFINx).
+    ``restart_both``: pedestal meshes on which each code is also started from the other's state."""
     out = Path(out_dir)
     version = check_dolfinx()
     _REUSE["on"] = bool(reuse)
@@ -476,7 +582,8 @@ def main(out_dir, problems=("strip", "shear", "pedestal", "mpi"), quick=False, l
         records += r
         table += t
     if "pedestal" in problems:
-        r, t = pedestal_problem(work, ["12x4x4"] if quick else list(pedestal_meshes), log)
+        r, t = pedestal_problem(work, ["12x4x4"] if quick else list(pedestal_meshes), log,
+                                restart_both=tuple(restart_both))
         records += r
         table += t
     if "mpi" in problems:
@@ -494,13 +601,18 @@ def cli(argv=None):
     ap.add_argument("--problems", nargs="+", default=["strip", "shear", "pedestal", "mpi"],
                     choices=["strip", "shear", "pedestal", "mpi"])
     ap.add_argument("--quick", action="store_true", help="coarser meshes only (about a tenth of the time)")
-    ap.add_argument("--pedestal-meshes", nargs="+", default=["12x4x4", "24x8x4", "48x16x4"],
-                    help="square-pedestal meshes (the 48x16x4 DOLFINx drape takes hours on 2 busy cores)")
+    ap.add_argument("--pedestal-meshes", nargs="+", default=list(PEDESTAL_MESHES),
+                    help="square-pedestal meshes (default %(default)s; docs/fenicsx.md has the DOLFINx run times)")
     ap.add_argument("--reuse", action="store_true",
                     help="reuse converged DOLFINx results of identical jobs in OUT/fenicsx_work")
+    ap.add_argument("--restart-both", nargs="*", default=list(RESTART_MESHES), metavar="MESH",
+                    help="start each code from the other's pedestal state (DC, folds, stability reached and "
+                         "max |dU|) on these meshes (default %(default)s; the option alone: none)")
     a = ap.parse_args(argv)
+    rb = a.restart_both
     try:
-        recs = main(a.out, tuple(a.problems), a.quick, reuse=a.reuse, pedestal_meshes=a.pedestal_meshes)
+        recs = main(a.out, tuple(a.problems), a.quick, reuse=a.reuse, pedestal_meshes=a.pedestal_meshes,
+                    restart_both=rb)
     except DolfinxMissing as exc:
         print(str(exc), file=sys.stderr)
         return 3

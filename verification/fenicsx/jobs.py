@@ -92,16 +92,19 @@ def run_model(job: dict, work_dir, ranks: int = 1, timeout: float = 3600.0,
         mpirun = shutil.which("mpirun") or "/usr/bin/mpirun"
         cmd = [mpirun, "--allow-run-as-root", "--oversubscribe", "-n", str(ranks)] + cmd
     env = dict(os.environ, OMP_NUM_THREADS="1")
+    # the model's output goes to the log files as it runs, so an hour-long drape can be watched
+    lp, ep = work / f"{tag}.log", work / f"{tag}.stderr.log"
     t0 = time.perf_counter()
-    try:
-        p = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, env=env)
-        rc, out, err = p.returncode, p.stdout, p.stderr
-    except subprocess.TimeoutExpired as exc:
-        rc, out, err = -1, exc.stdout or "", f"timed out after {timeout:.0f} s"
-        out = out.decode() if isinstance(out, bytes) else out
+    with open(lp, "w") as fo, open(ep, "w") as fe:
+        try:
+            rc = subprocess.run(cmd, stdout=fo, stderr=fe, text=True, timeout=timeout, env=env).returncode
+            err = ""
+        except subprocess.TimeoutExpired:
+            rc, err = -1, f"timed out after {timeout:.0f} s"
     wall = time.perf_counter() - t0
+    out = lp.read_text()
+    err = (ep.read_text() + "\n" + err).strip()
     log = (out + "\n" + err).strip().splitlines()[-8:]
-    (work / f"{tag}.log").write_text((out or "") + "\n--- stderr ---\n" + (err or ""))
     if rp.exists():
         res = json.loads(rp.read_text())
     else:

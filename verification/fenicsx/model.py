@@ -367,8 +367,17 @@ def _say(msg):
         print(f"fenicsx model: {msg}", flush=True)
 
 
+def _loadavg():
+    try:
+        with open("/proc/loadavg") as fh:
+            return float(fh.read().split()[0])
+    except (OSError, ValueError, IndexError):
+        return float("nan")
+
+
 def solve(job):
     t_start = time.perf_counter()
+    load_start = _loadavg()      # wall times mean little without the machine's load (shared cores)
     shell = Shell(job)
     t_setup = time.perf_counter() - t_start
     _say(f"{job.get('name', '?')}: {shell.n_dofs} dofs, forms compiled in {t_setup:.1f} s")
@@ -434,8 +443,16 @@ def solve(job):
                 c = 4.0 * c if c > 0.0 else 4.0 * c_min
             if lam < 1.0 - 1e-14:
                 dlam *= 0.5
-            if dlam < dmin or (prox and c > 1e6 * c0):
-                status = f"step to lambda={target:.6g} failed (reason {reason}) below the minimum increment"
+                if dlam < dmin:
+                    status = f"step to lambda={target:.6g} failed (reason {reason}) below the minimum increment"
+                    break
+            elif not prox:
+                # at the full load (a restart from a given state) only the proximal shift can shorten
+                # the step: without it a retry would repeat the failure
+                status = f"the solve at lambda=1 failed (reason {reason}) and there is no proximal shift to raise"
+                break
+            if prox and c > 1e6 * c0:
+                status = f"step to lambda={target:.6g} failed (reason {reason}) with the proximal shift at its maximum"
                 break
     wall = time.perf_counter() - t0
     x_prev.copy(shell.w.vector)
@@ -445,7 +462,7 @@ def solve(job):
                   failed_steps=n_fail, newton_iterations=n_newton, linear_solves=n_lin,
                   wall_time_s=wall, setup_time_s=t_setup, n_dofs=int(shell.n_dofs),
                   n_cells=int(shell.msh.topology.index_map(2).size_global), ranks=COMM.size,
-                  history=history, energy=shell.energy(),
+                  history=history, energy=shell.energy(), load_average=[load_start, _loadavg()],
                   dolfinx_version=dolfinx.__version__)
     if job.get("stability", True):
         t1 = time.perf_counter()

@@ -191,6 +191,21 @@ def test_restart_of_an_adaptive_run_is_bit_for_bit(tmp_path):
         _driver({"restart": str(ck), "alpha": 1.0}, **RESTART).run()
 
 
+def test_a_fast_sheet_gets_passes_before_every_steps():
+    """adapt.travel: with every = 10000 steps (beyond this run's ~4000), a pass comes at a multiple of
+    100 steps as soon as the falling sheet's fastest node travels more than travel x the finest side
+    (1.25 cm here) in 100 steps: travel 1e-3 (1.25e-3 cm, a speed of ~2 cm/s at this step) remeshes
+    the hung corners as the every-50 run does, at a step that is a multiple of 100; travel 1e3 never
+    passes before step 10000, so the mesh stays at level 0."""
+    fast = _driver({}, every=10000, travel=1e-3)
+    fast.run()
+    assert fast.remeshes, "the falling sheet must be remeshed before step 10000"
+    assert all(r["step"] % 100 == 0 and r["step"] < 10000 for r in fast.remeshes)
+    slow = _driver({}, every=10000, travel=1e3)
+    slow.run()
+    assert not slow.remeshes and slow.integ.state.step < 10000
+
+
 def test_coarse_membrane_ans_gives_the_quads_below_the_finest_level_assumed_membrane_strains():
     """adapt.coarse_membrane = "ans": after the splits (one level here, so the split corners are the
     finest level), every quad below the finest level -- level-0 leaves and the transition patches

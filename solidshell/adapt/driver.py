@@ -37,6 +37,7 @@ from ..solvers.blas import single_threaded_blas
 from ..solvers.explicit import Integrator, checkpoint, parse_settings, threads_for
 
 _STATE_PREFIX = "adapt_"
+_CHECK_STEPS = 100      # steps between two looks at the sheet's speed (adapt.travel)
 _PHASES = ("mark", "mesh", "problem", "transfer", "settle", "integrator")
 _REMESH_KEYS = ("t", "step", "splits", "merges", "nodes_in", "nodes_out", "active_nodes", "energy_jump",
                 "kinetic_before")
@@ -74,6 +75,7 @@ class AdaptiveRun:
         self.relax, self.progress = relax, _monotone(progress or no_progress)
         self.bg = BackgroundMesh.from_level0(level0, adapt.levels, curves if adapt.project_boundary else None)
         self.L = level_side_lengths(self.bg)
+        self._h_fine = float(np.min(self.L[-1]))   # smallest finest-level side [length]
         self.forest = AdaptiveMesh(self.bg)
         self.segments: list[Segment] = []
         self.history = []          # (t, active nodes, elements) after every mesh change and at the start
@@ -168,19 +170,38 @@ class AdaptiveRun:
         if self.integ is None:
             with self._threads(self.bg.level0):     # the first critical-step estimate included
                 self.restart(self.restart_path) if self.restart_path else self.start()
+        check = self._check
         while True:
             with self._threads(self.active.mesh):   # 1 thread on small meshes, remeshing included
-                status = self.integ.advance(self.adapt.every)
+                status = self.integ.advance(check - self.integ.state.step % check)
                 if status != "running":
                     break
-                t0 = time.perf_counter()
-                self._adapt_pass()
-                self.remesh_seconds += time.perf_counter() - t0
+                if self._pass_due():
+                    t0 = time.perf_counter()
+                    self._adapt_pass()
+                    self.remesh_seconds += time.perf_counter() - t0
         out = self._output()
         wall = time.perf_counter() - wall0
         out.result.info["adaptive_wall_time_s"] = float(wall)
         out.result.info["remesh_share"] = float(self.remesh_seconds / wall) if wall > 0 else 0.0
         return out
+
+    @property
+    def _check(self) -> int:
+        """Steps between two looks at the sheet's speed (and the only steps a pass can fall on)."""
+        return min(self.adapt.every, _CHECK_STEPS)
+
+    def _pass_due(self) -> bool:
+        """A pass at every multiple of ``every`` steps, and earlier, at a multiple of ``_check``, when
+        the fastest node at its current speed travels more than ``adapt.travel`` times the finest
+        elements' smallest side within ``_check`` steps.  Both depend on the state at this step
+        only, so a restart keeps the schedule (bit for bit)."""
+        st = self.integ.state
+        if st.step % self.adapt.every == 0:
+            return True
+        d = (st.D - st.D_prev).reshape(-1, 6)[:, :3]
+        step = float(np.sqrt(np.max(np.einsum("ij,ij->i", d, d)))) if len(d) else 0.0
+        return step * self._check > self.adapt.travel * self._h_fine
 
     def _threads(self, mesh):
         """The solver's thread rule (solvers.explicit.threads_for) for a mesh of this size."""
@@ -325,6 +346,7 @@ class AdaptiveRun:
             "adaptive": True,
             "adapt_levels": int(self.adapt.levels), "adapt_const": float(self.adapt.const),
             "adapt_eps": float(self.adapt.eps), "adapt_every": int(self.adapt.every),
+            "adapt_travel": float(self.adapt.travel),
             "adapt_transfer": self.adapt.transfer,
             "adapt_settle_directors": bool(self.adapt.settle_directors),
             "adapt_settle_new_nodes": self._settle_new_nodes,

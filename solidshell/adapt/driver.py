@@ -300,17 +300,12 @@ class AdaptiveRun:
         velocity is not enough: docs/adaptivity.md).  D_n-1 starts from the settled D_n's
         directors, one step away.  With ``adapt.settle_new_nodes`` the inserted nodes' positions
         settle too (from their DK placement, the old nodes held)."""
-        nodes = np.searchsorted(new.nodes, inserted) if self._settle_new_nodes else None
+        nodes = np.searchsorted(new.nodes, inserted) if self.adapt.settle_new_nodes else None
         settler = DirectorSettler(problem.model, problem.loads, problem.fixed, nodes)
         D_s, rep = settler(D)
         Dp_s, rep_p = settler(Dp, start=D_s)
         self.settle_failures += (not rep.converged) + (not rep_p.converged)
         return D_s, Dp_s
-
-    @property
-    def _settle_new_nodes(self) -> bool:
-        """adapt.settle_new_nodes, unset = on for relaxation, off for explicit dynamics."""
-        return self.relax if self.adapt.settle_new_nodes is None else bool(self.adapt.settle_new_nodes)
 
     def _needs_new_step(self, old: ActiveMesh, new: ActiveMesh) -> bool:
         """A new critical-step estimate when the finest level present changed (the step is set by
@@ -349,7 +344,7 @@ class AdaptiveRun:
             "adapt_travel": float(self.adapt.travel),
             "adapt_transfer": self.adapt.transfer,
             "adapt_settle_directors": bool(self.adapt.settle_directors),
-            "adapt_settle_new_nodes": self._settle_new_nodes,
+            "adapt_settle_new_nodes": bool(self.adapt.settle_new_nodes),
             "adapt_coarse_membrane": self.adapt.coarse_membrane,
             "settle_failures": int(self.settle_failures),
             "level0_elements": int(self.bg.n_elements(0)), "background_nodes": int(len(self.bg.Xo)),

@@ -87,7 +87,6 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.sparse as sp
 
 from ..errors import InputError
 from ..problem import SolveResult, no_progress
@@ -214,6 +213,8 @@ class _System:
         """The contact tangent blocks as a (6N, 6N) CSR matrix, or None."""
         if not blocks:
             return None
+        import scipy.sparse as sp   # scipy.sparse only where a 6N x 6N matrix is formed: a small
+                                    # run on the free-tangent path does not import it at all
         rows, cols, vals = [], [], []
         for act, nn in blocks:
             base = 6 * act
@@ -242,6 +243,8 @@ class _System:
 
     def force_tangent(self, D):
         """(F internal (+contact) full vector, K (6N,6N) CSR)."""
+        import scipy.sparse as sp
+
         self.n_tangent += 1
         F, K = self.model.force_and_tangent(self.U(D))
         F = np.asarray(F, dtype=float).ravel()
@@ -291,6 +294,8 @@ class _System:
         so the restriction is a gather of K.data through a map built once per pattern (slicing
         and converting ~1e6 entries every iteration cost ~10 % of a drape solve); K is symmetric,
         so the CSR arrays of the restriction serve as its CSC arrays."""
+        import scipy.sparse as sp
+
         f = self.free
         K = K.tocsr()
         cache = getattr(self, "_kff_cache", None)
@@ -864,7 +869,7 @@ def _stability(sys, D, eig_max_dofs, known=None):
         except Exception:  # noqa: BLE001 - a diagnostic, never fatal
             lmin = None
     elif n <= _DENSE_EIG:
-        lmin = float(np.linalg.eigvalsh(as_csc(A).toarray()).min())
+        lmin = float(np.linalg.eigvalsh(A.toarray()).min())
     return pd, lmin
 
 

@@ -8,7 +8,6 @@ matrix (6N, 6N) with dof index 6*node + k.
 from __future__ import annotations
 
 import numpy as np
-import scipy.sparse as sp
 from numba import get_num_threads
 
 from .assembly import (FreeLowerPattern, SparsePattern, element_dofs, scatter_add_mat,
@@ -188,6 +187,8 @@ class Model:
 
     def force_and_tangent(self, U):
         """(internal force (N,6), tangent K_t (6N,6N) CSR) at U, Eq. (9)."""
+        import scipy.sparse as sp      # here only: the static solver's path never forms this matrix
+
         p = self.pattern
         F, data = self._force_and_tangent_into(U, p.pos, p.nnz, False)
         return F.reshape(-1, 6), sp.csr_matrix((data, p.indices.copy(), p.indptr.copy()),

@@ -87,7 +87,6 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.sparse as sp
 
 from ..errors import InputError
 from ..problem import SolveResult, no_progress
@@ -214,6 +213,8 @@ class _System:
         """The contact tangent blocks as a (6N, 6N) CSR matrix, or None."""
         if not blocks:
             return None
+        import scipy.sparse as sp   # scipy.sparse only where a 6N x 6N matrix is formed: a small
+                                    # run on the free-tangent path does not import it at all
         rows, cols, vals = [], [], []
         for act, nn in blocks:
             base = 6 * act
@@ -242,6 +243,8 @@ class _System:
 
     def force_tangent(self, D):
         """(F internal (+contact) full vector, K (6N,6N) CSR)."""
+        import scipy.sparse as sp
+
         self.n_tangent += 1
         F, K = self.model.force_and_tangent(self.U(D))
         F = np.asarray(F, dtype=float).ravel()
@@ -291,6 +294,8 @@ class _System:
         so the restriction is a gather of K.data through a map built once per pattern (slicing
         and converting ~1e6 entries every iteration cost ~10 % of a drape solve); K is symmetric,
         so the CSR arrays of the restriction serve as its CSC arrays."""
+        import scipy.sparse as sp
+
         f = self.free
         K = K.tocsr()
         cache = getattr(self, "_kff_cache", None)
@@ -481,12 +486,16 @@ def _newton_level(sys, D, lam, o, stats):
                 rho = dec / pred if pred < 0.0 else 0.0
                 step = alpha * pmax
                 if abs(pred) <= _ROUNDOFF * _energy_scale(sys, D, lam, Pi):
-                    # the decrease is below the round-off of Pi: judge the step by the residual
-                    # and leave the radius alone (it describes the global phase, not this one)
+                    # the decrease is below the round-off of Pi: judge the step by the residual.
+                    # A step that lowers it is the local phase, where the radius must not hold
+                    # Newton back: it grows as after a good model (frozen, it had square-on-disc
+                    # 30x240 take 17 steps of alpha 0.25-0.66 at 5.3e-4 cm before the full ones)
                     accepted = bool(np.linalg.norm(Gt[f]) < gnorm or dec <= 0.0)
                     if not accepted:
                         alpha *= 0.25
                         continue
+                    if alpha < 1.0:
+                        radius = min(2.0 * radius, o.max_step)
                 elif rho > 1e-4:
                     accepted = True
                     if rho < o.tr_shrink:
@@ -823,18 +832,24 @@ _DENSE_EIG = 600
 faster than ARPACK there, and a small run does not import scipy.sparse.linalg at all."""
 
 
-def _stability(sys, D, eig_max_dofs):
+def _stability(sys, D, eig_max_dofs, known=None):
     """(positive_definite or None, min eigenvalue or None) of K_t on the free dofs at D.
 
     Positive definite = the Cholesky factorisation succeeds; otherwise the inertia of SuperLU's
     LDL^T says so (None when its pivoting was not symmetric).  The smallest eigenvalue comes from
-    ARPACK in shift-invert mode about -s (s = 1e-10 of the mean diagonal), with the inverse applied
-    by the Cholesky factor of A + s I when it exists."""
-    _, A = sys.free_tangent(D)
+    ARPACK in shift-invert mode: about 0 with the inverse applied by the Cholesky factor of A where
+    A is positive definite, else about -s (s = 1e-10 of the mean diagonal) with ARPACK's own LU.
+    ``known``: the free tangent at D whose positive-definite Cholesky factor ``sys.chol`` holds
+    (the last test of ``_seek_minimum``): then neither the tangent nor its factor is formed again
+    (a tangent and two factorisations saved at the end of every solve)."""
+    chol = sys.chol if isinstance(sys.chol, Cholesky) else Cholesky()   # reuse its analysis
+    if known is not None and chol is sys.chol:
+        A, pd = known, True
+    else:
+        _, A = sys.free_tangent(D)
+        pd = chol.factor(A)
     n = A.shape[0]
     s = 1e-10 * float(np.abs(A.diagonal()).mean())
-    chol = sys.chol if isinstance(sys.chol, Cholesky) else Cholesky()   # reuse its analysis
-    pd = chol.factor(A)
     if not pd:
         try:
             _, neg = ldl_inertia(A)
@@ -845,16 +860,20 @@ def _stability(sys, D, eig_max_dofs):
     if _DENSE_EIG < n <= eig_max_dofs:
         from scipy.sparse.linalg import LinearOperator, eigsh
         try:
-            opinv = None
-            if pd and chol.factor(A, np.full(n, s)):
-                opinv = LinearOperator((n, n), matvec=chol.solve, dtype=float)
-            vals = eigsh(as_csc(A), k=1, sigma=-s, which="LM", return_eigenvectors=False, tol=1e-8,
-                         maxiter=2000, OPinv=opinv)
+            if pd:
+                # A itself is positive definite: shift-invert about 0 with its Cholesky factor (A
+                # is only an operator here: ARPACK's mode 3 applies nothing but OPinv)
+                vals = eigsh(LinearOperator((n, n), matvec=lambda x: A @ x, dtype=float), k=1,
+                             sigma=0.0, which="LM", return_eigenvectors=False, tol=1e-8,
+                             maxiter=2000, OPinv=LinearOperator((n, n), matvec=chol.solve, dtype=float))
+            else:
+                vals = eigsh(as_csc(A), k=1, sigma=-s, which="LM", return_eigenvectors=False,
+                             tol=1e-8, maxiter=2000)
             lmin = float(vals[0])
         except Exception:  # noqa: BLE001 - a diagnostic, never fatal
             lmin = None
     elif n <= _DENSE_EIG:
-        lmin = float(np.linalg.eigvalsh(as_csc(A).toarray()).min())
+        lmin = float(np.linalg.eigvalsh(A.toarray()).min())
     return pd, lmin
 
 
@@ -918,11 +937,14 @@ def _leave_saddle(sys, D, lam, o, stats, step_frac):
 
 def _seek_minimum(sys, D, lam, o, stats, max_escapes, step_frac, info_w):
     """Leave saddles until the free-dof tangent at the converged state D is positive definite
-    (Cholesky succeeds), continuing the energy Newton from each escape.  Returns (D, ok, message)."""
+    (Cholesky succeeds), continuing the energy Newton from each escape.  Returns (D, ok, message);
+    on success ``stats["stable_tangent"]`` is the free tangent at D, whose Cholesky factor
+    ``sys.chol`` then holds (``_stability`` reports from it)."""
     stats.setdefault("saddle_eigenvalues", [])
     for _ in range(max_escapes + 1):
         _, A = sys.free_tangent(D)
         if sys.chol.factor(A):
+            stats["stable_tangent"] = A
             return D, True, ""
         if len(stats["saddle_eigenvalues"]) >= max_escapes:
             break
@@ -1151,7 +1173,8 @@ def _solve_static(model, fixed, loads, load_factors, method, prescribed, *, tol,
     if check_stability and np.all(np.isfinite(D)) and status != "interrupted":
         lam = stats["load_factor"]
         try:
-            pd, lmin = _stability(sys, sys.apply_prescribed(D, lam) if ok else D, eig_max_dofs)
+            pd, lmin = _stability(sys, sys.apply_prescribed(D, lam) if ok else D, eig_max_dofs,
+                                  known=stats.get("stable_tangent") if ok else None)
         except KeyboardInterrupt:
             pd, lmin = None, None
         info["positive_definite"] = pd

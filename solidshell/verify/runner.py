@@ -17,6 +17,9 @@ DEFAULT_OUT = "verification-out"
 def select(names=None, quick: bool = False) -> list:
     """The checks to run: the named ones (in registry order), else the quick or the default set.
     An unknown name is an InputError listing the valid names."""
+    from . import load_checks
+
+    load_checks()
     if names:
         bad = [n for n in names if n not in CHECKS]
         if bad:

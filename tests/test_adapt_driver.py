@@ -191,6 +191,30 @@ def test_restart_of_an_adaptive_run_is_bit_for_bit(tmp_path):
         _driver({"restart": str(ck), "alpha": 1.0}, **RESTART).run()
 
 
+def test_new_node_settling_that_falls_short_falls_back_to_directors_only(monkeypatch):
+    """adapt.settle_new_nodes (on by default in relaxation): when the settling of the new nodes'
+    positions misses its three digits, the remesh settles the directors alone.  Forced here (every
+    such settling reported short): the run is then bit for bit the directors-only run, and every
+    remesh is counted as a fallback."""
+    from solidshell.adapt import driver as drv
+
+    class Short(drv.DirectorSettler):
+        def __call__(self, D, **kw):
+            out, rep = super().__call__(D, **kw)
+            if len(self.idx) > int(np.count_nonzero(~self.fixed[:, 3:])):   # positions among the dofs
+                rep.converged = False
+            return out, rep
+
+    kw = dict(mesh=LEVEL0, solver="relax", progress=False, adaptive=True, mass_scaling=1.0, max_steps=2900)
+    over = {**ADAPT, "adapt.const": 0.1, "adapt.eps": 0.05}
+    plain = run_scene(SCENE, overrides={**over, "adapt.settle_new_nodes": False}, **kw)
+    monkeypatch.setattr(drv, "DirectorSettler", Short)
+    forced = run_scene(SCENE, overrides=over, **kw)
+    assert forced.summary["remesh_count"] >= 1 and forced.summary["adapt_settle_new_nodes"] is True
+    assert forced.summary["settle_new_node_fallbacks"] == forced.summary["remesh_count"]
+    assert np.array_equal(forced.U, plain.U)
+
+
 def test_a_fast_sheet_gets_passes_before_every_steps():
     """adapt.travel: with every = 10000 steps (beyond this run's ~4000), a pass comes at a multiple of
     100 steps as soon as the falling sheet's fastest node travels more than travel x the finest side

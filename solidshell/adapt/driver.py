@@ -83,6 +83,7 @@ class AdaptiveRun:
         self.remesh_seconds = 0.0
         self.phase_seconds = dict.fromkeys(_PHASES, 0.0)   # remeshing time by phase (the profile's rows)
         self.settle_failures = 0   # director settlings whose residual did not fall by three digits
+        self.new_node_fallbacks = 0   # remeshes whose new-node settling fell short (directors only)
         self.integ = None
         self.restart_path = restart
 
@@ -299,13 +300,27 @@ class AdaptiveRun:
         oscillation the previous remeshes' out-of-balance forces left in the velocity (keeping that
         velocity is not enough: docs/adaptivity.md).  D_n-1 starts from the settled D_n's
         directors, one step away.  With ``adapt.settle_new_nodes`` the inserted nodes' positions
-        settle too (from their DK placement, the old nodes held)."""
-        nodes = np.searchsorted(new.nodes, inserted) if self.adapt.settle_new_nodes else None
-        settler = DirectorSettler(problem.model, problem.loads, problem.fixed, nodes)
+        settle too (from their DK placement, the old nodes held); where that settling falls short of
+        its three digits (large new elements sag far from their DK placement), the directors alone
+        are settled instead and ``new_node_fallbacks`` counts it."""
+        if self._settle_new_nodes and len(inserted):
+            settler = DirectorSettler(problem.model, problem.loads, problem.fixed,
+                                      np.searchsorted(new.nodes, inserted))
+            D_s, rep = settler(D)
+            Dp_s, rep_p = settler(Dp, start=D_s)
+            if rep.converged and rep_p.converged:
+                return D_s, Dp_s
+            self.new_node_fallbacks += 1   # not settled: the new nodes keep their DK placement
+        settler = DirectorSettler(problem.model, problem.loads, problem.fixed)
         D_s, rep = settler(D)
         Dp_s, rep_p = settler(Dp, start=D_s)
         self.settle_failures += (not rep.converged) + (not rep_p.converged)
         return D_s, Dp_s
+
+    @property
+    def _settle_new_nodes(self) -> bool:
+        """adapt.settle_new_nodes; unset: on for relaxation, off for explicit dynamics."""
+        return self.relax if self.adapt.settle_new_nodes is None else bool(self.adapt.settle_new_nodes)
 
     def _needs_new_step(self, old: ActiveMesh, new: ActiveMesh) -> bool:
         """A new critical-step estimate when the finest level present changed (the step is set by
@@ -344,9 +359,10 @@ class AdaptiveRun:
             "adapt_travel": float(self.adapt.travel),
             "adapt_transfer": self.adapt.transfer,
             "adapt_settle_directors": bool(self.adapt.settle_directors),
-            "adapt_settle_new_nodes": bool(self.adapt.settle_new_nodes),
+            "adapt_settle_new_nodes": self._settle_new_nodes,
             "adapt_coarse_membrane": self.adapt.coarse_membrane,
             "settle_failures": int(self.settle_failures),
+            "settle_new_node_fallbacks": int(self.new_node_fallbacks),
             "level0_elements": int(self.bg.n_elements(0)), "background_nodes": int(len(self.bg.Xo)),
             "max_active_nodes": int(max(counts)), "final_active_nodes": int(counts[-1]),
             "active_nodes_history": [[round(t, 6), n, m] for t, n, m in self.history],

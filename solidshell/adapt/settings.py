@@ -39,9 +39,10 @@ class AdaptSettings(SettingsModel):
     settle_new_nodes : settle the positions of the inserted nodes with the directors (from the DK
                 placement, their neighbours held): the membrane stretch a DK mid-edge node on the cubic
                 leaves, and the out-of-balance force and oscillation that follow, go
-                (docs/adaptivity.md).  Off by default: on large-square-pedestal the settled new nodes of
-                3 x 5 cm level-0 elements sagged into interpenetration and the run went non-finite; in
-                explicit dynamics a falling sheet is not in static equilibrium at all
+                (docs/adaptivity.md); where it falls short of three digits the directors alone are
+                settled.  Unset: on in relaxation runs (a path to a static state), off in explicit
+                dynamics, where a falling sheet is not in static equilibrium and the new nodes'
+                inertia is part of the motion
     coarse_membrane : "scene" (every quad has the scene's ``model.membrane``) or "ans" (quads below
                 the finest level, transition patches included, take the assumed membrane strains,
                 free of the membrane locking that stiffens large elements; docs/adaptivity.md)
@@ -59,7 +60,7 @@ class AdaptSettings(SettingsModel):
     transfer: Literal["dk", "linear"] = "dk"
     project_boundary: bool = True
     settle_directors: bool = True
-    settle_new_nodes: bool = False
+    settle_new_nodes: bool | None = None
     coarse_membrane: Literal["scene", "ans"] = "scene"
 
     @model_validator(mode="after")

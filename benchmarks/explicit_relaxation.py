@@ -121,7 +121,7 @@ def _fmt(x, f="{:.4g}"):
 
 def write_md(res: dict, path: Path) -> str:
     rows = res["rows"]
-    lines = ["# Dynamic relaxation: wall time to steady state (issue 5)", "",
+    lines = ["# Dynamic relaxation: wall time to steady state (issues 5 and 13)", "",
              "`python benchmarks/explicit_relaxation.py " + "`, then `".join(res["argv"]) + f"` (last on {res['date']}), "
              f"{res['cpu_count']} CPUs (shared; the 1/5/15-min load averages before and after each run are "
              "given).  wall = the solver's own time (after a warm-up that compiled the kernels); "

@@ -40,7 +40,7 @@ def test_scene_contents():
     assert sp.mesh["paper_meshes"] == ["24x8x4", "48x16x4", "6x2x4"]
     assert sp.mesh["adaptive_level0"] == "6x2x4"          # 48 quads, Sec. 6.1
     assert sp.supports == {"clamped": ("clamped",)} and sp.solver["kind"] == "static"
-    assert sp.solver["relax"] == {"alpha": 5.0, "mass_scaling": 100}
+    assert sp.solver["relax"] == {"preset": "fast"}
     assert scenes.load("strip-weft").material_object().warp_angle == 90.0
     assert scenes.load("strip-warp").material_object().warp_angle == 0.0
     cp = scenes.load("circle-pedestal")
@@ -58,7 +58,7 @@ def test_scene_contents():
     assert h20.solver_settings()["t_end"] == 2.1 and h100.solver_settings()["t_end"] == 3.0
     sph = scenes.load("sphere")
     assert (sph.geometry["size"], sph.density, sph.solver["kind"]) == (30.0, "60x60", "relax")
-    assert sph.solver_settings() == {"alpha": 5.0, "mass_scaling": 100}
+    assert sph.solver_settings() == {"preset": "fast"}
     assert sph.mesh["adaptive_level0"] == "16x16" and "100x100" in sph.mesh["paper_meshes"]
     (ball,) = sph.contact
     assert ball["type"] == "sphere" and ball["radius"] == 5.0
@@ -232,7 +232,7 @@ def test_with_overrides():
                           "solver.kind": "relax", "solver.relax.alpha": 1.0})
     assert t.density == "24x8x4" and t.solver["static"] == {"sequence": "auto", "c": 2e-3} and t.solver["kind"] == "relax"
     assert t.material_object().warp_angle == 90.0
-    assert t.solver_settings() == {"alpha": 1.0, "mass_scaling": 100}
+    assert t.solver_settings() == {"preset": "fast", "alpha": 1.0}
     assert s.density == "48x16x4" and s.solver["static"] == {"sequence": "auto"}          # the original is unchanged
     c = scenes.load("sphere").with_overrides({"contact.0.radius": 6.0})
     assert c.contact[0]["radius"] == 6.0

@@ -1,4 +1,5 @@
-"""The explicit integrator: central differences, Eq. (23), with Rayleigh or kinetic damping.
+"""The explicit integrator: central differences, Eq. (23), with the damping of ``damping/`` (Rayleigh,
+kinetic, FIRE or modal).
 
 ``Integrator(problem, settings)`` estimates the critical step and sets up the start state;
 ``advance(n)`` takes up to n steps (all remaining when None) and returns the status word;
@@ -20,7 +21,7 @@ import numpy as np
 
 from ...errors import InputError, SolverError
 from ...problem import SolveResult, no_progress
-from . import checkpoint, ledger, observers, report, stepcontrol
+from . import checkpoint, damping, ledger, observers, report, stepcontrol
 from .forces import Forces
 from .kernels import central_step, coefficients, dot, norm
 from .settings import RESTART_NEUTRAL, ExplicitSettings, RelaxSettings, parse_settings
@@ -75,9 +76,7 @@ class Integrator:
         self.shape = (self.N, 6)
         self.n_elem = int(getattr(getattr(self.model, "mesh", None), "n_elements", 0))
         self.damping = s.damping if self.relax else "rayleigh"
-        # Cundall's kinetic damping replaces the viscous damping: a scene file's alpha is meant for
-        # damping="rayleigh" (with both, the relaxation measured 4x more steps on the wool strip)
-        self.alpha = 0.0 if self.damping == "kinetic" else s.alpha
+        self.damper = damping.make(self.damping)
         self.M = M = scaled_mass(self.model, s.mass_scaling, s.mass_scaling_mode)
         self.free_mask = ~problem.fixed
         if np.any(M[self.free_mask] <= 0.0):
@@ -97,6 +96,7 @@ class Integrator:
         self.invM = np.zeros_like(self.Mf)
         self.invM[self.free_idx] = 1.0 / self.Mf[self.free_idx]
         self.Pn = norm(self.P[self.free_idx])
+        self.alpha = self.damper.alpha0(self)   # the viscous alpha [1/s] of Eq. (23) at the start
         shaping = {k: v for k, v in s.as_dict().items() if k not in RESTART_NEUTRAL}
         self.fingerprint = checkpoint.fingerprint(problem, shaping, M)
 
@@ -151,6 +151,7 @@ class Integrator:
             q_F=(F0.copy() if quasi else np.zeros(0)), q_D=(D0.copy() if quasi else np.zeros(0)),
             anchors=anchors0, fric_work=0.0, max_slip=0, max_interp=mi0, t_max_interp=0.0, max_contact=0,
             max_pen=0.0, ek_prev_half=0.0, resets=0, last_ekin=Ek0,
+            fire_a=float(getattr(self.s, "fire_alpha_start", 0.1)), fire_n=0, damper_alpha=float(self.alpha),
             last_rel_res=(norm((self.P - F0 + C0)[self.free_idx]) / self.Pn if self.Pn > 0 else 0.0),
             frame_dt=self._frame_interval())
         st.fingerprint = self.fingerprint
@@ -256,6 +257,8 @@ class Integrator:
             f, vMv, finite = self._forces_and_step(n, D, Dp, Dn1, sample, R)
             if f is None:
                 return "failed"
+            vMv, finite_d = self.damper.correct(self, n, D, Dp, Dn1, R, vMv)
+            finite = finite and finite_d
             if not finite:
                 return self._nonfinite(n)
             self._work(n, vMv, f, Dn1, Dp)
@@ -268,8 +271,7 @@ class Integrator:
             self._frames(n, D)
             if check and n > 0 and self._steady(n, vMv):
                 return "steady"
-            if self.damping == "kinetic":
-                self._kinetic(Dn1, D, R, vMv)
+            self.damper.after(self, n, D, Dn1, R, vMv)
             if self.n_fric:
                 self._friction_work(f, Dn1, Dp)
             Dp, D, Dn1 = D, Dn1, Dp
@@ -401,26 +403,6 @@ class Integrator:
         self.message = (f"steady state at t = {self.time_of(n):.6g} s after {n} steps: E_kin/W_ext = {rel_ke:.3g} "
                         f"< {self.s.tol_kinetic:g}, residual {st.last_rel_res:.3g} < {self.s.tol_residual:g}")
         return True
-
-    def _kinetic(self, Dn1, D, R, vMv) -> None:
-        """Cundall's kinetic damping: at a kinetic-energy peak (between v_n-1/2 and v_n+1/2, i.e. at
-        D_n) restart from D_n at rest with the start rule, D_n+1 = D_n + dt^2/2 M^-1 R_n.  (Simply
-        zeroing v_n+1/2 at D_n+1 turns repeated resets near equilibrium into steepest descent with
-        step dt^2 M^-1, unstable above omega dt = sqrt(2); the half-step restart is stable up to
-        omega dt = 2 like the scheme itself.)"""
-        st, dt = self.state, self.state.dt
-        dh = Dn1 - D
-        ek_half = 0.5 * dot(self.Mf * dh, dh) / dt**2
-        if ek_half < st.ek_prev_half:
-            st.damp_sum += 0.5 * vMv
-            np.multiply(self.invM, R, out=Dn1)
-            Dn1 *= 0.5 * dt * dt
-            Dn1 += D
-            Dn1[self.fixed_idx] = self.presc
-            dh = Dn1 - D
-            ek_half = 0.5 * dot(self.Mf * dh, dh) / dt**2
-            st.resets += 1
-        st.ek_prev_half = ek_half
 
     def _friction_work(self, f, Dn1, Dp) -> None:
         """Friction work by the scheme's own central rule f_t,n.(x_n+1 - x_n-1)/2; new anchors."""
@@ -574,6 +556,8 @@ class Integrator:
         self._check_sizes(st)
         self.progress_cb(0.0, f"continuing at t = {st.t:.4g} s, step {st.step}")
         self.state = st
+        if getattr(self.damper, "varies_alpha", False):
+            self.alpha = float(st.damper_alpha)   # the estimate the run had reached
         if reestimate_step:
             lim = stepcontrol.estimate(self.model, self.M, self.free_mask, st.D, self.bodies, self.n_fric,
                                        self.s, self.alpha)

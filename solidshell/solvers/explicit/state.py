@@ -30,6 +30,8 @@ FIELDS = {
     # watched maxima and the latest readings
     "max_interp": "i", "t_max_interp": "f", "max_contact": "i", "max_pen": "f", "ek_prev_half": "f",
     "resets": "i", "last_ekin": "f", "last_rel_res": "f",
+    # dampers (damping/): FIRE's mixing a and steps since its last freeze; the viscous alpha [1/s] now
+    "fire_a": "f", "fire_n": "i", "damper_alpha": "f",
     # interval frames: the interval [s] (doubled at each thinning)
     "frame_dt": "f",
 }

@@ -625,6 +625,7 @@ def _adaptive_run(sc: Scene, level0, settings: dict, adapt, kind: str, cb):
 
     s = dict(settings)
     restart = s.pop("restart", None)
+
     def make_problem(mesh, coarse_quads=None):
         # coarse_quads: quads below the finest level, given "ans" membranes (adapt.coarse_membrane)
         membrane = None if coarse_quads is None else \

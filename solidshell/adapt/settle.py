@@ -53,9 +53,9 @@ def director_dofs(fixed: np.ndarray, nodes=None) -> np.ndarray:
 
 class DirectorSettler:
     """Settles the directors of states on one problem (``model``, ``loads`` (N,6) [force], ``fixed``
-    (N,6) bool), and the positions of ``nodes`` too when given (the inserted nodes), by Newton steps on the director block K_nn of the tangent, each backtracked until Pi
-    falls, with Levenberg shifts where K_nn is not convex there (the Newton step is then not a descent
-    direction).  K_nn is refreshed every step: the Green thickness strain makes the block strongly
+    (N,6) bool), and the positions of ``nodes`` too when given (the inserted nodes), by Newton steps
+    on that block K_nn of the tangent, each backtracked until Pi falls, with Levenberg shifts where
+    K_nn is not convex there (the Newton step is then not a descent direction).  K_nn is refreshed every step: the Green thickness strain makes the block strongly
     nonlinear.  A second state (the other time level) may start from the first one's settled
     directors, one step away."""
 

@@ -331,6 +331,27 @@ def test_split_everything_then_flat_state_merges_back_to_level0():
     assert not np.any(run.integ.state.D) and np.array_equal(run.integ.state.D_prev, Dp0)
 
 
+def test_merge_hold_keeps_leaves_a_split_just_made():
+    """adapt.merge_hold: the flat refined sheet satisfies Eq. (26) everywhere, but leaves a split
+    made within merge_hold x every steps (here 4 x 50) stay; once that many steps have passed they
+    merge.  A restart keeps the births (checkpoint arrays)."""
+    run = _driver({}, settle_directors=False, merge_hold=4)
+    run.start()
+    run.forest.refine_all()
+    run._switch(run.forest.active_mesh(), 0, 0)
+    step = run.integ.state.step
+    for l in range(1, run.bg.levels + 1):
+        run.born[l][:] = step                     # as if a split had made every leaf now
+    n = len(run.remeshes)
+    run._adapt_pass()
+    assert len(run.remeshes) == n                 # every merge held
+    extra = run._checkpoint_arrays()
+    assert all(np.array_equal(extra[f"adapt_born_{l}"], b) for l, b in enumerate(run.born))
+    run.integ.advance(4 * 50)
+    run._adapt_pass()
+    assert len(run.remeshes) == n + 1 and run.remeshes[-1]["merges"] > 0
+
+
 def test_remap_anchors_keeps_survivors_and_gives_new_nodes_nan():
     rng = np.random.default_rng(3)
     old, new, Nb = np.array([0, 1, 2, 5]), np.array([0, 2, 5, 7, 9]), 10

@@ -82,6 +82,9 @@ class AdaptiveRun:
         self.remeshes = []         # per remesh: t, splits, merges, nodes in/out, energy jump
         self.remesh_seconds = 0.0
         self.phase_seconds = dict.fromkeys(_PHASES, 0.0)   # remeshing time by phase (the profile's rows)
+        # per level: the step at which each element was made a leaf by a split (-1: never), for
+        # adapt.merge_hold
+        self.born = [np.full(self.bg.n_elements(l), -1, dtype=np.int64) for l in range(self.bg.levels + 1)]
         self.settle_failures = 0   # director settlings whose residual did not fall by three digits
         self.new_node_fallbacks = 0   # remeshes whose new-node settling fell short (directors only)
         self.integ = None
@@ -117,6 +120,8 @@ class AdaptiveRun:
                                                   for k, x in zip(_REMESH_KEYS, row))))
                          for row in extra[_STATE_PREFIX + "remeshes"]]
         self.remesh_seconds = float(extra[_STATE_PREFIX + "remesh_seconds"])
+        for l, b in enumerate(self.born):
+            b[:] = np.asarray(extra.get(f"{_STATE_PREFIX}born_{l}", b), dtype=np.int64)
         phases = np.asarray(extra.get(_STATE_PREFIX + "phase_seconds", np.zeros(len(_PHASES))), dtype=float)
         self.phase_seconds = dict(zip(_PHASES, map(float, phases)))
         self.forest = AdaptiveMesh.from_state_arrays(self.bg, self.segments[-1].leaves)
@@ -158,7 +163,8 @@ class AdaptiveRun:
                                                     dtype=float).reshape(-1, len(_REMESH_KEYS)),
                _STATE_PREFIX + "remesh_seconds": np.asarray(self.remesh_seconds),
                _STATE_PREFIX + "phase_seconds": np.array([self.phase_seconds[k] for k in _PHASES]),
-               _STATE_PREFIX + "settings": np.asarray(json.dumps(self._adapt_key(), sort_keys=True))}
+               _STATE_PREFIX + "settings": np.asarray(json.dumps(self._adapt_key(), sort_keys=True)),
+               **{f"{_STATE_PREFIX}born_{l}": b.copy() for l, b in enumerate(self.born)}}
         for j, i in enumerate(keep):
             out.update({f"{_STATE_PREFIX}s{j}_{k}": v for k, v in self.segments[i].leaves.items()})
         return out
@@ -227,20 +233,46 @@ class AdaptiveRun:
         """Steps d-f: mark, split/merge, and when the mesh changed continue on the new one."""
         with self._timed("mark"):
             marks, leaves = self._marks()
+        merge = self._held(marks.merge)
         n_split = int(np.count_nonzero(marks.split))
-        n_merge = len(marks.merge)
+        n_merge = len(merge)
         if not n_split and not n_merge:
             return
         with self._timed("mesh"):
             before = self.forest.state_arrays()
             if n_merge:
-                self.forest.merge(marks.merge)
+                self.forest.merge(merge)
             if n_split:
                 self.forest.split(leaves[marks.split])
+                self._note_births(before)
             new = self.forest.active_mesh()
         if np.array_equal(new.nodes, self.active.nodes) and _same_leaves(before, self.forest.state_arrays()):
             return
         self._switch(new, n_split, n_merge)
+
+    def _held(self, parents):
+        """The merges of Eq. (26) less those whose children a split made within the last
+        ``merge_hold * every`` steps."""
+        hold = self.adapt.merge_hold * self.adapt.every
+        if not hold or not len(parents):
+            return parents
+        parents = np.asarray(parents, dtype=np.int64).reshape(-1, 2)
+        step = self.integ.state.step
+        keep = np.ones(len(parents), dtype=bool)
+        for l in np.unique(parents[:, 0]):
+            sel = np.flatnonzero(parents[:, 0] == l)
+            kids = 4 * parents[sel, 1][:, None] + np.arange(4)
+            born = self.born[l + 1][kids]
+            keep[sel] = ~((born >= 0) & (born > step - hold)).any(axis=1)
+        return parents[keep]
+
+    def _note_births(self, before: dict) -> None:
+        """Record the step at which each leaf made by this pass's splits appeared."""
+        step = self.integ.state.step
+        for l in range(1, self.bg.levels + 1):
+            was_leaf_parent = np.asarray(before[f"leaf_{l - 1}"], dtype=bool)
+            made = self.forest.leaf[l] & np.repeat(was_leaf_parent, 4)   # children of a parent split now
+            self.born[l][made] = step
 
     def _switch(self, new: ActiveMesh, n_split: int, n_merge: int) -> None:
         old, integ = self.active, self.integ
@@ -356,7 +388,7 @@ class AdaptiveRun:
             "adaptive": True,
             "adapt_levels": int(self.adapt.levels), "adapt_const": float(self.adapt.const),
             "adapt_eps": float(self.adapt.eps), "adapt_every": int(self.adapt.every),
-            "adapt_travel": float(self.adapt.travel),
+            "adapt_travel": float(self.adapt.travel), "adapt_merge_hold": int(self.adapt.merge_hold),
             "adapt_transfer": self.adapt.transfer,
             "adapt_settle_directors": bool(self.adapt.settle_directors),
             "adapt_settle_new_nodes": self._settle_new_nodes,

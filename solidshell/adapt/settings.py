@@ -30,6 +30,10 @@ class AdaptSettings(SettingsModel):
                 node at its current speed travels more than ``travel`` times the finest elements'
                 smallest side within those steps (a falling sheet is remeshed as often as it needs:
                 ``every`` steps are 0.08 s on the paper's path but 8 ms of a free fall at unscaled masses)
+    merge_hold : leaves made by a split are not merged back for this many multiples of ``every``
+                steps (Eq. 26 vetoed): a creeping sheet otherwise splits, merges and splits the same
+                leaves again, each remesh disturbing it (docs/adaptivity.md); 0 (the default) turns
+                the hold off
     transfer  : new mid-edge nodes by the discrete-Kirchhoff condition (Eqs. 27-34, "dk") or by linear
                 interpolation ("linear", for comparison); centre nodes always by the 8-node serendipity
                 functions
@@ -57,6 +61,7 @@ class AdaptSettings(SettingsModel):
     eps: Finite = Field(DEFAULT_EPS, gt=0.0)
     every: int = Field(1000, ge=1)
     travel: Finite = Field(0.25, gt=0.0)
+    merge_hold: int = Field(0, ge=0)
     transfer: Literal["dk", "linear"] = "dk"
     project_boundary: bool = True
     settle_directors: bool = True

@@ -24,8 +24,7 @@ class AdaptSettings(SettingsModel):
     const     : the dimensionless threshold of Eq. (25), split where ||eps_b|| L_i > const
     eps       : the hysteresis of Eq. (26), merge where every sibling has ||eps_b|| L_(i-1) <= const - eps
     every     : integration steps between two adaptive passes (§5.5 c); a remesh costs about as much
-                as a few hundred steps, so 200 made remeshing 24-30 % of the paper-path run and 1000
-                makes it 5-10 % (docs/adaptivity.md)
+                as a few hundred steps, so passes are kept a thousand steps apart (docs/adaptivity.md)
     travel    : a pass also comes earlier, at a multiple of min(every, 100) steps, when the fastest
                 node at its current speed travels more than ``travel`` times the finest elements'
                 smallest side within those steps (a falling sheet is remeshed as often as it needs:

@@ -26,16 +26,8 @@ def scatter_add_vec(dofs, fe, out):
 
 @njit(cache=True)
 def scatter_add_mat(pos, Ke, data):
-    M, nd, _ = Ke.shape
-    for e in range(M):
-        for a in range(nd):
-            for b in range(nd):
-                data[pos[e, a, b]] += Ke[e, a, b]
-
-
-@njit(cache=True)
-def scatter_add_mat_masked(pos, Ke, data):
-    """``scatter_add_mat`` skipping the entries with pos < 0 (fixed dofs, upper triangle)."""
+    """data[pos[e, a, b]] += Ke[e, a, b], skipping the entries with pos < 0 (a free lower-triangle
+    pattern's fixed dofs and upper triangle; a full pattern has none)."""
     M, nd, _ = Ke.shape
     for e in range(M):
         for a in range(nd):

@@ -10,8 +10,7 @@ from __future__ import annotations
 import numpy as np
 from numba import get_num_threads
 
-from .assembly import (FreeLowerPattern, SparsePattern, element_dofs, scatter_add_mat,
-                       scatter_add_mat_masked, scatter_add_vec)
+from .assembly import FreeLowerPattern, SparsePattern, element_dofs, scatter_add_mat, scatter_add_vec
 from .elements import core, quad4, tri3
 from .errors import InputError
 from .mesh import ShellMesh
@@ -157,14 +156,13 @@ class Model:
             self._pattern = SparsePattern(self.n_dofs, [b.dofs for b in self.blocks])
         return self._pattern
 
-    def _force_and_tangent_into(self, U, pos_maps, nnz, masked):
+    def _force_and_tangent_into(self, U, pos_maps, nnz):
         """(internal force (6N,), tangent data (nnz,)) at U: the element tangents of each block,
         computed ``TANGENT_CHUNK`` elements at a time, scattered through ``pos_maps`` (one
-        (M, nd, nd) position map per block; ``masked``: negative positions are skipped).  Chunks
+        (M, nd, nd) position map per block; negative positions are skipped).  Chunks
         follow the element order, so every entry sums the same terms in the same order as one
         whole-mesh call would; only a chunk's element matrices are held at a time (the whole
         mesh's were 14 MB on square-pedestal 48x16x4, alive next to the last factorisation)."""
-        scatter = scatter_add_mat_masked if masked else scatter_add_mat
         xo, xn, Uc = self._current(U)
         F = np.zeros(self.n_dofs)
         data = np.zeros(nnz)
@@ -182,7 +180,7 @@ class Model:
                 core.force_tangent(*b.args(xo, xn, Uc, self.quasi, self.mu, sl), b.gp_membrane,
                                    fe[:m], we[:m], Ke[:m], nth)
                 scatter_add_vec(b.dofs[sl], fe[:m].reshape(m, -1), F)
-                scatter(pos[sl], Ke[:m], data)
+                scatter_add_mat(pos[sl], Ke[:m], data)
         return F, data
 
     def force_and_tangent(self, U):
@@ -190,7 +188,7 @@ class Model:
         import scipy.sparse as sp      # here only: the static solver's path never forms this matrix
 
         p = self.pattern
-        F, data = self._force_and_tangent_into(U, p.pos, p.nnz, False)
+        F, data = self._force_and_tangent_into(U, p.pos, p.nnz)
         return F.reshape(-1, 6), sp.csr_matrix((data, p.indices.copy(), p.indptr.copy()),
                                                shape=(p.n, p.n))
 
@@ -205,7 +203,7 @@ class Model:
     def force_and_free_tangent(self, U, lower: FreeLowerPattern):
         """(internal force (N,6), data of K_t's lower triangle on the free dofs in the CSC pattern
         ``lower``) at U, Eq. (9): the static solver's form of the tangent (no 6N x 6N matrix)."""
-        F, data = self._force_and_tangent_into(U, lower.pos, lower.nnz, True)
+        F, data = self._force_and_tangent_into(U, lower.pos, lower.nnz)
         return F.reshape(-1, 6), data
 
     def tangent(self, U):

@@ -159,13 +159,10 @@ def test_from_state_onto_a_refined_mesh_of_a_falling_sheet():
     assert i["energy_balance_error"] < 1e-9 and i["steps"] > 2 * n_mid
 
 
-def test_relaxation_restart_bit_for_bit(tmp_path):
-    prob = cantilever(Fabric.wool(), nx=6, ny=1, L=3.0, W=0.5, gravity=1.0)
-    s = dict(damping="kinetic", mass_scaling=1e4, mass_scaling_mode="director", tol_residual=1e-4,
-             tol_kinetic=1e-8, sample_every=7)
+def relax_whole_and_restarted(prob, s, ck):
+    """(the uninterrupted relaxation, the same run stopped past half-way by its progress callback
+    and restarted from the checkpoint ``ck`` it wrote every 37 steps)."""
     full = explicit.run_relax(prob, s)
-    assert full.converged and full.info["kinetic_resets"] > 0
-    ck = str(tmp_path / "relax.npz")
     cks = dict(checkpoint=ck, checkpoint_every=37, progress_every=50)
 
     class Stop(Exception):
@@ -177,7 +174,15 @@ def test_relaxation_restart_bit_for_bit(tmp_path):
 
     with pytest.raises(Stop):
         explicit.run_relax(prob, {**s, **cks}, progress=stop)
-    again = explicit.run_relax(prob, {**s, **cks, "restart": ck})
+    return full, explicit.run_relax(prob, {**s, **cks, "restart": ck})
+
+
+def test_relaxation_restart_bit_for_bit(tmp_path):
+    prob = cantilever(Fabric.wool(), nx=6, ny=1, L=3.0, W=0.5, gravity=1.0)
+    s = dict(damping="kinetic", mass_scaling=1e4, mass_scaling_mode="director", tol_residual=1e-4,
+             tol_kinetic=1e-8, sample_every=7)
+    full, again = relax_whole_and_restarted(prob, s, str(tmp_path / "relax.npz"))
+    assert full.converged and full.info["kinetic_resets"] > 0
     assert 0 < again.info["restarted_from_step"] < full.info["steps"]
     assert np.array_equal(again.U, full.U) and again.message == full.message
     for k in ("steps", "energy_balance_error", "kinetic_resets", "final_relative_residual", "damping_dissipation"):

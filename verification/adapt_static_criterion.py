@@ -31,7 +31,7 @@ from solidshell import analysis
 from solidshell.adapt.background import BackgroundMesh
 from solidshell.adapt.criteria import DEFAULT_EPS, leaf_bending_strain, level_side_lengths, mark
 from solidshell.adapt.forest import AdaptiveMesh
-from solidshell.adapt.transfer import fill_new_nodes
+from solidshell.adapt.transfer import to_new_mesh
 from solidshell.runner import _pedestal_area, build_problem, build_scene_mesh
 from solidshell.scenes import load
 from solidshell.solvers.static import solve_static
@@ -80,12 +80,7 @@ def refine_to_equilibrium(sc, level0, levels, const, choice, max_rounds=8):
         old = act
         forest.split(leaves[marks.split])
         act = forest.active_mesh()
-        inserted = np.setdiff1d(act.nodes, old.nodes, assume_unique=True)
-        Ubg = np.zeros((len(bg.Xo), 6))
-        Ubg[old.nodes] = r.U.reshape(-1, 6)
-        known = np.zeros(len(bg.Xo), dtype=bool)
-        known[old.nodes] = True
-        U = fill_new_nodes(bg, Ubg, inserted, "dk", known=known)[act.nodes]
+        U = to_new_mesh(bg, r.U, old.nodes, act.nodes, "dk").reshape(-1, 6)
     return rows
 
 

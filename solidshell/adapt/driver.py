@@ -32,7 +32,7 @@ from .criteria import leaf_bending_strain, level_side_lengths, mark
 from .forest import ActiveMesh, AdaptiveMesh
 from .settings import AdaptSettings
 from .settle import DirectorSettler
-from .transfer import fill_new_nodes
+from .transfer import to_new_mesh
 from ..solvers.blas import single_threaded_blas
 from ..solvers.explicit import Integrator, checkpoint, parse_settings, threads_for
 
@@ -281,12 +281,10 @@ class AdaptiveRun:
         kinetic_before = 0.5 * float(np.add.reduce(integ.Mf * v * v))
         Nb = len(self.bg.Xo)
         inserted = np.setdiff1d(new.nodes, old.nodes, assume_unique=True)
-        known = np.zeros(Nb, dtype=bool)
-        known[old.nodes] = True
         with self._timed("problem"):
             problem = self._problem(new)
         with self._timed("transfer"):
-            st.D, st.D_prev = self._transfer(st.D, st.D_prev, old, new, inserted, known)
+            st.D, st.D_prev = self._transfer(st.D, st.D_prev, old, new)
             st.anchors = _remap_anchors(st.anchors, old.nodes, new.nodes, Nb)
         if self.adapt.settle_directors:
             with self._timed("settle"):
@@ -308,22 +306,15 @@ class AdaptiveRun:
                                   kinetic_before=kinetic_before))
         self._enter(self.integ, new)
 
-    def _transfer(self, D, Dp, old: ActiveMesh, new: ActiveMesh, inserted, known):
+    def _transfer(self, D, Dp, old: ActiveMesh, new: ActiveMesh):
         """(D_n, D_n-1) on the new mesh.  Positions of new nodes by the chosen transfer (§5.4: DK);
         their step increment D_n - D_n-1 (the velocity) by linear / serendipity interpolation of
         their neighbours', a convex combination that cannot exceed them.  DK applied to D_n-1 too
         (the paper's "similar approach") would map the fast velocities of the light directors,
         through w_oM = -L/8 (v_nA - v_nB), into translational velocities of heavy nodes
         (docs/adaptivity.md)."""
-        Nb = len(self.bg.Xo)
-
-        def fill(vec, method, centre):
-            Ubg = np.zeros((Nb, 6))
-            Ubg[old.nodes] = vec.reshape(-1, 6)
-            return fill_new_nodes(self.bg, Ubg, inserted, method, known=known, centre=centre)[new.nodes].ravel()
-
-        D_new = fill(D, self.adapt.transfer, "kirchhoff")
-        step = fill(D - Dp, "linear", "serendipity")
+        D_new = to_new_mesh(self.bg, D, old.nodes, new.nodes, self.adapt.transfer, "kirchhoff")
+        step = to_new_mesh(self.bg, D - Dp, old.nodes, new.nodes, "linear", "serendipity")
         return D_new, D_new - step
 
     def _settle(self, problem, D, Dp, new: ActiveMesh, inserted):
@@ -335,18 +326,19 @@ class AdaptiveRun:
         settle too (from their DK placement, the old nodes held); where that settling falls short of
         its three digits (large new elements sag far from their DK placement), the directors alone
         are settled instead and ``new_node_fallbacks`` counts it."""
-        if self._settle_new_nodes and len(inserted):
-            settler = DirectorSettler(problem.model, problem.loads, problem.fixed,
-                                      np.searchsorted(new.nodes, inserted))
+        def both(nodes=None):
+            settler = DirectorSettler(problem.model, problem.loads, problem.fixed, nodes)
             D_s, rep = settler(D)
             Dp_s, rep_p = settler(Dp, start=D_s)
-            if rep.converged and rep_p.converged:
+            return D_s, Dp_s, (not rep.converged) + (not rep_p.converged)
+
+        if self._settle_new_nodes and len(inserted):
+            D_s, Dp_s, short = both(np.searchsorted(new.nodes, inserted))
+            if not short:
                 return D_s, Dp_s
             self.new_node_fallbacks += 1   # not settled: the new nodes keep their DK placement
-        settler = DirectorSettler(problem.model, problem.loads, problem.fixed)
-        D_s, rep = settler(D)
-        Dp_s, rep_p = settler(Dp, start=D_s)
-        self.settle_failures += (not rep.converged) + (not rep_p.converged)
+        D_s, Dp_s, short = both()
+        self.settle_failures += short
         return D_s, Dp_s
 
     @property

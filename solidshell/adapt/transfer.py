@@ -61,7 +61,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["dk_midedge", "linear_midedge", "serendipity_centre", "kirchhoff_centre_director",
-           "fill_new_nodes", "STRETCH_MODES", "METHODS", "CENTRE_MODES"]
+           "fill_new_nodes", "to_new_mesh", "STRETCH_MODES", "METHODS", "CENTRE_MODES"]
 
 STRETCH_MODES = ("length", "paper")
 METHODS = ("dk", "linear")
@@ -291,3 +291,17 @@ def fill_new_nodes(bg, Ubg, new_nodes, method: str = "dk", known=None, *, stretc
             U[cens] = Uc
             valid[cens] = True
     return U
+
+
+def to_new_mesh(bg, U, old_nodes, new_nodes, method: str = "dk", centre: str = "kirchhoff"):
+    """A state (n_old*6,) or (n_old,6) on the active mesh of background nodes ``old_nodes`` carried to
+    the one of ``new_nodes`` (both sorted): surviving nodes keep their rows, the nodes inserted now
+    are filled by :func:`fill_new_nodes` from the old ones.  Returns the flat (n_new*6,) state."""
+    old_nodes, new_nodes = np.asarray(old_nodes), np.asarray(new_nodes)
+    Nb = len(bg.Xo)
+    Ubg = np.zeros((Nb, 6))
+    Ubg[old_nodes] = np.asarray(U, dtype=float).reshape(-1, 6)
+    known = np.zeros(Nb, dtype=bool)
+    known[old_nodes] = True
+    inserted = np.setdiff1d(new_nodes, old_nodes, assume_unique=True)
+    return fill_new_nodes(bg, Ubg, inserted, method, known=known, centre=centre)[new_nodes].ravel()

@@ -285,6 +285,7 @@ class AdaptiveRun:
             problem = self._problem(new)
         with self._timed("transfer"):
             st.D, st.D_prev = self._transfer(st.D, st.D_prev, old, new)
+            _impose_prescribed(problem, st.D, st.D_prev)
             st.anchors = _remap_anchors(st.anchors, old.nodes, new.nodes, Nb)
         if self.adapt.settle_directors:
             with self._timed("settle"):
@@ -318,19 +319,19 @@ class AdaptiveRun:
         return D_new, D_new - step
 
     def _settle(self, problem, D, Dp, new: ActiveMesh, inserted):
-        """The directors of both time levels put at equilibrium with their positions (settle.py): the
-        director velocity becomes the quasi-static director's rate, which drops the director
+        """D_n's directors put at equilibrium with its positions (settle.py), and D_n-1 one
+        quasi-static step behind: the settled dofs' velocity becomes the rate at which their
+        equilibrium follows the held dofs' transferred velocity, which drops the director
         oscillation the previous remeshes' out-of-balance forces left in the velocity (keeping that
-        velocity is not enough: docs/adaptivity.md).  D_n-1 starts from the settled D_n's
-        directors, one step away.  With ``adapt.settle_new_nodes`` the inserted nodes' positions
-        settle too (from their DK placement, the old nodes held); where that settling falls short of
-        its three digits (large new elements sag far from their DK placement), the directors alone
-        are settled instead and ``new_node_fallbacks`` counts it."""
+        velocity is not enough, and settling D_n-1 apart leaves the two settlings' residual errors
+        in the velocity: docs/adaptivity.md).  With ``adapt.settle_new_nodes`` the inserted nodes'
+        positions settle too (from their DK placement, the old nodes held); where that settling
+        falls short of its three digits (large new elements sag far from their DK placement), the
+        directors alone are settled instead and ``new_node_fallbacks`` counts it."""
         def both(nodes=None):
             settler = DirectorSettler(problem.model, problem.loads, problem.fixed, nodes)
             D_s, rep = settler(D)
-            Dp_s, rep_p = settler(Dp, start=D_s)
-            return D_s, Dp_s, (not rep.converged) + (not rep_p.converged)
+            return D_s, D_s - settler.quasi_static_step(D_s, D - Dp), int(not rep.converged)
 
         if self._settle_new_nodes and len(inserted):
             D_s, Dp_s, short = both(np.searchsorted(new.nodes, inserted))
@@ -408,6 +409,17 @@ def _monotone(cb):
         best[0] = max(best[0], float(fraction))
         cb(best[0], text)
     return call
+
+
+def _impose_prescribed(problem, D, Dp) -> None:
+    """The prescribed values (clamps: zero) on both time levels of the new mesh's fixed dofs, in
+    place.  A node inserted on a clamped edge is transferred like any other (DK places it on the
+    bent edge's cubic, ~1e-2 cm off the clamp); the integrator would snap it back in one step, a
+    velocity of (offset / 2 dt) ~ 50 cm/s on the clamp that the first ledger reading books as energy."""
+    fx = np.asarray(problem.fixed, dtype=bool).ravel()
+    pv = np.asarray(problem.prescribed, dtype=float).ravel()
+    D[fx] = pv[fx]
+    Dp[fx] = pv[fx]
 
 
 def _same_leaves(a: dict, b: dict) -> bool:

@@ -12,10 +12,11 @@ the paper-path blow-up measured in docs/adaptivity.md.
 
 What.  With the positions U_o held, the directors minimise the total potential Pi = U(D) - P.D; a
 few Newton steps on the director block K_nn of the tangent (Eq. 9), each backtracked until Pi falls,
-reach that minimum.  The driver settles both time levels D_n and D_n-1 of the central-difference
-state: the director velocity becomes the rate of the quasi-static director, so the fast director
-oscillation is removed and the slow rotation with the sheet is kept.  Positions and every
-translational dof are untouched, so DK's placement of the new nodes (§5.4) stands.
+reach that minimum.  The driver settles D_n, and gives the settled dofs of D_n-1 the quasi-static rate
+(:meth:`DirectorSettler.quasi_static_step`): the director velocity becomes the rate of the
+quasi-static director, so the fast director oscillation is removed and the slow rotation with the
+sheet is kept.  Positions and every translational dof are untouched (but those of the inserted
+nodes, when asked), so DK's placement of the new nodes (§5.4) stands.
 """
 
 from __future__ import annotations
@@ -55,9 +56,8 @@ class DirectorSettler:
     """Settles the directors of states on one problem (``model``, ``loads`` (N,6) [force], ``fixed``
     (N,6) bool), and the positions of ``nodes`` too when given (the inserted nodes), by Newton steps
     on that block K_nn of the tangent, each backtracked until Pi falls, with Levenberg shifts where
-    K_nn is not convex there (the Newton step is then not a descent direction).  K_nn is refreshed every step: the Green thickness strain makes the block strongly
-    nonlinear.  A second state (the other time level) may start from the first one's settled
-    directors, one step away."""
+    K_nn is not convex there (the Newton step is then not a descent direction).  K_nn is refreshed
+    every step: the Green thickness strain makes the block strongly nonlinear."""
 
     def __init__(self, model, loads, fixed, nodes=None):
         self.model = model
@@ -67,7 +67,8 @@ class DirectorSettler:
         self._chol = Cholesky()          # CHOLMOD; one symbolic analysis for all steps (one pattern)
         self._lower = None               # K_nn's lower-triangle pattern, built at the first step
         self._K = None
-        self._factored = False           # the last factorisation succeeded (chord steps may reuse it)
+        self._factored = False           # the last factorisation succeeded (quasi_static_step reuses it)
+        self._shift = 0.0                # and its Levenberg shift
 
     def _step(self, U, r, shift):
         """K_nn^-1 r at U, or (K_nn + shift mean|diag K_nn| I)^-1 r; None where that matrix is not
@@ -83,18 +84,15 @@ class DirectorSettler:
         K = self._K
         s = shift * float(np.mean(np.abs(K.data[K.diag_pos]))) if shift else None
         self._factored = self._chol.factor(K, s)
+        self._shift = shift
         if not self._factored:
             return None
         x = self._chol.solve(r)
         return x if np.all(np.isfinite(x)) else None
 
-    def _descend(self, U, flat, r, pi, chord=False):
-        """One backtracked step; (Pi, force) after it, or None (flat restored) if none lowers Pi.
-        ``chord``: only the last factor's step (no new tangent), for a state next to the last one."""
+    def _descend(self, U, flat, r, pi):
+        """One backtracked step; (Pi, force) after it, or None (flat restored) if none lowers Pi."""
         base = flat[self.idx].copy()
-        if chord:
-            step = self._chol.solve(r) if self._factored else None
-            return self._backtrack(U, flat, base, step, r, pi)
         for shift in _SHIFTS:
             got = self._backtrack(U, flat, base, self._step(U, r, shift), r, pi)
             if got is not None:
@@ -116,37 +114,21 @@ class DirectorSettler:
         flat[idx] = base
         return None
 
-    def __call__(self, D, *, start=None, max_iter: int = 8, rtol: float = 1e-3):
+    def __call__(self, D, *, max_iter: int = 8, rtol: float = 1e-3):
         """(D with its free directors at equilibrium (flat, 6N), report).  ``D`` flat (6N,) or (N,6),
-        not modified; ``start``: a state whose free directors to start from (taken only if they give
-        the lower Pi).  Stops when the director residual is below ``rtol`` times that of D (three digits:
-        the rest is then far below the translational out-of-balance force the transfer leaves), after
-        ``max_iter`` steps, or when no step lowers Pi.  With ``start``, the steps first reuse the
-        last factor of K_nn (chord steps: the other time level's positions are one step away, so
-        its K_nn is nearly the same) and assemble a new tangent only when a chord step fails."""
+        not modified.  Stops when the director residual is below ``rtol`` times that of D (three
+        digits: the rest is then far below the translational out-of-balance force the transfer
+        leaves), after ``max_iter`` steps, or when no step lowers Pi."""
         idx, P = self.idx, self.P
         U = np.array(D, dtype=float).reshape(self.fixed.shape)
         flat = U.ravel()
         E, F = self.model.energy_and_force(U)
         pi = float(E) - float(P @ flat)
         r = (P - np.asarray(F).ravel())[idx]
-        r0 = float(np.linalg.norm(r))
-        if start is not None:
-            base = flat[idx].copy()
-            flat[idx] = np.asarray(start, dtype=float).ravel()[idx]
-            E_s, F_s = self.model.energy_and_force(U)
-            pi_s = float(E_s) - float(P @ flat)
-            if np.isfinite(pi_s) and pi_s < pi:
-                pi, r = pi_s, (P - np.asarray(F_s).ravel())[idx]
-            else:
-                flat[idx] = base
-        rn, it = float(np.linalg.norm(r)), 0
-        chord = start is not None
+        r0 = rn = float(np.linalg.norm(r))
+        it = 0
         while it < max_iter and rn > rtol * r0 and r0 > 0.0:
-            got = self._descend(U, flat, r, pi, chord)
-            if got is None and chord:
-                chord = False
-                continue
+            got = self._descend(U, flat, r, pi)
             if got is None:
                 break
             pi, F = got
@@ -154,6 +136,35 @@ class DirectorSettler:
             r = (P - np.asarray(F).ravel())[idx]
             rn = float(np.linalg.norm(r))
         return flat.copy(), SettleReport(it, r0, rn, bool(rn <= rtol * r0))
+
+    def quasi_static_step(self, D, step):
+        """``step`` (flat 6N: D_n - D_n-1 as transferred) with its settled entries replaced by the
+        quasi-static rate at the settled state D: w = -K_SS^-1 K_SH v for the held dofs' step v, so
+        that r_S stays zero to first order as the held dofs move (S: the settled dofs).  K_SH v is the
+        central difference of the force over +-v (one time step each way: the secant of the motion
+        the integrator makes); K_SS is the last factor of the settling (the state one Newton step
+        before D, or D itself when none was taken).  Settling D_n-1 on its own instead leaves the
+        difference of two settlings' residual errors in the velocity: ~1e-3 cm in D_n - D_n-1 is
+        ~10 cm/s at dt ~ 1e-4 s (docs/adaptivity.md)."""
+        idx = self.idx
+        U = np.array(D, dtype=float).reshape(self.fixed.shape)
+        v = np.array(step, dtype=float).ravel()
+        v[idx] = 0.0
+        v[self.fixed.ravel()] = 0.0
+        if not (self._factored and self._shift == 0.0):
+            if self._step(U, np.zeros(len(idx)), 0.0) is None:    # not convex: keep the step
+                return np.array(step, dtype=float).ravel()
+        flat = U.ravel()
+        base = flat.copy()
+        flat[:] = base + v
+        Fp = np.asarray(self.model.internal_force(U)).ravel()[idx]
+        flat[:] = base - v
+        Fm = np.asarray(self.model.internal_force(U)).ravel()[idx]
+        w = -self._chol.solve(0.5 * (Fp - Fm))
+        out = np.array(step, dtype=float).ravel()
+        if np.all(np.isfinite(w)):
+            out[idx] = w
+        return out
 
 
 def settle_directors(model, loads, fixed, D, **kw):

@@ -46,8 +46,8 @@ def make_adaptive(name, scene, caption, out_dir: Path, quick: bool, title: str, 
         rec["uniform_mesh_nodes"] = uniform_nodes
     steady = "steady" if rec.get("converged") else "NOT steady"
     info = {"figure": name, "caption": caption, "quick": quick, "runs": [rec],
-            "differs_from_paper": "directors (and new nodes) settled after each remesh, a step beyond the bare "
-                                  "DK transfer (docs/adaptivity.md)"
+            "differs_from_paper": "directors and new nodes settled after each remesh, D_n-1 one quasi-static "
+                                  "step behind: a step beyond the bare DK transfer (docs/adaptivity.md)"
                                   + ("; quick: two levels, wall time capped" if quick else "")}
     sub = f"{rec.get('fold_count')} folds, DC {rec.get('drape_coefficient', float('nan')):.3f}, max {rec.get('max_active_nodes')} active nodes, {steady}"
     common.save(fig, out_dir, name, info, suptitle=f"{title}\n{sub}")

@@ -166,3 +166,46 @@ def test_pack_refuses_the_compatible_membrane():
     assert not lanes_ans.covers(b.c)
     with pytest.raises(ValueError, match="membrane='ans'"):
         lanes_ans.pack(b.conn, b.c, b.c["r_zq"])
+
+
+def test_fused_step_with_assumed_membrane_follows_the_previous_path():
+    """The explicit solver's fused step on a mesh whose quads are "ans" and "full" in runs (three
+    blocks, the adaptive mesh's coarse/fine split) plus triangles: the ans blocks go through the
+    lane kernel, and 60 steps of a sheet falling onto a plane follow Model.internal_force +
+    central_step to round-off (1e-11 relative: per-step differences of 1e-16 grown by 60 steps of
+    a stable scheme)."""
+    from solidshell.contact import Plane
+    from solidshell.problem import Problem
+    from solidshell.solvers.explicit import Integrator
+    from solidshell.solvers.explicit.fused import FusedForces
+
+    base = distorted_warped_mesh()
+    q = base.quads
+    t = q[25:]
+    mesh = ShellMesh(base.nodes, quads=q[:25], tris=np.vstack([t[:, [0, 1, 2]], t[:, [0, 2, 3]]]))
+    choice = ["ans"] * 12 + ["full"] * 6 + ["ans"] * 7
+    model = Model(mesh, WOOL30, thickness_strain="quasi", membrane=choice)
+    ff = FusedForces(model)
+    assert [p[2]["kernel"] for p in ff.parts if p[0] == "lanes"] == \
+        [lanes_ans.quad_forces, lanes.quad_forces, lanes_ans.quad_forces]
+    fixed = np.zeros((mesh.n_nodes, 6), bool)
+    fixed[mesh.nodes[:, 0] == 0.0] = True
+    loads = np.zeros((mesh.n_nodes, 6))
+    loads[:, 2] = -980.665 * model.lumped_mass()[:, 0]
+    z0 = mesh.nodes[:, 2].min() + 0.01                    # the lowest nodes start in contact
+    prob = Problem(model, fixed, loads, contact=[Plane(point=(0.0, 0.0, z0), normal=(0.0, 0.0, 1.0))])
+    s = {"t_end": 1.0, "sample_every": 7, "mass_scaling": 100.0}
+    a, b = Integrator(prob, s), Integrator(prob, s)
+    b.forces.fused = None
+    assert a.forces.fused is not None
+    for it in (a, b):
+        assert it.advance(60) == "running"
+    D0 = b.state.D
+    assert np.max(np.abs(a.state.D - D0)) <= 1e-11 * np.max(np.abs(D0))
+    assert a.state.max_contact == b.state.max_contact > 0
+    # and the force itself at a deformed state, against the model's
+    U = random_motion(mesh, 8)
+    F1, E1 = ff.internal(U.ravel(), True)
+    E0, F0 = model.energy_and_force(U)
+    assert np.abs(F1 - F0.ravel()).max() <= 1e-13 * np.abs(F0).max()
+    assert abs(E1 - E0) <= 1e-13 * abs(E0)

@@ -12,7 +12,6 @@ import pytest
 
 from solidshell import Fabric, ShellMesh
 from solidshell.elements import core, lanes, lanes_ans, quad4
-from solidshell.elements.frames import covariant_maps, fold, local_frame
 from solidshell.model import Model
 
 WOOL30 = Fabric.wool(warp_angle=30.0)
@@ -47,21 +46,6 @@ def test_membrane_products_are_combinations_of_six():
     assert np.abs(raw - y @ quad4.R_MEM.T).max() <= 1e-13 * np.abs(raw).max()
 
 
-def _dense_block(mesh, section, quasi):
-    """The 26-tie form: 4 shear ties and the 22 raw membrane products with the dense 22x22 rigidity
-    P^T C5 P (what quad4 stored before the factorisation), from the same geometric steps as
-    quad4.precompute."""
-    Xo, Xn = mesh.nodes[mesh.quads], mesh.directors[mesh.quads]
-    A1 = np.einsum("gi,mic->mgc", quad4.DN_GP[:, :, 0], Xo)
-    A2 = np.einsum("gi,mic->mgc", quad4.DN_GP[:, :, 1], Xo)
-    J = np.einsum("mgc,mgc->mg", np.cross(A1, A2), np.einsum("gi,mic->mgc", quad4.N_GP, Xn))
-    ex, ey, _ = local_frame(A1, A2, section.warp_angle_rad)
-    _, T = covariant_maps(A1, A2, ex, ey)
-    P, C5 = quad4._assumed_membrane(Xo, fold(T, section.C_m, J), J)
-    Cm = np.swapaxes(P, 1, 2) @ C5 @ P
-    return P, C5, Cm
-
-
 @pytest.mark.parametrize("thickness", ["green", "quasi"])
 def test_factorised_membrane_is_the_dense_one(thickness):
     """Rank 5 (the field's five parameters), and core's kernels on the compact 10-tie form give the
@@ -71,14 +55,11 @@ def test_factorised_membrane_is_the_dense_one(thickness):
     model = Model(mesh, WOOL30, thickness_strain=thickness, membrane="ans")
     b = model.blocks[0]
     assert b.alpha.shape[0] == 10 and not b.gp_membrane
-    P, C5, Cm = _dense_block(mesh, WOOL30, model.quasi)
+    Cm = quad4.dense_membrane(mesh.nodes[mesh.quads], b.c, WOOL30.C_m)
     sv = np.linalg.svd(Cm, compute_uv=False)
     assert np.all(sv[:, 5] <= 1e-14 * sv[:, 0]) and np.all(sv[:, 4] > 1e-4 * sv[:, 0])
-    Q = P @ quad4.R_MEM
     np.testing.assert_allclose(b.c["Cs"][:, 4:, 4:], quad4.R_MEM.T @ Cm @ quad4.R_MEM,
                                rtol=0, atol=1e-13 * np.abs(Cm).max())
-    np.testing.assert_allclose(b.c["Cs"][:, 4:, 4:], np.swapaxes(Q, 1, 2) @ C5 @ Q, rtol=0,
-                               atol=1e-13 * np.abs(Cm).max())
 
     M = len(mesh.quads)
     Cs = np.zeros((M, 26, 26))

@@ -42,12 +42,12 @@ N_BEND = 36            # bending rows: Gauss point g, 3x3 Cb at 9 g + 3 r + s
 N_K = 21               # membrane rows after them: K's upper triangle, row by row
 N_ROWS = N_BEND + N_K
 
-FLOPS_PER_ELEMENT = 2152
+FLOPS_PER_ELEMENT = 2794
 """Floating-point operations of one element (Green thickness strain), counted from this source as
-executed: membrane 6 nodal combinations 126, products 42, K y 66, energy 12, generalised forces
-45, nodal forces 72 (363); 4 bending points x 350 (8 tangent combinations 168, curvatures 62,
-moments 15, energy 6, generalised forces 36, nodal forces 48, energy sum 1 ... as lanes.py's
-Gauss point without its membrane terms); shear and thickness as lanes.py (389)."""
+executed, as lanes.FLOPS_PER_ELEMENT is: membrane 420 (6 nodal combinations 126, products 87,
+K y 66, energy 12, forces on a_xi, a_eta, h 45, nodal forces 84); 4 bending points x 379 (8
+tangent combinations 168, curvatures 57, moments 15, energy 7, generalised forces 36, nodal forces
+96); shear, thickness and current coordinates as lanes.py's 858."""
 
 
 def covers(c) -> bool:

@@ -220,6 +220,16 @@ def _assumed_membrane(Xo, Cm_gp, Jw):
     return P, 0.5 * (C5 + np.swapaxes(C5, 1, 2))
 
 
+def dense_membrane(Xo, c, C_m):
+    """(M,22,22) P^T C5 P: the assumed membrane's rigidity on its 22 raw tying products
+    (M_ALPHA/M_BETA/M_TIE), the form before the factorisation into the six products, from
+    precompute's constants ``c`` (its T and J) of quads with initial positions Xo (M,4,3) and the
+    section's C_m: the reference the compact form is tested and timed against."""
+    Jw = c["J"] * GAUSS_W
+    P, C5 = _assumed_membrane(Xo, fold(c["T"], C_m, Jw), Jw)
+    return np.swapaxes(P, 1, 2) @ C5 @ P
+
+
 def _sum_gauss_quadratic(S, C):
     """sum_g S_g^T C_g S_g per element: S (M,G,a,t), C (M,G,a,a) or broadcastable -> (M,t,t), by
     batched matrix products (a multi-operand einsum loops over every index at once: 10x slower)."""

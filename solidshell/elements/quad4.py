@@ -36,10 +36,16 @@ Membrane strains (``membrane=``):
     0.026).  Five independent parameters: no spurious zero-energy mode.  Measured: Scordelis-Lo roof
     -5.4/-2.7/-1.1 % (full) -> +5.0/+0.6/-0.25 % (ans) on 8^2/16^2/32^2; square-pedestal DC
     0.629/0.569/0.553 on the uniform meshes and 0.573/0.552/0.548 (0.57 % change) on meshes graded
-    towards the pedestal corners (``grading = 8`` of meshing.square_on_square).  Cost: 22 more
-    tying products (Cs is 26x26 instead of 4x4): the force kernel is 2-3 times slower.  All of
-    this is beyond the paper, whose quadrilateral integrates the compatible membrane strains by
-    the 2x2 rule; ``"full"`` stays the default.
+    towards the pedestal corners (``grading = 8`` of meshing.square_on_square).  All of this is
+    beyond the paper, whose quadrilateral integrates the compatible membrane strains by the 2x2
+    rule; ``"full"`` stays the default.
+    Stored form: the field's 22 raw tying products (12 compatible strains at the Gauss points, 5
+    tying strains, 5 twist terms) enter only through the five parameters, so their rigidity is
+    P^T C5 P (rank 5), and each product is a fixed combination (R_MEM) of the six products of the
+    centre tangents and the hourglass vector (a bilinear quad's tangents are a_xi + eta h and
+    a_eta + xi h).  The kernels see six membrane "tying" products with a 6x6 rigidity (Cs is 10x10
+    instead of the 4x4 shear block): core's force kernel costs ~2x the compatible quad's, its
+    force+tangent ~1.3x, and the lane kernel (lanes_ans.py) about the same as lanes.py's.
 """
 
 from __future__ import annotations

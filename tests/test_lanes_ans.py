@@ -190,3 +190,12 @@ def test_fused_step_with_assumed_membrane_follows_the_previous_path():
     E0, F0 = model.energy_and_force(U)
     assert np.abs(F1 - F0.ravel()).max() <= 1e-13 * np.abs(F0).max()
     assert abs(E1 - E0) <= 1e-13 * abs(E0)
+    # blocks are the unit of work: the same bits on 2 threads
+    import numba
+    old = numba.get_num_threads()
+    try:
+        numba.set_num_threads(min(2, numba.config.NUMBA_NUM_THREADS))
+        F2, E2 = ff.internal(U.ravel(), True)
+    finally:
+        numba.set_num_threads(old)
+    assert np.array_equal(F1, F2) and E1 == E2

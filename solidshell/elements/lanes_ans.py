@@ -18,6 +18,11 @@ and the transverse shear and thickness stage is lanes.py's own.
 Stages per block: gather (lanes), membrane, four bending points, shear and thickness (lanes).
 Results do not depend on the thread count (blocks are the unit of work); they equal core.py's to
 round-off (the same operations, grouped and contracted differently).
+
+lanes.py's helpers are inlined here: numba's on-disk cache of this module is keyed on this file
+only, so after a change of those helpers (or of their names) delete this module's cache files
+(``__pycache__/lanes_ans*.nbi/.nbc``) or touch this file; tests/test_lanes_ans.py catches a
+mismatch with core either way.
 """
 
 from __future__ import annotations

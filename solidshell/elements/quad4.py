@@ -36,10 +36,16 @@ Membrane strains (``membrane=``):
     0.026).  Five independent parameters: no spurious zero-energy mode.  Measured: Scordelis-Lo roof
     -5.4/-2.7/-1.1 % (full) -> +5.0/+0.6/-0.25 % (ans) on 8^2/16^2/32^2; square-pedestal DC
     0.629/0.569/0.553 on the uniform meshes and 0.573/0.552/0.548 (0.57 % change) on meshes graded
-    towards the pedestal corners (``grading = 8`` of meshing.square_on_square).  Cost: 22 more
-    tying products (Cs is 26x26 instead of 4x4): the force kernel is 2-3 times slower.  All of
-    this is beyond the paper, whose quadrilateral integrates the compatible membrane strains by
-    the 2x2 rule; ``"full"`` stays the default.
+    towards the pedestal corners (``grading = 8`` of meshing.square_on_square).  All of this is
+    beyond the paper, whose quadrilateral integrates the compatible membrane strains by the 2x2
+    rule; ``"full"`` stays the default.
+    Stored form: the field's 22 raw tying products (12 compatible strains at the Gauss points, 5
+    tying strains, 5 twist terms) enter only through the five parameters, so their rigidity is
+    P^T C5 P (rank 5), and each product is a fixed combination (R_MEM) of the six products of the
+    centre tangents and the hourglass vector (a bilinear quad's tangents are a_xi + eta h and
+    a_eta + xi h).  The kernels see six membrane "tying" products with a 6x6 rigidity (Cs is 10x10
+    instead of the 4x4 shear block): core's force kernel costs ~2x the compatible quad's, its
+    force+tangent ~1.3x, and the lane kernel (lanes_ans.py) about the same as lanes.py's.
 """
 
 from __future__ import annotations
@@ -98,6 +104,32 @@ M_BETA = np.array([DN_GP[g, :, l] for g, _, l, _ in _GPM] + [shape(*p)[1][:, l] 
 M_TIE = np.array([[0.0, 0.0, c] for *_, c in _GPM] + [[0.0, 0.0, c] for _, _, _, c, _ in _MTY]
                  + [[0.0, 0.0, c] for *_, c in _TW])
 N_MEM = len(M_TIE)                                      # 22 raw membrane strains
+# On a bilinear quadrilateral x = x_c + xi a_xi + eta a_eta + xi eta h, so every tangent is
+# a_xi + eta h or a_eta + xi h, and each of the 22 products above is a fixed combination of the six
+# products y = (a_xi.a_xi/2, a_eta.a_eta/2, a_xi.a_eta, h.h/2, a_xi.h, a_eta.h) of the centre
+# tangents and the hourglass vector: raw = R_MEM y.  The membrane rigidity therefore acts on y as
+# the 6x6 R^T P^T C5 P R (rank 5), and the kernels form six products instead of 22.
+_V = np.stack([_DC[:, 0], _DC[:, 1], _HG], 1)          # (4,3): orthogonal columns, |column|^2 = 1/4
+_PAIRS = ((0, 0, 0.5), (1, 1, 0.5), (0, 1, 1.0), (2, 2, 0.5), (0, 2, 1.0), (1, 2, 1.0))
+P_ALPHA = np.array([_V[:, k] for k, _, _ in _PAIRS])
+P_BETA = np.array([_V[:, l] for _, l, _ in _PAIRS])
+P_TIE = np.array([[0.0, 0.0, c] for *_, c in _PAIRS])
+N_PROD = len(P_TIE)                                    # the six membrane products
+
+
+def products_map(alpha, beta, tie):
+    """(nt,6) R with c_t (alpha_t . x)(beta_t . x) = R_t . y for any nodal x (y: the six products
+    P_ALPHA/P_BETA/P_TIE), for x_o.x_o tying rows alpha, beta (nt,4) whose weights sum to zero."""
+    a = 4.0 * alpha @ _V                                   # coordinates on the basis _V
+    b = 4.0 * beta @ _V
+    R = np.zeros((len(alpha), N_PROD))
+    for p, (k, l, c) in enumerate(_PAIRS):
+        w = a[:, k] * b[:, l] + (a[:, l] * b[:, k] if k != l else 0.0)
+        R[:, p] = tie[:, 2] * w / c
+    return R
+
+
+R_MEM = products_map(M_ALPHA, M_BETA, M_TIE)           # (22,6)
 MEMBRANES = ("full", "ans")
 
 
@@ -143,10 +175,12 @@ def raw_strains(xo, xn):
 
 
 def _assumed_membrane(Xo, Cm_gp, Jw):
-    """(M,22,22): rigidity of the assumed membrane field (module docstring) on its 22 raw strains
-    (M_ALPHA/M_BETA/M_TIE: 12 compatible ones at the Gauss points, the 5 tying strains, 5 twist
-    terms), from the natural-strain rigidities Cm_gp (M,4,3,3) = T^T C_m T J_o w at the Gauss
-    points."""
+    """The assumed membrane field (module docstring) as factors: P (M,5,22) takes the 22 raw
+    strains (M_ALPHA/M_BETA/M_TIE: 12 compatible ones at the Gauss points, the 5 tying strains, 5
+    twist terms) to the five parameters (e1, e2, e3, b4, b5), C5 (M,5,5) = sum_g F_g^T W_g^T Cm_g
+    W_g F_g is the rigidity on them (F_g: the field at Gauss point g, W_g: Cartesian to natural
+    strains there), from the natural-strain rigidities Cm_gp (M,4,3,3) = T^T C_m T J_o w at the
+    Gauss points.  The rigidity on the 22 raw strains is P^T C5 P: of rank 5."""
     M = len(Xo)
     A1c = np.einsum("i,mic->mc", _DC[:, 0], Xo)                 # centre tangents
     A2c = np.einsum("i,mic->mc", _DC[:, 1], Xo)
@@ -181,13 +215,25 @@ def _assumed_membrane(Xo, Cm_gp, Jw):
     coef[:, 20], coef[:, 21], coef[:, 16] = 2.0 * a_ * a_, 2.0 * b_ * b_, 2.0 * a_ * b_
     tw = np.einsum("mg,mgab,b->ma", Jw / area[:, None], Winv, np.array([1.0, 1.0, 0.0]) / 3.0)
     mean += tw[:, :, None] * coef[:, None, :]
-    S = np.empty((M, 4, 3, N_MEM))                               # natural strains at gp g
-    for g, (xg, eg) in enumerate(GAUSS):
-        E = mean.copy()
-        E[:, 0, 12:17] += (eg - eta_c)[:, None] * b45[:, 0]
-        E[:, 1, 12:17] += (xg - xi_c)[:, None] * b45[:, 1]
-        S[:, g] = W[:, g] @ E
-    return _sum_gauss_quadratic(S, Cm_gp)
+    P = np.zeros((M, 5, N_MEM))
+    P[:, :3] = mean
+    P[:, 3:, 12:17] = b45
+    F = np.zeros((M, 4, 3, 5))                                   # the field at gp g (_assumed_field)
+    F[:, :, 0, 0] = F[:, :, 1, 1] = F[:, :, 2, 2] = 1.0
+    F[:, :, 0, 3] = GAUSS[None, :, 1] - eta_c[:, None]
+    F[:, :, 1, 4] = GAUSS[None, :, 0] - xi_c[:, None]
+    C5 = _sum_gauss_quadratic(W @ F, Cm_gp)
+    return P, 0.5 * (C5 + np.swapaxes(C5, 1, 2))
+
+
+def dense_membrane(Xo, c, C_m):
+    """(M,22,22) P^T C5 P: the assumed membrane's rigidity on its 22 raw tying products
+    (M_ALPHA/M_BETA/M_TIE), the form before the factorisation into the six products, from
+    precompute's constants ``c`` (its T and J) of quads with initial positions Xo (M,4,3) and the
+    section's C_m: the reference the compact form is tested and timed against."""
+    Jw = c["J"] * GAUSS_W
+    P, C5 = _assumed_membrane(Xo, fold(c["T"], C_m, Jw), Jw)
+    return np.swapaxes(P, 1, 2) @ C5 @ P
 
 
 def _sum_gauss_quadratic(S, C):
@@ -202,7 +248,8 @@ def precompute(Xo, Xn, C_m, C_b, C_t, E_z, warp_angle, membrane="full"):
     membrane : "full" (compatible strains at the Gauss points) or "ans" (assumed membrane strains,
         see the module docstring: their rigidity moves from Cmb into the tying block of Cs).
     Returns dict(Cmb (M,4,2,3,3), Cs (M,nt,nt), Cz (M,4,4), r_mb, r_s, r_z, T (M,4,3,3), J (M,4),
-    alpha, beta (nt,4), tie (nt,3)) with nt = 4 ("full") or 26 ("ans").
+    alpha, beta (nt,4), tie (nt,3)) with nt = 4 ("full") or 10 ("ans": the 4 shear ties, then
+    the six membrane products P_ALPHA/P_BETA/P_TIE with their 6x6 rigidity).
     """
     if membrane not in MEMBRANES:
         raise ValueError(f"membrane must be one of {MEMBRANES}, got {membrane!r}")
@@ -223,16 +270,17 @@ def precompute(Xo, Xn, C_m, C_b, C_t, E_z, warp_angle, membrane="full"):
     alpha, beta, tie = ALPHA, BETA, TIE
     if membrane == "ans":
         Cmb[:, :, 0] = 0.0                       # the membrane moves into the tying block
-        Cm = _assumed_membrane(Xo, fold(T, C_m, Jw), Jw)
+        P, C5 = _assumed_membrane(Xo, fold(T, C_m, Jw), Jw)
+        Q = P @ R_MEM                            # (M,5,6): the field's parameters from y
+        Cm = np.swapaxes(Q, 1, 2) @ C5 @ Q
         nts = Cs.shape[1]
-        nm = Cm.shape[1]
-        Cs_all = np.zeros((len(Xo), nts + nm, nts + nm))
+        Cs_all = np.zeros((len(Xo), nts + N_PROD, nts + N_PROD))
         Cs_all[:, :nts, :nts] = Cs
-        Cs_all[:, nts:, nts:] = Cm
+        Cs_all[:, nts:, nts:] = 0.5 * (Cm + np.swapaxes(Cm, 1, 2))   # exactly symmetric
         Cs = Cs_all
-        alpha = np.vstack([ALPHA, M_ALPHA])
-        beta = np.vstack([BETA, M_BETA])
-        tie = np.vstack([TIE, M_TIE])
+        alpha = np.vstack([ALPHA, P_ALPHA])
+        beta = np.vstack([BETA, P_BETA])
+        tie = np.vstack([TIE, P_TIE])
         r_s = tying_raw(alpha, beta, tie, Xo, Xn)
     return dict(Cmb=np.ascontiguousarray(Cmb), Cs=np.ascontiguousarray(Cs), Cz=Cz, r_mb=r_mb,
                 r_s=np.ascontiguousarray(r_s), r_z=r_z, T=T, J=J, alpha=np.ascontiguousarray(alpha),

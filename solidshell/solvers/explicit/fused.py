@@ -4,7 +4,8 @@ One step is two compiled passes and no allocation:
 
 1. the element pass: every element's force and energy into one flat buffer -- quadrilaterals with
    the compatible membrane by the lane kernel (``elements/lanes.py``, elements in SIMD lanes),
-   other blocks (triangles, the assumed-membrane quadrilateral) by ``elements/core.energy_force``;
+   with the assumed membrane by ``elements/lanes_ans.py`` (same layout), triangles by
+   ``elements/core.energy_force``;
 2. assembly and update, serial: the element forces are summed into the dofs in
    ``assembly.scatter_add_vec``'s order (elements in mesh order, block by block), so the assembled
    force equals the model's whenever the element forces do; then R = P - F (+ C), D_n+1 of Eq. (23)
@@ -24,7 +25,7 @@ import numpy as np
 from numba import get_num_threads, njit
 
 from ...assembly import scatter_add_vec
-from ...elements import core, lanes, quad4
+from ...elements import core, lanes, lanes_ans, quad4
 
 
 @njit(cache=True)
@@ -84,8 +85,10 @@ class FusedForces:
         base = 0
         for b in model.blocks:
             M, nn = b.conn.shape
-            if use_lanes and _uses_lanes(b):
-                pk = lanes.pack(b.conn, b.c, b.c["r_zq"])
+            ans = use_lanes and lanes_ans.covers(b.c)      # the assumed-membrane quad (same layout)
+            if use_lanes and (_uses_lanes(b) or ans):
+                pk = (lanes_ans if ans else lanes).pack(b.conn, b.c, b.c["r_zq"])
+                pk["kernel"] = lanes_ans.quad_forces if ans else lanes.quad_forces
                 size = pk["B"] * 24 * lanes.LANES
                 self.parts.append(("lanes", b, pk, base, size))
             else:
@@ -114,8 +117,8 @@ class FusedForces:
         nth = get_num_threads()
         for (kind, b, pk, _, _), (fe, we) in zip(self.parts, self.views):
             if kind == "lanes":
-                lanes.quad_forces(self.X, self.Xn, D6, pk["conn"], pk["Cmb"], pk["Cs"], pk["Cz"], pk["r_z"],
-                                  self.quasi, self.mu, pk["xs"], fe, we)
+                pk["kernel"](self.X, self.Xn, D6, pk["conn"], pk["Cmb"], pk["Cs"], pk["Cz"], pk["r_z"],
+                             self.quasi, self.mu, pk["xs"], fe, we)
             else:
                 core.energy_force(*b.args(xo, xn, Uc, self.quasi, self.mu), fe, we, nth)
 

@@ -371,6 +371,21 @@ def test_new_node_settling_of_large_bent_elements_gets_the_steps_it_needs():
     assert driver._SETTLE_ITER < rep.iterations < driver._SETTLE_ITER_NEW
 
 
+def test_every_new_mesh_gets_its_own_critical_step():
+    """square-pedestal (graded level 0) by the scenes' default relaxation (FIRE): the third pass
+    (t = 0.08 s, 28 splits, 8 merges) adds no finer level but stiffer elements at a pedestal corner,
+    dt_crit 8.58e-5 -> 7.22e-5 s.  Keeping the old step there (the rule before: a new estimate only
+    when the finest level changed) went non-finite 18 steps later (step 1018).  Each remesh now
+    estimates the step of its mesh: the run stays finite past it with dt below every estimate."""
+    out = run_scene("square-pedestal", solver="relax", adaptive=True, out_dir=None, progress=False,
+                    overrides={"solver.relax.t_max": 0.1, "output.pictures": [], "output.snapshots": []})
+    s = out.summary
+    assert s["finite"] and s["t_final"] >= 0.1 - 1e-9, s["message"]
+    assert s["remesh_count"] >= 3
+    # the step of the last mesh's estimate (the corner's 7.22e-5 s), under it
+    assert s["critical_time_step"] < 7.5e-5 and s["dt"] < s["critical_time_step"]
+
+
 # ----------------------------------------------------------------------------- 4. merging
 def test_split_everything_then_flat_state_merges_back_to_level0():
     # the bare transfer: settling D_-1's directors (a state one gravity half-step from flat) would

@@ -558,9 +558,9 @@ class Integrator:
         self.state = st
         if getattr(self.damper, "varies_alpha", False):
             self.alpha = float(st.damper_alpha)   # the estimate the run had reached
-        if reestimate_step:
+        if reestimate_step:   # warm-started from the state's top mode when it has one (e.g. carried over a remesh)
             lim = stepcontrol.estimate(self.model, self.M, self.free_mask, st.D, self.bodies, self.n_fric,
-                                       self.s, self.alpha)
+                                       self.s, self.alpha, v0=st.mode if np.any(st.mode) else None)
         else:
             lim = stepcontrol.limit(st.omega_el, st.method, self.M, self.bodies, self.n_fric, self.s, self.alpha)
         self._bind(lim)

@@ -35,15 +35,16 @@ class StepLimit:
     mode: np.ndarray | None = None   # the top mode (warm start of the re-checks)
 
 
-def omega_sheet(model, M, free_mask, D, s):
+def omega_sheet(model, M, free_mask, D, s, v0=None):
     """(omega_el, method, force evaluations, mode) at the flat state D: Lanczos (or the method
-    asked), or 2 / critical_time_step when the user gave it."""
+    asked; ``v0`` a start vector, e.g. the previous mesh's top mode carried over), or
+    2 / critical_time_step when the user gave it."""
     if s.critical_time_step is not None:
         return 2.0 / s.critical_time_step, "given", 0, None
     try:
         est = estimate_omega_max(model.internal_force, M, free_mask, D.reshape(M.shape),
                                  method=s.critical_step_method, tol=s.critical_step_tol,
-                                 tangent=getattr(model, "tangent", None))
+                                 tangent=getattr(model, "tangent", None), v0=v0)
     except ValueError as exc:
         raise InputError(f"cannot estimate the critical time step: {exc}") from None
     return est.omega_max, s.critical_step_method, est.n_force_evals, est.mode
@@ -64,10 +65,10 @@ def limit(omega_el, method, M, bodies, n_fric, s, alpha, n_evals=0, seconds=0.0,
                      n_evals, seconds, mode)
 
 
-def estimate(model, M, free_mask, D, bodies, n_fric, s, alpha) -> StepLimit:
-    """The critical step at the flat state D (the start estimate)."""
+def estimate(model, M, free_mask, D, bodies, n_fric, s, alpha, v0=None) -> StepLimit:
+    """The critical step at the flat state D (the start estimate; ``v0``: Lanczos' start vector)."""
     t0 = time.perf_counter()
-    w, method, n_ev, mode = omega_sheet(model, M, free_mask, D, s)
+    w, method, n_ev, mode = omega_sheet(model, M, free_mask, D, s, v0)
     return limit(w, method, M, bodies, n_fric, s, alpha, n_ev, time.perf_counter() - t0, mode)
 
 

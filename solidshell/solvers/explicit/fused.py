@@ -133,6 +133,16 @@ def update(F, P, C, has_C, R, Dn1, D, Dp, cF, cD, cDp, fixed, presc, Mf, inv2dt)
     return vMv, finite
 
 
+@njit(cache=True)
+def residual(F, P, C, has_C, R):
+    """R = P - F (+ C when has_C), update's operations, for a damper that rewrites the step."""
+    for i in range(F.size):
+        r = P[i] - F[i]
+        if has_C:
+            r += C[i]
+        R[i] = r
+
+
 def _uses_lanes(b) -> bool:
     """The lane kernel covers the quadrilateral with the compatible membrane and 4 shear ties."""
     return b.module is quad4 and b.gp_membrane and b.alpha.shape[0] == 4 and np.array_equal(b.alpha, quad4.ALPHA)
@@ -222,13 +232,17 @@ class FusedForces:
         self.assemble()
         return self.F.copy(), (self.energy() if want_energy else None)
 
-    def step(self, D, Dp, Dn1, R, P, C, cF, cD, cDp, fixed, presc, Mf, inv2dt, want_energy):
+    def step(self, D, Dp, Dn1, R, P, C, cF, cD, cDp, fixed, presc, Mf, inv2dt, want_energy, residual_only=False):
         """One step of Eq. (23) from D_n: F into self.F, R = P - F (+ C unless None), D_n+1 into Dn1
         (prescribed where ``fixed``, a (6N,) bool mask, values ``presc`` (6N,)).  Returns (v_n.M.v_n,
-        finite, strain energy or None)."""
+        finite, strain energy or None).  ``residual_only``: F and R only, Dn1 untouched, (0, True,
+        energy) -- for a damper that computes D_n+1 itself (FIRE): one pass over the dofs fewer."""
         self.element_pass(D.reshape(self.N, 6))
         self.assemble()
         has_C = C is not None
+        if residual_only:
+            residual(self.F, P, C if has_C else self._zero, has_C, R)
+            return 0.0, True, (self.energy() if want_energy else None)
         vMv, finite = update(self.F, P, C if has_C else self._zero, has_C, R, Dn1, D, Dp, cF, cD, cDp, fixed, presc,
                              Mf, inv2dt)
         return vMv, finite, (self.energy() if want_energy else None)

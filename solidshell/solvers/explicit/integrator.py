@@ -79,6 +79,7 @@ class Integrator:
         self.n_elem = int(getattr(getattr(self.model, "mesh", None), "n_elements", 0))
         self.damping = s.damping if self.relax else "rayleigh"
         self.damper = damping.make(self.damping)
+        self.damper_rewrites = bool(getattr(self.damper, "rewrites_step", False))
         self.M = M = scaled_mass(self.model, s.mass_scaling, s.mass_scaling_mode)
         self.free_mask = ~problem.fixed
         if np.any(M[self.free_mask] <= 0.0):
@@ -313,8 +314,11 @@ class Integrator:
             else:
                 f = {}
                 C = self._contact(n, D, f)
+                # a damper that rewrites the whole step (FIRE) needs only R, except on a fresh
+                # run's first step, which is the scheme's own
+                r_only = self.damper_rewrites and not (n == 0 and self.fresh)
                 vMv, finite, Es = fused.step(D, Dp, Dn1, R, self.P, C, self.cF, self.cD, self.cDp, self.fixed_mask,
-                                             self.presc_full, self.Mf, 0.5 / st.dt, sample)
+                                             self.presc_full, self.Mf, 0.5 / st.dt, sample, r_only)
                 F = fused.F
         except (FloatingPointError, ZeroDivisionError, SolverError) as exc:
             self.message = f"internal force failed at step {n} (t = {self.time_of(n):.6g} s): {exc}"

@@ -96,22 +96,6 @@ def chunk_plan(conn, M, N, chunks=CHUNKS):
 
 
 @njit(cache=True)
-def scatter_lanes(conn, M, fe, F):
-    """F[6 p + c] += element forces of the lane layout (lanes.pack), elements in mesh order and
-    within an element dof 6 i + c in order: scatter_add_vec's order, so the same sums bit for bit.
-    The block being read is 3 KB (in L1); F takes the scattered writes."""
-    L = conn.shape[2]
-    for b in range(conn.shape[0]):
-        for k in range(L):
-            if b * L + k >= M:
-                break
-            for i in range(4):
-                o = 6 * conn[b, i, k]
-                for c in range(6):
-                    F[o + c] += fe[b, (6 * i + c) * L + k]
-
-
-@njit(cache=True)
 def update(F, P, C, has_C, R, Dn1, D, Dp, cF, cD, cDp, fixed, presc, Mf, inv2dt):
     """R = P - F (+ C when has_C); D_n+1 = cF R + cD D + cDp Dp (kernels.central_step's operation
     order, no fast-math), prescribed values where ``fixed``; returns (v_n.M.v_n, finite)."""

@@ -96,11 +96,24 @@ def _pos(v, name: str, allow_zero=False) -> float:
     return x
 
 
+def active_energy(kp, p) -> float:
+    """1/2 sum k_i p_i^2 over the nodes in contact (p_i > 0) only, in node order: the same sum bit
+    for bit whichever superset of the contact nodes is passed (the explicit solver evaluates only
+    nodes near a body, explicit/candidates.py), and no BLAS (see explicit.kernels.dot)."""
+    act = p > 0.0
+    return 0.5 * float(np.add.reduce(kp[act] * p[act]))
+
+
 class RigidBody:
-    """Base class: subclasses implement :meth:`signed_distance` -> (g (N,), n (N,3))."""
+    """Base class: subclasses implement :meth:`signed_distance` -> (g (N,), n (N,3)).
+
+    ``lipschitz``: a bound L on |g(x) - g(y)| / |x - y| (1 for an exact distance, as for every body
+    here), or None when unknown.  With it the explicit solver checks contact only at the nodes
+    within a margin of the body and re-selects them once any node has moved margin / L."""
 
     offset: float = 0.0
     friction: float = 0.0  # Coulomb coefficient mu (0: frictionless, the default)
+    lipschitz: float | None = None
 
     def signed_distance(self, x: np.ndarray):  # pragma: no cover - interface
         raise NotImplementedError
@@ -121,7 +134,7 @@ class RigidBody:
         gap, n = self.penetration(x)
         p = np.maximum(-gap, 0.0)
         kp = np.asarray(k, dtype=float) * p
-        return kp[:, None] * n, 0.5 * float(np.add.reduce(kp * p))  # no BLAS: see explicit.kernels.dot
+        return kp[:, None] * n, active_energy(kp, p)
 
     def active(self, x) -> np.ndarray:
         """(N,) bool: points in contact (gap < 0)."""
@@ -130,6 +143,8 @@ class RigidBody:
 
 class Sphere(RigidBody):
     """Rigid solid sphere of ``radius`` about ``center`` (the paper's Ø10 cm sphere, Section 4.2)."""
+
+    lipschitz = 1.0   # |x - c| - R is a distance
 
     def __init__(self, center, radius, offset=0.0, friction=0.0):
         self.center = _vec3(center, "sphere center")
@@ -154,6 +169,8 @@ class Sphere(RigidBody):
 class Plane(RigidBody):
     """Rigid half-space: the side of the plane through ``point`` opposite to ``normal`` is solid
     (a floor with normal (0,0,1))."""
+
+    lipschitz = 1.0   # (x - p).n with |n| = 1
 
     def __init__(self, point, normal=(0.0, 0.0, 1.0), offset=0.0, friction=0.0):
         self.point = _vec3(point, "plane point")
@@ -210,6 +227,10 @@ class Pedestal(RigidBody):
     The paper clamps the sheet along the pedestal edge and models only the hanging part, so the
     pedestal body here only keeps the hanging skirt out of the pedestal's side and top.
     """
+
+    # the exact signed distance of a box (Euclidean outside, minus the nearest face's distance
+    # inside) is 1-Lipschitz, and so is its composition with the 1-Lipschitz x -> (|x_xy|, z)
+    lipschitz = 1.0
 
     def __init__(self, top_center, radius=None, half_widths=None, height=None, edge_radius=0.0,
                  offset=0.0, friction=0.0):
@@ -291,7 +312,7 @@ def frictional_contact(body, x, k, k_t, anchor):
     p = np.maximum(-gap, 0.0)
     kp = np.asarray(k, dtype=float) * p
     f = kp[:, None] * n
-    e_n = 0.5 * float(np.add.reduce(kp * p))
+    e_n = active_energy(kp, p)
     idx = np.flatnonzero(p > 0.0)
     new = np.full_like(anchor, np.nan)
     if idx.size == 0:

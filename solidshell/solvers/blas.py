@@ -29,6 +29,13 @@ def single_threaded_blas(fn):
 
     @functools.wraps(fn)
     def wrapper(*args, **kwargs):
+        # threadpoolctl limits only the BLAS libraries loaded when the limit is set, and scipy
+        # ships its own OpenBLAS (ARPACK's, SuperLU's), loaded by its first import: loaded
+        # inside the solver, it ran ARPACK's reorthogonalisation on 2 threads.  Measured on the
+        # sphere 100x100 critical-step estimate (882 force evaluations, load 5): 48 s -> 27 s,
+        # of which 20 s -> 8 s outside the force evaluations.
+        import scipy.linalg  # noqa: F401
+
         with threadpool_limits(limits=1, user_api="blas"):
             return fn(*args, **kwargs)
 

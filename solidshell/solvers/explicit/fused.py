@@ -4,16 +4,19 @@ One step is two compiled passes and no allocation:
 
 1. the element pass: every element's force and energy into one flat buffer -- quadrilaterals with
    the compatible membrane by the lane kernel (``elements/lanes.py``, elements in SIMD lanes),
-   with the assumed membrane by ``elements/lanes_ans.py`` (same layout), triangles by
+   with the assumed membrane by ``elements/lanes_ans.py`` (same layout), each block's forces
+   scattered into the dofs right after it, in parallel over CHUNKS fixed chunks of blocks (see
+   CHUNKS: the sums of ``assembly.scatter_add_vec``'s order but at chunk boundaries); triangles by
    ``elements/core.energy_force``;
-2. assembly and update, serial: the element forces are summed into the dofs in
-   ``assembly.scatter_add_vec``'s order (elements in mesh order, block by block), so the assembled
-   force equals the model's whenever the element forces do; then R = P - F (+ C), D_n+1 of Eq. (23)
+2. assembly and update, serial: the chunks' slots and the other blocks' forces are summed into the
+   dofs (elements in mesh order, block by block); then R = P - F (+ C), D_n+1 of Eq. (23)
    with the operation order of ``kernels.central_step``, the prescribed values, finiteness and
    v_n.M.v_n in one pass.  (A node-ordered gather, parallel over nodes, took 24 % of a one-thread
    step against 62 % for the element pass -- a node's contributions sit 128 bytes apart in the lane
    layout -- and on 2 threads of the loaded machine a second parallel region per step made the
-   loop 0.95x the previous path: every region waits for its slowest thread.)
+   loop 0.95x the previous path: every region waits for its slowest thread.  The serial scatter
+   of the lane blocks was 9 % of a one-thread step of the 100x100 sheet; scattered inside the
+   element pass it costs 5 % less CPU on one thread, and runs on both threads.)
 
 Nothing here depends on the thread count: elements are evaluated block by block by the same
 instructions and every sum is serial in a fixed order.
@@ -22,26 +25,83 @@ instructions and every sum is serial in a fixed order.
 from __future__ import annotations
 
 import numpy as np
-from numba import get_num_threads, njit
+from numba import get_num_threads, njit, prange
 
 from ...assembly import scatter_add_vec
 from ...elements import core, lanes, lanes_ans, quad4
+from ...elements.core import _FM
+
+
+CHUNKS = 4
+"""The lane blocks are cut into this many contiguous chunks, a fixed number whatever the thread
+count (so the sums are too): each chunk scatters its blocks' forces as it computes them, while
+they are in L1, into the dofs of the nodes it owns (the nodes whose first element is in it) and
+into slots of its own for the nodes an earlier chunk owns; the slots are added afterwards, chunk
+by chunk.  A dof thus sums its elements in mesh order within each chunk, then the chunks in order:
+scatter_add_vec's sum bit for bit except at the few nodes on a chunk boundary (round-off there)."""
+
+
+@njit(forceinline=True, error_model="numpy")
+def _scatter_block(b, dest, fe, F):
+    """Block b's element forces into F at ``dest`` (elements in order, node by node, dof by dof;
+    a negative dest is a padded lane).  No fast-math: every += stays one rounded addition in order."""
+    L = dest.shape[2]
+    for k in range(L):
+        for i in range(4):
+            o = dest[b, i, k]
+            if o < 0:
+                continue
+            for c in range(6):
+                F[o + c] += fe[b, (6 * i + c) * L + k]
+
+
+@njit(cache=True, parallel=True, fastmath=_FM, error_model="numpy")
+def lanes_scatter(X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we, bounds, dest, F):
+    """lanes.quad_forces and the scatter of each block right after it, chunk by chunk (CHUNKS):
+    F (zero on entry) gets the owned dofs, its tail the slots (chunk_plan)."""
+    for ch in prange(bounds.size - 1):
+        for b in range(bounds[ch], bounds[ch + 1]):
+            lanes._block(b, X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we)
+            _scatter_block(b, dest, fe, F)
+
+
+@njit(cache=True, parallel=True, fastmath=_FM, error_model="numpy")
+def lanes_ans_scatter(X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we, bounds, dest, F):
+    """lanes_scatter for assumed-membrane quads (lanes_ans._block, the same layout and contract)."""
+    for ch in prange(bounds.size - 1):
+        for b in range(bounds[ch], bounds[ch + 1]):
+            lanes_ans._block(b, X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we)
+            _scatter_block(b, dest, fe, F)
 
 
 @njit(cache=True)
-def scatter_lanes(conn, M, fe, F):
-    """F[6 p + c] += element forces of the lane layout (lanes.pack), elements in mesh order and
-    within an element dof 6 i + c in order: scatter_add_vec's order, so the same sums bit for bit.
-    The block being read is 3 KB (in L1); F takes the scattered writes."""
-    L = conn.shape[2]
-    for b in range(conn.shape[0]):
-        for k in range(L):
-            if b * L + k >= M:
-                break
-            for i in range(4):
-                o = 6 * conn[b, i, k]
-                for c in range(6):
-                    F[o + c] += fe[b, (6 * i + c) * L + k]
+def add_slots(F_all, slot0, slot_node):
+    """F_all[6 p + c] += slot s (F_all[slot0 + 6 s + c]) for the slots in order (chunk, node)."""
+    for s in range(slot_node.size):
+        o = 6 * slot_node[s]
+        for c in range(6):
+            F_all[o + c] += F_all[slot0 + 6 * s + c]
+
+
+def chunk_plan(conn, M, N, chunks=CHUNKS):
+    """(bounds (chunks+1,) block ranges, dest (B, 4, LANES) dof offsets, slot_node (S,)) for the
+    lane layout conn (B, 4, LANES) of M elements on N nodes: see CHUNKS.  dest is 6 p for an owned
+    node, 6 N + 6 s for slot s, -1 for a padded lane."""
+    B, _, L = conn.shape
+    bounds = np.round(np.linspace(0, B, chunks + 1)).astype(np.int64)
+    chunk_of_block = np.searchsorted(bounds, np.arange(B), side="right") - 1
+    e = np.arange(B * L).reshape(B, L)                       # element number of (b, k)
+    real = e < M
+    ch = np.broadcast_to(chunk_of_block[:, None, None], conn.shape)
+    mask = np.broadcast_to(real[:, None, :], conn.shape)
+    owner = np.full(N, chunks, dtype=np.int64)
+    np.minimum.at(owner, conn[mask], ch[mask])
+    foreign = mask & (owner[conn] != ch)
+    pairs = np.unique(ch[foreign] * N + conn[foreign])     # (chunk, node) in order
+    slot_node = pairs % N
+    dest = np.where(mask, 6 * conn, -1).astype(np.int64)
+    dest[foreign] = 6 * N + 6 * np.searchsorted(pairs, ch[foreign] * N + conn[foreign])
+    return bounds, dest, slot_node
 
 
 @njit(cache=True)
@@ -66,6 +126,16 @@ def update(F, P, C, has_C, R, Dn1, D, Dp, cF, cD, cDp, fixed, presc, Mf, inv2dt)
     return vMv, finite
 
 
+@njit(cache=True)
+def residual(F, P, C, has_C, R):
+    """R = P - F (+ C when has_C), update's operations, for a damper that rewrites the step."""
+    for i in range(F.size):
+        r = P[i] - F[i]
+        if has_C:
+            r += C[i]
+        R[i] = r
+
+
 def _uses_lanes(b) -> bool:
     """The lane kernel covers the quadrilateral with the compatible membrane and 4 shear ties."""
     return b.module is quad4 and b.gp_membrane and b.alpha.shape[0] == 4 and np.array_equal(b.alpha, quad4.ALPHA)
@@ -88,7 +158,7 @@ class FusedForces:
             ans = use_lanes and lanes_ans.covers(b.c)      # the assumed-membrane quad (same layout)
             if use_lanes and (_uses_lanes(b) or ans):
                 pk = (lanes_ans if ans else lanes).pack(b.conn, b.c, b.c["r_zq"])
-                pk["kernel"] = lanes_ans.quad_forces if ans else lanes.quad_forces
+                pk["kernel"] = lanes_ans_scatter if ans else lanes_scatter
                 size = pk["B"] * 24 * lanes.LANES
                 self.parts.append(("lanes", b, pk, base, size))
             else:
@@ -96,6 +166,14 @@ class FusedForces:
                 self.parts.append(("core", b, None, base, size))
             base += size
         self.fe = np.zeros(base)
+        slots = 0
+        for kind, b, pk, o, size in self.parts:
+            if kind == "lanes":
+                pk["bounds"], dest, slot_node = chunk_plan(pk["conn"], pk["M"], N)
+                pk["dest"] = np.where(dest >= 6 * N, dest + 6 * slots, dest)   # this part's slots after earlier parts'
+                pk["slot_node"] = slot_node
+                pk["slot0"] = 6 * N + 6 * slots
+                slots += slot_node.size
         self.views = []
         for kind, b, pk, o, size in self.parts:
             if kind == "lanes":
@@ -106,19 +184,22 @@ class FusedForces:
                 M, nn = b.conn.shape
                 self.views.append((self.fe[o:o + size].reshape(M, nn, 6), np.zeros(M)))
         self.needs_current = any(kind == "core" for kind, *_ in self.parts)
-        self.F = np.zeros(6 * N)
+        self.F_all = np.zeros(6 * N + 6 * slots)    # the dofs, then the chunks' slots
+        self.F = self.F_all[:6 * N]
         self._zero = np.zeros(0)
 
     # ------------------------------------------------------------ element pass
     def element_pass(self, D6):
-        """Element forces and energies at the displacements D6 (N, 6) into the buffers."""
+        """Element forces and energies at the displacements D6 (N, 6) into the buffers; the lane
+        blocks' forces are also scattered (into F and the slots, lanes_scatter)."""
         if self.needs_current:
             xo, xn, Uc = self.model._current(D6)
         nth = get_num_threads()
+        self.F_all[:] = 0.0
         for (kind, b, pk, _, _), (fe, we) in zip(self.parts, self.views):
             if kind == "lanes":
                 pk["kernel"](self.X, self.Xn, D6, pk["conn"], pk["Cmb"], pk["Cs"], pk["Cz"], pk["r_z"],
-                             self.quasi, self.mu, pk["xs"], fe, we)
+                             self.quasi, self.mu, pk["xs"], fe, we, pk["bounds"], pk["dest"], self.F_all)
             else:
                 core.energy_force(*b.args(xo, xn, Uc, self.quasi, self.mu), fe, we, nth)
 
@@ -131,12 +212,12 @@ class FusedForces:
 
     # ------------------------------------------------------------ public
     def assemble(self):
-        """F = the element forces of the last element pass summed into the dofs (self.F)."""
+        """F = the element forces of the last element pass summed into the dofs (self.F): the lane
+        parts' slots added to what their chunks scattered, then the other blocks, block by block."""
         F = self.F
-        F[:] = 0.0
         for (kind, b, pk, _, _), (fe, _) in zip(self.parts, self.views):
             if kind == "lanes":
-                scatter_lanes(pk["conn"], pk["M"], fe, F)
+                add_slots(self.F_all, pk["slot0"], pk["slot_node"])
             else:
                 scatter_add_vec(b.dofs, fe.reshape(len(fe), -1), F)
 
@@ -146,13 +227,17 @@ class FusedForces:
         self.assemble()
         return self.F.copy(), (self.energy() if want_energy else None)
 
-    def step(self, D, Dp, Dn1, R, P, C, cF, cD, cDp, fixed, presc, Mf, inv2dt, want_energy):
+    def step(self, D, Dp, Dn1, R, P, C, cF, cD, cDp, fixed, presc, Mf, inv2dt, want_energy, residual_only=False):
         """One step of Eq. (23) from D_n: F into self.F, R = P - F (+ C unless None), D_n+1 into Dn1
         (prescribed where ``fixed``, a (6N,) bool mask, values ``presc`` (6N,)).  Returns (v_n.M.v_n,
-        finite, strain energy or None)."""
+        finite, strain energy or None).  ``residual_only``: F and R only, Dn1 untouched, (0, True,
+        energy) -- for a damper that computes D_n+1 itself (FIRE): one pass over the dofs fewer."""
         self.element_pass(D.reshape(self.N, 6))
         self.assemble()
         has_C = C is not None
+        if residual_only:
+            residual(self.F, P, C if has_C else self._zero, has_C, R)
+            return 0.0, True, (self.energy() if want_energy else None)
         vMv, finite = update(self.F, P, C if has_C else self._zero, has_C, R, Dn1, D, Dp, cF, cD, cDp, fixed, presc,
                              Mf, inv2dt)
         return vMv, finite, (self.energy() if want_energy else None)

@@ -22,7 +22,9 @@ import numpy as np
 from ...errors import InputError, SolverError
 from ...problem import SolveResult, no_progress
 from . import checkpoint, damping, ledger, observers, report, stepcontrol
+from .candidates import Candidates, contact_power, default_margin
 from .forces import Forces
+from .fused import FusedForces
 from .kernels import central_step, coefficients, dot, norm
 from .settings import RESTART_NEUTRAL, ExplicitSettings, RelaxSettings, parse_settings
 from .state import State
@@ -62,7 +64,7 @@ class Integrator:
         if _start:
             self.progress_cb(0.0, "estimating the critical time step")
             lim = stepcontrol.estimate(self.model, self.M, self.free_mask, self._D0(), self.bodies,
-                                       self.n_fric, s, self.alpha)
+                                       self.n_fric, s, self.alpha, self.force_fn)
             self._bind(lim)
             self.state = self._initial_state(self._first_step(lim), lim)
             self._prepare(fresh=True)
@@ -77,6 +79,7 @@ class Integrator:
         self.n_elem = int(getattr(getattr(self.model, "mesh", None), "n_elements", 0))
         self.damping = s.damping if self.relax else "rayleigh"
         self.damper = damping.make(self.damping)
+        self.damper_rewrites = bool(getattr(self.damper, "rewrites_step", False))
         self.M = M = scaled_mass(self.model, s.mass_scaling, s.mass_scaling_mode)
         self.free_mask = ~problem.fixed
         if np.any(M[self.free_mask] <= 0.0):
@@ -92,18 +95,34 @@ class Integrator:
         self.bodies = list(problem.contact or [])
         self.fric_of = [float(getattr(b, "friction", 0.0)) for b in self.bodies]
         self.n_fric = sum(1 for mu in self.fric_of if mu > 0.0)   # 0: the frictionless path
+        mesh = getattr(self.model, "mesh", None)
+        # the step's contact only at the nodes near a body (candidates.py), into buffers of its own
+        self.cand = Candidates(self.bodies, mesh.nodes, default_margin(mesh)) if self.bodies and mesh is not None \
+            else None
+        self._C = np.zeros(6 * self.N)
+        self._anchor_bufs = [np.full((self.n_fric, self.N, 3), np.nan) for _ in range(2)]
+        self._all_nodes = np.arange(self.N)
         self.Mf = M.ravel()
         self.invM = np.zeros_like(self.Mf)
         self.invM[self.free_idx] = 1.0 / self.Mf[self.free_idx]
         self.Pn = norm(self.P[self.free_idx])
         self.alpha = self.damper.alpha0(self)   # the viscous alpha [1/s] of Eq. (23) at the start
+        # the preallocated element/node passes for the library's Model (fused.py), also the force
+        # the critical-step estimates differentiate; other models (e.g. a user's with its own
+        # internal_force) go through their methods
+        self.fused = FusedForces(self.model) if hasattr(self.model, "blocks") and hasattr(self.model, "mesh") else None
+        self.force_fn = self._fused_force if self.fused is not None else self.model.internal_force
         shaping = {k: v for k, v in s.as_dict().items() if k not in RESTART_NEUTRAL}
         self.fingerprint = checkpoint.fingerprint(problem, shaping, M)
+
+    def _fused_force(self, U):
+        """Internal force (6N,) at U (N,6) by the fused lane kernel (a new array)."""
+        return self.fused.internal(U, False)[0]
 
     def _bind(self, lim) -> None:
         """Attach a critical-step estimate: penalty stiffness, forces, the energy floor."""
         self.lim = lim
-        self.forces = Forces(self.problem, lim.k_pen, lim.k_t, self.fric_of)
+        self.forces = Forces(self.problem, lim.k_pen, lim.k_t, self.fric_of, self.fused)
         self.quasi = self.forces.quasi
         self.E_floor = ledger.energy_floor(self.P, self.Mf, self.free_idx, self.forces.X0, lim.omega_el)
 
@@ -295,8 +314,11 @@ class Integrator:
             else:
                 f = {}
                 C = self._contact(n, D, f)
+                # a damper that rewrites the whole step (FIRE) needs only R, except on a fresh
+                # run's first step, which is the scheme's own
+                r_only = self.damper_rewrites and not (n == 0 and self.fresh)
                 vMv, finite, Es = fused.step(D, Dp, Dn1, R, self.P, C, self.cF, self.cD, self.cDp, self.fixed_mask,
-                                             self.presc_full, self.Mf, 0.5 / st.dt, sample)
+                                             self.presc_full, self.Mf, 0.5 / st.dt, sample, r_only)
                 F = fused.F
         except (FloatingPointError, ZeroDivisionError, SolverError) as exc:
             self.message = f"internal force failed at step {n} (t = {self.time_of(n):.6g} s): {exc}"
@@ -320,16 +342,26 @@ class Integrator:
         return f, vMv, finite
 
     def _contact(self, n, D, f):
-        """Contact (and friction) forces at D_n, their books into f; C (6N,) or None without bodies."""
-        st = self.state
+        """Contact (and friction) forces at D_n, their books into f; C (6N,) or None without bodies.
+        With candidates (candidates.py) only the nodes near a body are evaluated, C is the step's
+        buffer (valid until the next step) and the new anchors go into the buffer st.anchors is
+        not: the same forces, anchors and books as evaluating every node."""
+        st, cand = self.state, self.cand
+        if not self.bodies:
+            return None
+        nodes, C, new = None, None, None
+        if cand is not None and cand.enabled:
+            if cand.update(D):
+                self._C.fill(0.0)   # the previous candidates' entries
+            nodes, C = cand.nodes, self._C
+            new = self._anchor_bufs[1] if st.anchors is self._anchor_bufs[0] else self._anchor_bufs[0]
         if self.n_fric:
             C, f["Ec"], f["nact"], pen, f["fr"], f["Et"], f["anchors"], f["nslip"] = \
-                self.forces.contact_friction(D, st.anchors)
-        elif self.bodies:
-            C, f["Ec"], f["nact"], pen = self.forces.contact(D)
+                self.forces.contact_friction(D, st.anchors, nodes, C, new)
         else:
-            return None
+            C, f["Ec"], f["nact"], pen = self.forces.contact(D, nodes, C)
         f["C"] = C
+        f["cnodes"] = self._all_nodes if nodes is None else nodes
         if pen > st.max_pen:
             st.max_pen = pen
         return C
@@ -349,7 +381,7 @@ class Integrator:
             dd *= 0.5  # trapezoidal rule: the first and last samples weigh half
         st.damp_sum += dd
         if self.bodies:
-            st.contact_work += 0.5 * dot(f["C"], Dn1 - Dp)
+            st.contact_work += 0.5 * contact_power(f["C"], Dn1, Dp, f["cnodes"])
 
     def _sample(self, n, D, vMv, f) -> bool:
         """The energy balance at t_n (ledger.py); True when it exceeds max_energy_error."""
@@ -434,7 +466,8 @@ class Integrator:
         """Re-estimate the critical step at the current state; when dt exceeds (1 + safety)/2 of it,
         shorten the step to safety x it, keeping the velocity v_n-1/2."""
         st = self.state
-        dtc_now, mode = stepcontrol.recheck(self.model, self.M, self.free_mask, st.D, st.mode, self.lim, self.alpha)
+        dtc_now, mode = stepcontrol.recheck(self.model, self.M, self.free_mask, st.D, st.mode, self.lim, self.alpha,
+                                            self.force_fn)
         if dtc_now is None:
             return
         st.rechecks += 1
@@ -560,7 +593,8 @@ class Integrator:
             self.alpha = float(st.damper_alpha)   # the estimate the run had reached
         if reestimate_step:   # warm-started from the state's top mode when it has one (e.g. carried over a remesh)
             lim = stepcontrol.estimate(self.model, self.M, self.free_mask, st.D, self.bodies, self.n_fric,
-                                       self.s, self.alpha, v0=st.mode if np.any(st.mode) else None)
+                                       self.s, self.alpha, self.force_fn,
+                                       v0=st.mode if np.any(st.mode) else None)
         else:
             lim = stepcontrol.limit(st.omega_el, st.method, self.M, self.bodies, self.n_fric, self.s, self.alpha)
         self._bind(lim)

@@ -35,14 +35,16 @@ class StepLimit:
     mode: np.ndarray | None = None   # the top mode (warm start of the re-checks)
 
 
-def omega_sheet(model, M, free_mask, D, s, v0=None):
+def omega_sheet(model, M, free_mask, D, s, force=None, v0=None):
     """(omega_el, method, force evaluations, mode) at the flat state D: Lanczos (or the method
-    asked; ``v0`` a start vector, e.g. the previous mesh's top mode carried over), or
-    2 / critical_time_step when the user gave it."""
+    asked), or 2 / critical_time_step when the user gave it.  ``force``: the internal force U (N,6)
+    -> F to differentiate (default model.internal_force; the integrator passes its fused lane
+    kernel, the same force to round-off at a third of the cost); ``v0``: a start vector, e.g. the
+    previous mesh's top mode carried over."""
     if s.critical_time_step is not None:
         return 2.0 / s.critical_time_step, "given", 0, None
     try:
-        est = estimate_omega_max(model.internal_force, M, free_mask, D.reshape(M.shape),
+        est = estimate_omega_max(force or model.internal_force, M, free_mask, D.reshape(M.shape),
                                  method=s.critical_step_method, tol=s.critical_step_tol,
                                  tangent=getattr(model, "tangent", None), v0=v0)
     except ValueError as exc:
@@ -65,10 +67,10 @@ def limit(omega_el, method, M, bodies, n_fric, s, alpha, n_evals=0, seconds=0.0,
                      n_evals, seconds, mode)
 
 
-def estimate(model, M, free_mask, D, bodies, n_fric, s, alpha, v0=None) -> StepLimit:
-    """The critical step at the flat state D (the start estimate; ``v0``: Lanczos' start vector)."""
+def estimate(model, M, free_mask, D, bodies, n_fric, s, alpha, force=None, v0=None) -> StepLimit:
+    """The critical step at the flat state D (the start estimate); ``force``, ``v0`` as in omega_sheet."""
     t0 = time.perf_counter()
-    w, method, n_ev, mode = omega_sheet(model, M, free_mask, D, s, v0)
+    w, method, n_ev, mode = omega_sheet(model, M, free_mask, D, s, force, v0)
     return limit(w, method, M, bodies, n_fric, s, alpha, n_ev, time.perf_counter() - t0, mode)
 
 
@@ -94,11 +96,12 @@ def landing_step(dt: float, t_now: float, t_end: float) -> float:
     return (t_end - t_now) / int(math.ceil((t_end - t_now) / dt * (1.0 - 1e-12)))
 
 
-def recheck(model, M, free_mask, D, mode, lim: StepLimit, alpha):
+def recheck(model, M, free_mask, D, mode, lim: StepLimit, alpha, force=None):
     """(dt_crit now, top mode) at the flat state D, warm-started from ``mode``; (None, mode) when the
-    estimate fails (e.g. an indefinite state: keep the step, the energy check still watches)."""
+    estimate fails (e.g. an indefinite state: keep the step, the energy check still watches).
+    ``force`` as in omega_sheet."""
     try:
-        est = estimate_omega_max(model.internal_force, M, free_mask, D.reshape(M.shape), tol=1e-4,
+        est = estimate_omega_max(force or model.internal_force, M, free_mask, D.reshape(M.shape), tol=1e-4,
                                  v0=mode if np.any(mode) else None)
     except ValueError:
         return None, mode

@@ -21,6 +21,9 @@ Hooks (all optional but ``alpha``):
                                     the v_n.M.v_n the books are to use and whether Dn1 is finite;
 ``after(integ, n, D, Dn1, R, vMv)`` after the books, before the state advances (kinetic damping's
                                     restart, as it always ran).
+``rewrites_step`` (attribute)       True when correct() computes Dn1 from R alone whenever n > 0
+                                    or the run is not fresh: the fused step then leaves Dn1 to it
+                                    and its vMv argument is 0.
 
 Everything a damper changes during a run lives in the integrator's State (``state.py``: fire_a,
 fire_n, damper_alpha), so a checkpointed run continues bit for bit.

@@ -27,7 +27,8 @@ critical step, Section 4.1 -- FIRE's 10 x dt_MD would be unstable here), dt is n
 ``fire_dt_min`` x dt_max.  The kinetic energy the mixing and the freezes take out is booked as
 damping dissipation (half-step measure, as kinetic damping books its resets).
 
-Cost: two passes over the 6N dofs per step (``power``, ``update``), no allocation.
+Cost: two passes over the 6N dofs per step (``power``, ``update``), no allocation; the integrator's
+fused step then only forms R (``rewrites_step``) instead of a step that would be overwritten.
 """
 
 from __future__ import annotations
@@ -80,6 +81,7 @@ def update(Dn1, D, Dp, R, invM, Mf, fixed, presc, inv_dt_old, dt_new, c_v, c_f):
 
 class Fire:
     name = "fire"
+    rewrites_step = True   # correct() computes D_n+1 from R alone (but on a fresh run's first step)
 
     def alpha0(self, integ) -> float:
         return 0.0   # no viscous damping: FIRE's mixing and freezes take the energy out

@@ -38,7 +38,8 @@ def run(scene, mesh=None, solver=None, overrides=None, adaptive=None, **settings
            "settings": {k: v for k, v in settings.items()}, "converged": s.get("converged"),
            "message": s.get("message"), "wall_s": round(time.perf_counter() - t, 2)}
     for k in ("drape_coefficient", "fold_count", "interpenetrated_nodes", "max_interpenetrated_nodes",
-              "max_active_nodes", "remesh_count", "t_final", "steps", "tip_position"):
+              "max_active_nodes", "remesh_count", "t_final", "steps", "tip_position",
+              "iterations", "positive_definite", "min_tangent_eigenvalue", "fold_angles_deg"):
         if s.get(k) is not None:
             rec[k] = s[k]
     if s.get("warnings"):
@@ -183,6 +184,13 @@ def views_figure(rows, views=("top", "iso"), boundaries=None, pedestal=None, bou
     return fig, axes
 
 
+def interpenetration_note(rec) -> str:
+    """'' or one clause naming the nodes interpenetrated at the end of a run (n_p . d_p < 0, §4.3),
+    which the paper reports only for Fig. 12."""
+    n = rec.get("interpenetrated_nodes")
+    return f"{n} node(s) of {rec['mesh']} interpenetrated at the end (n_p . d_p < 0, §4.3; the paper reports none here)" if n else ""
+
+
 def describe(rec) -> str:
     """'mesh 48x16x4: DC 0.596, 4 folds' for a run record."""
     parts = [f"mesh {rec['mesh']}"]
@@ -190,4 +198,10 @@ def describe(rec) -> str:
         parts.append(f"DC {rec['drape_coefficient']:.3f}")
     if rec.get("fold_count") is not None:
         parts.append(f"{rec['fold_count']} folds")
+    if rec.get("converged") is False:
+        parts.append("NOT converged")
+    if rec.get("positive_definite") is not None:      # static runs: the final tangent's verdict
+        lmin = rec.get("min_tangent_eigenvalue")
+        parts.append(("stable" if rec["positive_definite"] else "NOT stable")
+                     + (f" (min eig {lmin:.2g})" if isinstance(lmin, float) else ""))
     return ", ".join(parts)

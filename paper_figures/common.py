@@ -156,7 +156,7 @@ def views_figure(rows, views=("top", "iso"), boundaries=None, pedestal=None, bou
     nr, nv = len(rows), len(views)
     widths = [1.4 if v == "iso" else 1.0 for v in views] + [0.05]
     if boundaries:
-        widths += [0.75, 1.25]    # room for the boundary panel's y label beside the colour bar's label
+        widths += [0.35, 1.25]    # room for the boundary panel's y label beside the colour bar's label
     fig = plt.figure(figsize=(panel_size * sum(widths) + 0.6, panel_size * nr * 0.95 + 0.5))
     gs = fig.add_gridspec(nr, len(widths), width_ratios=widths, wspace=0.2, hspace=0.32)
     norm = height_norm(*[X for _, _, X in rows])
@@ -176,6 +176,7 @@ def views_figure(rows, views=("top", "iso"), boundaries=None, pedestal=None, bou
     if boundaries:
         ax = fig.add_subplot(gs[:, -1])
         boundary_panel(ax, boundaries, pedestal)
+        ax.set_anchor("W")        # equal axes leave the cell wider than the panel: keep it by the colour bar
         ax.set_xlabel("x [cm]", fontsize=8)
         ax.set_ylabel("y [cm]", fontsize=8)
         ax.set_title(boundary_title or "projected boundaries on the X-Y plane", fontsize=9)

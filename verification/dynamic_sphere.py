@@ -41,6 +41,10 @@ DIR = dict(damping="rayleigh", alpha=5.0, mass_scaling=100, mass_scaling_mode="d
 KIN = dict(damping="kinetic", mass_scaling=1e4, mass_scaling_mode="director", threads=1)
 PAPER_EQ = dict(DIR, alpha=50.0)
 QUASI = {"model.thickness_strain": "quasi"}
+CT_INPLANE = 5.0 / 6.0 * 41.8      # [gf/cm] the kappa x G h a solid-shell code would take from Table 1's shear rigidity
+# a seeded random start (solidshell.perturbation) of at most 0.08 cm; the sphere is lowered by 0.1 cm
+# so that no node of the perturbed sheet starts inside it (the cloth then drops 0.1 cm first)
+SEEDED = {"perturbation.shape": "random", "perturbation.amplitude": 0.08, "contact.0.centre": [0.0, 0.0, -5.12965]}
 
 # name -> (mesh, solver settings, scene overrides, label)
 CASES = {
@@ -71,6 +75,25 @@ CASES = {
     "s60-green-uni": ("60x60", dict(UNI, max_wall_time=1800.0), {}, "Green, uni100 (paper), mu 0.3"),
     "s60-quasi-uni": ("60x60", dict(UNI, max_wall_time=1800.0), dict(QUASI), "Eq. (24), uni100 (paper), mu 0.3"),
     "s100-green-a50": ("100x100", dict(PAPER_EQ, max_wall_time=2400.0), {}, "Green, alpha 50, dir100 (= paper), mu 0.3"),
+    # issue 12 item 5: the paper's 60x60 sharp folds (Fig. 12c) pursued on the paper's path with the
+    # settings the paper does not state: friction, C_t, E_z, the penalty, and seeded starts
+    "s60-pursuit-mu0": ("60x60", dict(PAPER_EQ, max_wall_time=900.0), {"contact.0.friction": 0.0},
+                        "pursuit: paper path, frictionless"),
+    "s60-pursuit-ct35": ("60x60", dict(PAPER_EQ, max_wall_time=900.0), {"material.transverse_shear": CT_INPLANE},
+                         "pursuit: paper path, C_t = 5/6 x in-plane shear rigidity (34.8 gf/cm)"),
+    "s60-pursuit-ct3": ("60x60", dict(PAPER_EQ, max_wall_time=900.0), {"material.transverse_shear": 3.48},
+                        "pursuit: paper path, C_t = 3.48 gf/cm (x0.01 of the default)"),
+    "s60-pursuit-ct35-mu0": ("60x60", dict(PAPER_EQ, max_wall_time=900.0),
+                             {"material.transverse_shear": CT_INPLANE, "contact.0.friction": 0.0},
+                             "pursuit: paper path, C_t 34.8 gf/cm, frictionless"),
+    "s60-pursuit-ez01": ("60x60", dict(PAPER_EQ, max_wall_time=900.0), {"material.thickness_modulus": 93.885},
+                         "pursuit: paper path, E_z = 0.1 T_mean (93.9 gf/cm)"),
+    "s60-pursuit-pen001": ("60x60", dict(PAPER_EQ, max_wall_time=900.0, contact_penalty_factor=0.01), {},
+                           "pursuit: paper path, penalty factor 0.01 (x0.1)"),
+    "s60-pursuit-seed1": ("60x60", dict(PAPER_EQ, max_wall_time=900.0), dict(SEEDED, **{"perturbation.seed": 1}),
+                          "pursuit: paper path, random start 0.08 cm seed 1 (sphere 0.1 cm lower)"),
+    "s60-pursuit-seed2": ("60x60", dict(PAPER_EQ, max_wall_time=900.0), dict(SEEDED, **{"perturbation.seed": 2}),
+                          "pursuit: paper path, random start 0.08 cm seed 2 (sphere 0.1 cm lower)"),
 }
 
 KEYS = ("converged", "steady_state_reached", "status", "message", "steps", "dt", "critical_time_step",

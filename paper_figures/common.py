@@ -185,6 +185,24 @@ def views_figure(rows, views=("top", "iso"), boundaries=None, pedestal=None, bou
     return fig, axes
 
 
+def interpenetrated(out):
+    """(N,) bool: the nodes of a run's final state where n_p . d_p < 0 in some element (§4.3)."""
+    from solidshell.runner import build_problem
+
+    return build_problem(out.scene, out.mesh).model.interpenetrated_nodes(out.U)
+
+
+def save_state(out_dir: Path, name: str, out, **extra) -> Path:
+    """``name``.npz in out_dir: the run's mesh (nodes, quads, tris) and final U (N,6), so that a
+    figure of an expensive run can be looked into again without re-running it."""
+    p = Path(out_dir) / f"{name}.npz"
+    p.parent.mkdir(parents=True, exist_ok=True)
+    m = out.mesh
+    np.savez_compressed(p, nodes=m.nodes, quads=getattr(m, "quads", None) if getattr(m, "quads", None) is not None
+                        else np.zeros((0, 4), int), U=np.asarray(out.U, float), **extra)
+    return p
+
+
 def interpenetration_note(rec) -> str:
     """'' or one clause naming the nodes interpenetrated at the end of a run (n_p . d_p < 0, §4.3),
     which the paper reports only for Fig. 12."""

@@ -38,7 +38,8 @@ def run(scene, mesh=None, solver=None, overrides=None, adaptive=None, **settings
            "settings": {k: v for k, v in settings.items()}, "converged": s.get("converged"),
            "message": s.get("message"), "wall_s": round(time.perf_counter() - t, 2)}
     for k in ("drape_coefficient", "fold_count", "interpenetrated_nodes", "max_interpenetrated_nodes",
-              "max_active_nodes", "remesh_count", "t_final", "steps", "tip_position"):
+              "max_active_nodes", "remesh_count", "t_final", "steps", "tip_position",
+              "iterations", "positive_definite", "min_tangent_eigenvalue", "fold_angles_deg"):
         if s.get(k) is not None:
             rec[k] = s[k]
     if s.get("warnings"):
@@ -155,7 +156,7 @@ def views_figure(rows, views=("top", "iso"), boundaries=None, pedestal=None, bou
     nr, nv = len(rows), len(views)
     widths = [1.4 if v == "iso" else 1.0 for v in views] + [0.05]
     if boundaries:
-        widths += [0.75, 1.25]    # room for the boundary panel's y label beside the colour bar's label
+        widths += [0.35, 1.25]    # room for the boundary panel's y label beside the colour bar's label
     fig = plt.figure(figsize=(panel_size * sum(widths) + 0.6, panel_size * nr * 0.95 + 0.5))
     gs = fig.add_gridspec(nr, len(widths), width_ratios=widths, wspace=0.2, hspace=0.32)
     norm = height_norm(*[X for _, _, X in rows])
@@ -175,12 +176,38 @@ def views_figure(rows, views=("top", "iso"), boundaries=None, pedestal=None, bou
     if boundaries:
         ax = fig.add_subplot(gs[:, -1])
         boundary_panel(ax, boundaries, pedestal)
+        ax.set_anchor("W")        # equal axes leave the cell wider than the panel: keep it by the colour bar
         ax.set_xlabel("x [cm]", fontsize=8)
         ax.set_ylabel("y [cm]", fontsize=8)
         ax.set_title(boundary_title or "projected boundaries on the X-Y plane", fontsize=9)
         ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.1), ncol=1, frameon=False)
         axes.append(ax)
     return fig, axes
+
+
+def interpenetrated(out):
+    """(N,) bool: the nodes of a run's final state where n_p . d_p < 0 in some element (§4.3)."""
+    from solidshell.runner import build_problem
+
+    return build_problem(out.scene, out.mesh).model.interpenetrated_nodes(out.U)
+
+
+def save_state(out_dir: Path, name: str, out, **extra) -> Path:
+    """``name``.npz in out_dir: the run's mesh (nodes, quads, tris) and final U (N,6), so that a
+    figure of an expensive run can be looked into again without re-running it."""
+    p = Path(out_dir) / f"{name}.npz"
+    p.parent.mkdir(parents=True, exist_ok=True)
+    m = out.mesh
+    np.savez_compressed(p, nodes=m.nodes, quads=getattr(m, "quads", None) if getattr(m, "quads", None) is not None
+                        else np.zeros((0, 4), int), U=np.asarray(out.U, float), **extra)
+    return p
+
+
+def interpenetration_note(rec) -> str:
+    """'' or one clause naming the nodes interpenetrated at the end of a run (n_p . d_p < 0, §4.3),
+    which the paper reports only for Fig. 12."""
+    n = rec.get("interpenetrated_nodes")
+    return f"{n} node(s) of {rec['mesh']} interpenetrated at the end (n_p . d_p < 0, §4.3; the paper reports none here)" if n else ""
 
 
 def describe(rec) -> str:
@@ -190,4 +217,10 @@ def describe(rec) -> str:
         parts.append(f"DC {rec['drape_coefficient']:.3f}")
     if rec.get("fold_count") is not None:
         parts.append(f"{rec['fold_count']} folds")
+    if rec.get("converged") is False:
+        parts.append("NOT converged")
+    if rec.get("positive_definite") is not None:      # static runs: the final tangent's verdict
+        lmin = rec.get("min_tangent_eigenvalue")
+        parts.append(("stable" if rec["positive_definite"] else "NOT stable")
+                     + (f" (min eig {lmin:.2g})" if isinstance(lmin, float) else ""))
     return ", ".join(parts)

@@ -304,6 +304,26 @@ def test_adaptive_explicit_run_survives_repeated_splits():
         assert r["energy_jump"] < max(1.0, r["kinetic_before"]), r
 
 
+def _drooping_square_on_disc(a, **adapt):
+    """square-on-disc's level-0 run (one level) started, and a droop of its sheet from the clamped
+    rim: w = -a d^2 with d the distance past the rim [cm], directors tilted with the slope, the
+    clamped dofs at zero.  Returns (run, U (N,6))."""
+    sc = load("square-on-disc").with_overrides({"adapt.enabled": True, "adapt.levels": 1,
+                                                 **{f"adapt.{k}": v for k, v in adapt.items()}})
+    mesh, _ = build_scene_mesh(sc, sc.mesh["adaptive_level0"], "relax")
+    run = _adaptive_run(sc, mesh, {**sc.solver_settings("relax"), "t_max": 1.0}, adapt_settings(sc, "relax"),
+                        "relax", lambda *a: None)
+    run.start()
+    X = run.active.mesh.nodes
+    r = np.hypot(X[:, 0], X[:, 1])
+    d = np.maximum(r - 10.0, 0.0)
+    U = np.zeros((len(X), 6))
+    U[:, 2] = -a * d ** 2
+    U[:, 3:5] = 2.0 * a * d[:, None] * X[:, :2] / r[:, None]
+    U[np.asarray(run._problem(run.active).fixed, dtype=bool)] = 0.0
+    return run, U
+
+
 def test_inserted_clamped_nodes_keep_their_prescribed_values_on_both_time_levels():
     """A node inserted between two clamped nodes is clamped (background node sets), but the DK
     transfer places it on the bent edge's cubic (the edge frame turns with the free corner E): on
@@ -312,19 +332,7 @@ def test_inserted_clamped_nodes_keep_their_prescribed_values_on_both_time_levels
     integrator does not snap the node back within one step (a ~50 cm/s jolt on the clamp, which the
     ledger booked as energy: docs/adaptivity.md)."""
     from solidshell.adapt.transfer import to_new_mesh
-    sc = load("square-on-disc").with_overrides({"adapt.enabled": True, "adapt.levels": 1,
-                                                 "adapt.settle_directors": False})
-    mesh, _ = build_scene_mesh(sc, sc.mesh["adaptive_level0"], "relax")
-    run = _adaptive_run(sc, mesh, {**sc.solver_settings("relax"), "t_max": 1.0}, adapt_settings(sc, "relax"),
-                        "relax", lambda *a: None)
-    run.start()
-    X = run.active.mesh.nodes
-    r = np.hypot(X[:, 0], X[:, 1])
-    d = np.maximum(r - 10.0, 0.0)                        # distance beyond the rim [cm]
-    U = np.zeros((len(X), 6))
-    U[:, 2] = -0.05 * d ** 2                             # the droop, and directors tilted with its slope
-    U[:, 3:5] = 0.1 * d[:, None] * X[:, :2] / r[:, None]
-    U[np.asarray(run._problem(run.active).fixed, dtype=bool)] = 0.0
+    run, U = _drooping_square_on_disc(0.05, settle_directors=False)
     st = run.integ.state
     st.D, st.D_prev = U.ravel().copy(), U.ravel().copy()
     run.forest.refine_all()
@@ -347,19 +355,8 @@ def test_new_node_settling_of_large_bent_elements_gets_the_steps_it_needs():
     from solidshell.adapt import driver
     from solidshell.adapt.settle import DirectorSettler
     from solidshell.adapt.transfer import to_new_mesh
-    sc = load("square-on-disc").with_overrides({"adapt.enabled": True, "adapt.levels": 1})
-    mesh, _ = build_scene_mesh(sc, sc.mesh["adaptive_level0"], "relax")
-    run = _adaptive_run(sc, mesh, {**sc.solver_settings("relax"), "t_max": 1.0}, adapt_settings(sc, "relax"),
-                        "relax", lambda *a: None)
-    run.start()
-    X = run.active.mesh.nodes
-    r = np.hypot(X[:, 0], X[:, 1])
-    d = np.maximum(r - 10.0, 0.0)
-    U = np.zeros((len(X), 6))
-    U[:, 2] = -0.03 * d ** 2
-    U[:, 3:5] = 0.06 * d[:, None] * X[:, :2] / r[:, None]
-    U[np.asarray(run._problem(run.active).fixed, dtype=bool)] = 0.0
-    run.forest.split([[0, i] for i in range(0, len(mesh.quads), 2)])
+    run, U = _drooping_square_on_disc(0.03)
+    run.forest.split([[0, i] for i in range(0, len(run.bg.level0.quads), 2)])
     new = run.forest.active_mesh()
     p = run._problem(new)
     D = to_new_mesh(run.bg, U.ravel(), run.active.nodes, new.nodes).reshape(-1, 6)

@@ -293,9 +293,8 @@ class AdaptiveRun:
             with self._timed("settle"):
                 st.D, st.D_prev = self._settle(problem, st.D, st.D_prev, new, inserted)
         jump0 = st.remesh_energy_jump
-        # every new mesh gets its own critical step (0.1-0.2 s of Lanczos): a pass that adds no finer
-        # level can still make stiffer elements (square-pedestal's graded corners: 8.58e-5 -> 7.22e-5 s
-        # at a pass of 28 splits and 8 merges; with the old step FIRE went non-finite 18 steps later)
+        # every new mesh gets its own critical step: a pass that adds no finer level can still make
+        # stiffer elements (transition patches at a graded level 0's corners; docs/adaptivity.md)
         with self._timed("integrator"):
             self.integ = self.cls.from_state(problem, st, self.settings,
                                              reestimate_step=True,

@@ -131,28 +131,37 @@ def _disp(B, p, o):
 
 # ---------------------------------------------------------------- one Gauss point, one tying point
 @njit(forceinline=True, fastmath=_FM, error_model="numpy")
+def gradients(d, x, n, u, v):
+    """(d1, d2, a1, a2, b1, b2, u1, u2, v1, v2): the point's dN/dxi, dN/deta and the xi / eta
+    derivatives of x_o, x_n, U_o, U_n there (Eq. 1)."""
+    d1 = d[0]
+    d2 = d[1]
+    return (d1, d2, _comb(d1, x), _comb(d2, x), _comb(d1, n), _comb(d2, n), _comb(d1, u), _comb(d2, u),
+            _comb(d1, v), _comb(d2, v))
+
+
+@njit(forceinline=True, fastmath=_FM, error_model="numpy")
+def curvatures(a1, a2, b1, b2, u1, u2, v1, v2):
+    """The bending strains of Eq. (3) (k_xixi, k_etaeta, 2 k_xieta) in displacement form:
+    a.b - A.B = u.b + a.v - u.v with A = a - u, B = b - v."""
+    k0 = (u1[0] * (b1[0] - v1[0]) + u1[1] * (b1[1] - v1[1]) + u1[2] * (b1[2] - v1[2]) + _dot(a1, v1))
+    k1 = (u2[0] * (b2[0] - v2[0]) + u2[1] * (b2[1] - v2[1]) + u2[2] * (b2[2] - v2[2]) + _dot(a2, v2))
+    k2 = (u1[0] * (b2[0] - v2[0]) + u1[1] * (b2[1] - v2[1]) + u1[2] * (b2[2] - v2[2]) + _dot(a1, v2)
+          + u2[0] * (b1[0] - v1[0]) + u2[1] * (b1[1] - v1[1]) + u2[2] * (b1[2] - v1[2]) + _dot(a2, v1))
+    return k0, k1, k2
+
+
+@njit(forceinline=True, fastmath=_FM, error_model="numpy")
 def _gauss_point(d, x, n, u, v, C, b, r, k, fo, fn):
     """Membrane and bending at one Gauss point (core._element_force): (fo, fn, energy).  d: the
     point's (dN/dxi, dN/deta); x, n, u, v: nodal x_o, x_n, U_o, U_n; C[r:r+18, k] its Cmb."""
-    d1 = d[0]
-    d2 = d[1]
-    a1 = _comb(d1, x)
-    a2 = _comb(d2, x)
-    b1 = _comb(d1, n)
-    b2 = _comb(d2, n)
-    u1 = _comb(d1, u)
-    u2 = _comb(d2, u)
-    v1 = _comb(d1, v)
-    v2 = _comb(d2, v)
+    d1, d2, a1, a2, b1, b2, u1, u2, v1, v2 = gradients(d, x, n, u, v)
     # displacement form: a.b - A.B = u.b + a.v - u.v with A = a - u, B = b - v
     e0 = (u1[0] * (a1[0] - 0.5 * u1[0]) + u1[1] * (a1[1] - 0.5 * u1[1]) + u1[2] * (a1[2] - 0.5 * u1[2]))
     e1 = (u2[0] * (a2[0] - 0.5 * u2[0]) + u2[1] * (a2[1] - 0.5 * u2[1]) + u2[2] * (a2[2] - 0.5 * u2[2]))
     e2 = (u1[0] * (a2[0] - u2[0]) + u1[1] * (a2[1] - u2[1]) + u1[2] * (a2[2] - u2[2])
           + _dot(a1, u2))
-    k0 = (u1[0] * (b1[0] - v1[0]) + u1[1] * (b1[1] - v1[1]) + u1[2] * (b1[2] - v1[2]) + _dot(a1, v1))
-    k1 = (u2[0] * (b2[0] - v2[0]) + u2[1] * (b2[1] - v2[1]) + u2[2] * (b2[2] - v2[2]) + _dot(a2, v2))
-    k2 = (u1[0] * (b2[0] - v2[0]) + u1[1] * (b2[1] - v2[1]) + u1[2] * (b2[2] - v2[2]) + _dot(a1, v2)
-          + u2[0] * (b1[0] - v1[0]) + u2[1] * (b1[1] - v1[1]) + u2[2] * (b1[2] - v1[2]) + _dot(a2, v1))
+    k0, k1, k2 = curvatures(a1, a2, b1, b2, u1, u2, v1, v2)
     n0 = C[b, r + 0, k] * e0 + C[b, r + 1, k] * e1 + C[b, r + 2, k] * e2
     n1 = C[b, r + 3, k] * e0 + C[b, r + 4, k] * e1 + C[b, r + 5, k] * e2
     n2 = C[b, r + 6, k] * e0 + C[b, r + 7, k] * e1 + C[b, r + 8, k] * e2
@@ -222,6 +231,19 @@ def _store(F, b, r, k, fo, fn, h, n):
     F[b, (r + 5) * LANES + k] = fn[2] + h * n[2]
 
 
+_Z4 = (0.0, 0.0, 0.0, 0.0)
+"""No thickness stress at the four nodes (the stages before the last)."""
+
+
+@njit(forceinline=True, fastmath=_FM, error_model="numpy")
+def store_nodes(F, b, k, fo, fn, h, n):
+    """The four nodes' rows of lane k (_store): forces fo, fn, thickness stresses h (4-tuple)."""
+    _store(F, b, 0, k, fo[0], fn[0], h[0], n[0])
+    _store(F, b, 6, k, fo[1], fn[1], h[1], n[1])
+    _store(F, b, 12, k, fo[2], fn[2], h[2], n[2])
+    _store(F, b, 18, k, fo[3], fn[3], h[3], n[3])
+
+
 # ---------------------------------------------------------------- the kernel
 @njit(forceinline=True, error_model="numpy")
 def _gather(b, k, X, Xn, U, conn, xs):
@@ -272,10 +294,7 @@ def _stage_gp(b, k, D, r, Cmb, xs, fe, we, first):
         fo, fn = _forces_of(fe, b, k)
         w = we[b, k]
     fo, fn, wg = _gauss_point(D, x, n, u, v, Cmb, b, r, k, fo, fn)
-    _store(fe, b, 0, k, fo[0], fn[0], 0.0, n[0])
-    _store(fe, b, 6, k, fo[1], fn[1], 0.0, n[1])
-    _store(fe, b, 12, k, fo[2], fn[2], 0.0, n[2])
-    _store(fe, b, 18, k, fo[3], fn[3], 0.0, n[3])
+    store_nodes(fe, b, k, fo, fn, _Z4, n)
     we[b, k] = w + wg
 
 
@@ -319,10 +338,7 @@ def _stage_rest(b, k, Cs, Cz, rz, quasi, mu, xs, fe, we):
     h2 = Cz[b, 8, k] * z0 + Cz[b, 9, k] * z1 + Cz[b, 10, k] * z2 + Cz[b, 11, k] * z3_
     h3 = Cz[b, 12, k] * z0 + Cz[b, 13, k] * z1 + Cz[b, 14, k] * z2 + Cz[b, 15, k] * z3_
     energy += 0.5 * (h0 * z0 + h1 * z1 + h2 * z2 + h3 * z3_)
-    _store(fe, b, 0, k, fo[0], fn[0], h0 * c0, n[0])
-    _store(fe, b, 6, k, fo[1], fn[1], h1 * c1, n[1])
-    _store(fe, b, 12, k, fo[2], fn[2], h2 * c2, n[2])
-    _store(fe, b, 18, k, fo[3], fn[3], h3 * c3, n[3])
+    store_nodes(fe, b, k, fo, fn, (h0 * c0, h1 * c1, h2 * c2, h3 * c3), n)
     we[b, k] = energy
 
 

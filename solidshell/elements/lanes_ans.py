@@ -32,8 +32,8 @@ from numba import njit, prange
 
 from . import lanes, quad4
 from .core import _FM
-from .lanes import (LANES, _D0, _D1, _D2, _D3, _acc1, _acc2, _comb, _dot, _forces_of, _gather, _lin2,
-                    _nodes, _stage_rest, _store)
+from .lanes import (LANES, _D0, _D1, _D2, _D3, _Z4, _acc1, _acc2, _comb, _dot, _forces_of, _gather, _lin2,
+                    _nodes, _stage_rest, curvatures, gradients, store_nodes)
 
 # the basis of the six products: dN_i/dxi, dN_i/deta at the centre and the hourglass weights
 # xi_i eta_i / 4 (quad4.P_ALPHA rows 0, 1 and 3: the products (0,0), (1,1), (0,1), (2,2), (0,2),
@@ -83,21 +83,8 @@ def pack(conn, c, quasi_rz):
 def _bending_point(d, x, n, u, v, C, b, r, k, fo, fn):
     """Bending at one Gauss point (core._element_force with a zero membrane rigidity): (fo, fn,
     energy).  d: the point's (dN/dxi, dN/deta); C[b, r:r+9, k] its Cb."""
-    d1 = d[0]
-    d2 = d[1]
-    a1 = _comb(d1, x)
-    a2 = _comb(d2, x)
-    b1 = _comb(d1, n)
-    b2 = _comb(d2, n)
-    u1 = _comb(d1, u)
-    u2 = _comb(d2, u)
-    v1 = _comb(d1, v)
-    v2 = _comb(d2, v)
-    # displacement form: a.b - A.B = u.b + a.v - u.v with A = a - u, B = b - v
-    k0 = (u1[0] * (b1[0] - v1[0]) + u1[1] * (b1[1] - v1[1]) + u1[2] * (b1[2] - v1[2]) + _dot(a1, v1))
-    k1 = (u2[0] * (b2[0] - v2[0]) + u2[1] * (b2[1] - v2[1]) + u2[2] * (b2[2] - v2[2]) + _dot(a2, v2))
-    k2 = (u1[0] * (b2[0] - v2[0]) + u1[1] * (b2[1] - v2[1]) + u1[2] * (b2[2] - v2[2]) + _dot(a1, v2)
-          + u2[0] * (b1[0] - v1[0]) + u2[1] * (b1[1] - v1[1]) + u2[2] * (b1[2] - v1[2]) + _dot(a2, v1))
+    d1, d2, a1, a2, b1, b2, u1, u2, v1, v2 = gradients(d, x, n, u, v)
+    k0, k1, k2 = curvatures(a1, a2, b1, b2, u1, u2, v1, v2)
     m0 = C[b, r + 0, k] * k0 + C[b, r + 1, k] * k1 + C[b, r + 2, k] * k2
     m1 = C[b, r + 3, k] * k0 + C[b, r + 4, k] * k1 + C[b, r + 5, k] * k2
     m2 = C[b, r + 6, k] * k0 + C[b, r + 7, k] * k1 + C[b, r + 8, k] * k2
@@ -115,10 +102,7 @@ def _stage_bend(b, k, D, r, C, xs, fe, we):
     x, n, u, v = _nodes(xs, b, k)
     fo, fn = _forces_of(fe, b, k)
     fo, fn, wg = _bending_point(D, x, n, u, v, C, b, r, k, fo, fn)
-    _store(fe, b, 0, k, fo[0], fn[0], 0.0, n[0])
-    _store(fe, b, 6, k, fo[1], fn[1], 0.0, n[1])
-    _store(fe, b, 12, k, fo[2], fn[2], 0.0, n[2])
-    _store(fe, b, 18, k, fo[3], fn[3], 0.0, n[3])
+    store_nodes(fe, b, k, fo, fn, _Z4, n)
     we[b, k] = we[b, k] + wg
 
 
@@ -164,10 +148,7 @@ def _stage_membrane(b, k, C, xs, fe, we):
     z3 = (0.0, 0.0, 0.0)
     fo = _acc2((z3, z3, z3, z3), _C1, p1, _C2, p2)
     fo = _acc1(fo, 1.0, _H, ph)
-    _store(fe, b, 0, k, fo[0], z3, 0.0, n[0])
-    _store(fe, b, 6, k, fo[1], z3, 0.0, n[1])
-    _store(fe, b, 12, k, fo[2], z3, 0.0, n[2])
-    _store(fe, b, 18, k, fo[3], z3, 0.0, n[3])
+    store_nodes(fe, b, k, fo, (z3, z3, z3, z3), _Z4, n)
     we[b, k] = w
 
 

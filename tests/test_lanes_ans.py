@@ -155,10 +155,8 @@ def test_fused_step_with_assumed_membrane_follows_the_previous_path():
     lane kernel, and 60 steps of a sheet falling onto a plane follow Model.internal_force +
     central_step to round-off (1e-11 relative: per-step differences of 1e-16 grown by 60 steps of
     a stable scheme)."""
-    from solidshell.contact import Plane
-    from solidshell.problem import Problem
-    from solidshell.solvers.explicit import Integrator
     from solidshell.solvers.explicit.fused import FusedForces, lanes_ans_scatter, lanes_scatter
+    from test_lanes import fused_follows_previous_path
 
     base = distorted_warped_mesh()
     q = base.quads
@@ -169,21 +167,7 @@ def test_fused_step_with_assumed_membrane_follows_the_previous_path():
     ff = FusedForces(model)
     assert [p[2]["kernel"] for p in ff.parts if p[0] == "lanes"] == \
         [lanes_ans_scatter, lanes_scatter, lanes_ans_scatter]
-    fixed = np.zeros((mesh.n_nodes, 6), bool)
-    fixed[mesh.nodes[:, 0] == 0.0] = True
-    loads = np.zeros((mesh.n_nodes, 6))
-    loads[:, 2] = -980.665 * model.lumped_mass()[:, 0]
-    z0 = mesh.nodes[:, 2].min() + 0.01                    # the lowest nodes start in contact
-    prob = Problem(model, fixed, loads, contact=[Plane(point=(0.0, 0.0, z0), normal=(0.0, 0.0, 1.0))])
-    s = {"t_end": 1.0, "sample_every": 7, "mass_scaling": 100.0}
-    a, b = Integrator(prob, s), Integrator(prob, s)
-    b.forces.fused = None
-    assert a.forces.fused is not None
-    for it in (a, b):
-        assert it.advance(60) == "running"
-    D0 = b.state.D
-    assert np.max(np.abs(a.state.D - D0)) <= 1e-11 * np.max(np.abs(D0))
-    assert a.state.max_contact == b.state.max_contact > 0
+    fused_follows_previous_path(model, z_plane=mesh.nodes[:, 2].min() + 0.01)   # the lowest nodes start in contact
     # and the force itself at a deformed state, against the model's
     U = random_motion(mesh, 8)
     F1, E1 = ff.internal(U.ravel(), True)

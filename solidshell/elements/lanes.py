@@ -342,6 +342,18 @@ def _stage_rest(b, k, Cs, Cz, rz, quasi, mu, xs, fe, we):
     we[b, k] = energy
 
 
+@njit(forceinline=True, fastmath=_FM, error_model="numpy")
+def stages_rest(b, nl, Cs, Cz, rz, quasi, mu, xs, fe, we):
+    """The last stage (shear and thickness, _stage_rest) of the nl lanes of block b, the branch on
+    the thickness strain outside the lane loop: each loop body is straight-line code."""
+    if quasi:
+        for k in range(nl):
+            _stage_rest(b, k, Cs, Cz, rz, True, mu, xs, fe, we)
+    else:
+        for k in range(nl):
+            _stage_rest(b, k, Cs, Cz, rz, False, mu, xs, fe, we)
+
+
 @njit(cache=True, forceinline=True, fastmath=_FM, error_model="numpy")
 def _block(b, X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we):
     """All lanes of block b, stage by stage (gather, four Gauss points, shear and thickness): each
@@ -359,13 +371,7 @@ def _block(b, X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we):
         _stage_gp(b, k, _D2, 36, Cmb, xs, fe, we, False)
     for k in range(nl):
         _stage_gp(b, k, _D3, 54, Cmb, xs, fe, we, False)
-    # the branch outside the lane loop: each loop body is straight-line code
-    if quasi:
-        for k in range(nl):
-            _stage_rest(b, k, Cs, Cz, rz, True, mu, xs, fe, we)
-    else:
-        for k in range(nl):
-            _stage_rest(b, k, Cs, Cz, rz, False, mu, xs, fe, we)
+    stages_rest(b, nl, Cs, Cz, rz, quasi, mu, xs, fe, we)
 
 
 @njit(cache=True, parallel=True, fastmath=_FM, error_model="numpy")

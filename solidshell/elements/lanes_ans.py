@@ -33,7 +33,7 @@ from numba import njit, prange
 from . import lanes, quad4
 from .core import _FM
 from .lanes import (LANES, _D0, _D1, _D2, _D3, _Z4, _acc1, _acc2, _comb, _dot, _forces_of, _gather, _lin2,
-                    _nodes, _stage_rest, curvatures, gradients, store_nodes)
+                    _nodes, curvatures, gradients, stages_rest, store_nodes)
 
 # the basis of the six products: dN_i/dxi, dN_i/deta at the centre and the hourglass weights
 # xi_i eta_i / 4 (quad4.P_ALPHA rows 0, 1 and 3: the products (0,0), (1,1), (0,1), (2,2), (0,2),
@@ -169,12 +169,7 @@ def _block(b, X, Xn, U, conn, C, Cs, Cz, rz, quasi, mu, xs, fe, we):
         _stage_bend(b, k, _D2, 18, C, xs, fe, we)
     for k in range(nl):
         _stage_bend(b, k, _D3, 27, C, xs, fe, we)
-    if quasi:
-        for k in range(nl):
-            _stage_rest(b, k, Cs, Cz, rz, True, mu, xs, fe, we)
-    else:
-        for k in range(nl):
-            _stage_rest(b, k, Cs, Cz, rz, False, mu, xs, fe, we)
+    stages_rest(b, nl, Cs, Cz, rz, quasi, mu, xs, fe, we)
 
 
 @njit(cache=True, parallel=True, fastmath=_FM, error_model="numpy")

@@ -30,6 +30,7 @@ from numba import get_num_threads, njit, prange
 from ...assembly import scatter_add_vec
 from ...elements import core, lanes, lanes_ans, quad4
 from ...elements.core import _FM
+from .kernels import dof_power
 
 
 CHUNKS = 4
@@ -136,6 +137,28 @@ def residual(F, P, C, has_C, R):
         R[i] = r
 
 
+@njit(cache=True)
+def residual_power(F, P, C, has_C, R, D, Dp, invM, Mf, fixed, inv_dt, half_dt):
+    """residual's R and, in the same pass, FIRE's power sums over the free dofs (P = R.v, v.M.v,
+    R.M^-1.R; kernels.dof_power, damping/fire.power's terms in its order, so the same sums bit for
+    bit): one pass over the dofs fewer per FIRE step."""
+    Pw = 0.0
+    vMv = 0.0
+    fMf = 0.0
+    for i in range(F.size):
+        r = P[i] - F[i]
+        if has_C:
+            r += C[i]
+        R[i] = r
+        if fixed[i]:
+            continue
+        p, w, f = dof_power(r, D[i], Dp[i], invM[i], Mf[i], inv_dt, half_dt)
+        Pw += p
+        vMv += w
+        fMf += f
+    return Pw, vMv, fMf
+
+
 def _uses_lanes(b) -> bool:
     """The lane kernel covers the quadrilateral with the compatible membrane and 4 shear ties."""
     return b.module is quad4 and b.gp_membrane and b.alpha.shape[0] == 4 and np.array_equal(b.alpha, quad4.ALPHA)
@@ -227,16 +250,25 @@ class FusedForces:
         self.assemble()
         return self.F.copy(), (self.energy() if want_energy else None)
 
-    def step(self, D, Dp, Dn1, R, P, C, cF, cD, cDp, fixed, presc, Mf, inv2dt, want_energy, residual_only=False):
+    def step(self, D, Dp, Dn1, R, P, C, cF, cD, cDp, fixed, presc, Mf, inv2dt, want_energy, residual_only=False,
+             power=None):
         """One step of Eq. (23) from D_n: F into self.F, R = P - F (+ C unless None), D_n+1 into Dn1
         (prescribed where ``fixed``, a (6N,) bool mask, values ``presc`` (6N,)).  Returns (v_n.M.v_n,
         finite, strain energy or None).  ``residual_only``: F and R only, Dn1 untouched, (0, True,
-        energy) -- for a damper that computes D_n+1 itself (FIRE): one pass over the dofs fewer."""
+        energy) -- for a damper that computes D_n+1 itself (FIRE): one pass over the dofs fewer;
+        with ``power`` = (invM, dt) also FIRE's power sums at v_n into self.last_power
+        (residual_power), else self.last_power is None."""
         self.element_pass(D.reshape(self.N, 6))
         self.assemble()
         has_C = C is not None
+        self.last_power = None
         if residual_only:
-            residual(self.F, P, C if has_C else self._zero, has_C, R)
+            if power is None:
+                residual(self.F, P, C if has_C else self._zero, has_C, R)
+            else:
+                invM, dt = power
+                self.last_power = residual_power(self.F, P, C if has_C else self._zero, has_C, R, D, Dp, invM, Mf,
+                                                 fixed, 1.0 / dt, 0.5 * dt)
             return 0.0, True, (self.energy() if want_energy else None)
         vMv, finite = update(self.F, P, C if has_C else self._zero, has_C, R, Dn1, D, Dp, cF, cD, cDp, fixed, presc,
                              Mf, inv2dt)

@@ -80,6 +80,8 @@ class Integrator:
         self.damping = s.damping if self.relax else "rayleigh"
         self.damper = damping.make(self.damping)
         self.damper_rewrites = bool(getattr(self.damper, "rewrites_step", False))
+        self.damper_power = bool(getattr(self.damper, "wants_power", False))
+        self.step_power = None   # (P, v.M.v, R.M^-1.R) of this step when the fused pass formed them
         self.M = M = scaled_mass(self.model, s.mass_scaling, s.mass_scaling_mode)
         self.free_mask = ~problem.fixed
         if np.any(M[self.free_mask] <= 0.0):
@@ -318,8 +320,10 @@ class Integrator:
                 # run's first step, which is the scheme's own
                 r_only = self.damper_rewrites and not (n == 0 and self.fresh)
                 vMv, finite, Es = fused.step(D, Dp, Dn1, R, self.P, C, self.cF, self.cD, self.cDp, self.fixed_mask,
-                                             self.presc_full, self.Mf, 0.5 / st.dt, sample, r_only)
+                                             self.presc_full, self.Mf, 0.5 / st.dt, sample, r_only,
+                                             (self.invM, st.dt) if r_only and self.damper_power else None)
                 F = fused.F
+                self.step_power = fused.last_power
         except (FloatingPointError, ZeroDivisionError, SolverError) as exc:
             self.message = f"internal force failed at step {n} (t = {self.time_of(n):.6g} s): {exc}"
             return None, 0.0, True

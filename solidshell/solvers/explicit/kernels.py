@@ -45,6 +45,16 @@ def central_step(Dn1, D, Dp, R, cF, cD, cDp, fixed_idx, presc, Mf, inv2dt):
     return vMv, finite
 
 
+@njit(forceinline=True)
+def dof_power(r, d, dp, invm, m, inv_dt, half_dt):
+    """One free dof's terms of FIRE's power sums (damping/fire.py): (r v, m v v, r r / m) with the
+    velocity at D_n of the velocity-Verlet form, v = (d - dp) / dt + dt/2 r / m.  One definition for
+    the damper's own pass and the fused residual pass (fused.residual_power), so both sum the same
+    rounded terms in the same order."""
+    v = (d - dp) * inv_dt + half_dt * invm * r
+    return r * v, m * v * v, invm * r * r
+
+
 def coefficients(invM, dt: float, alpha: float):
     """(cF, cD, cDp) of Eq. (23) with lumped inverse mass invM (zero on fixed dofs), step dt [s] and
     Rayleigh alpha [1/s]: D_n+1 = cF (P - F + C) + cD D_n + cDp D_n-1."""

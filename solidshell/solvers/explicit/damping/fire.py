@@ -27,8 +27,10 @@ critical step, Section 4.1 -- FIRE's 10 x dt_MD would be unstable here), dt is n
 ``fire_dt_min`` x dt_max.  The kinetic energy the mixing and the freezes take out is booked as
 damping dissipation (half-step measure, as kinetic damping books its resets).
 
-Cost: two passes over the 6N dofs per step (``power``, ``update``), no allocation; the integrator's
-fused step then only forms R (``rewrites_step``) instead of a step that would be overwritten.
+Cost: one pass over the 6N dofs per step (``update``), no allocation: the integrator's fused step
+only forms R (``rewrites_step``) instead of a step that would be overwritten, and the power sums
+with it (``wants_power``: fused.residual_power, the terms of ``power`` in its order); ``power``
+is the damper's own pass where the step is not fused.
 """
 
 from __future__ import annotations
@@ -36,6 +38,8 @@ from __future__ import annotations
 import math
 
 from numba import njit
+
+from ..kernels import dof_power
 
 
 @njit(cache=True)
@@ -47,11 +51,10 @@ def power(D, Dp, R, invM, Mf, fixed, inv_dt, half_dt):
     for i in range(D.size):
         if fixed[i]:
             continue
-        r = R[i]
-        v = (D[i] - Dp[i]) * inv_dt + half_dt * invM[i] * r
-        P += r * v
-        vMv += Mf[i] * v * v
-        fMf += invM[i] * r * r
+        p, w, f = dof_power(R[i], D[i], Dp[i], invM[i], Mf[i], inv_dt, half_dt)
+        P += p
+        vMv += w
+        fMf += f
     return P, vMv, fMf
 
 
@@ -82,6 +85,7 @@ def update(Dn1, D, Dp, R, invM, Mf, fixed, presc, inv_dt_old, dt_new, c_v, c_f):
 class Fire:
     name = "fire"
     rewrites_step = True   # correct() computes D_n+1 from R alone (but on a fresh run's first step)
+    wants_power = True     # correct() reads integ.step_power (P, v.M.v, R.M^-1.R) when the step formed it
 
     def alpha0(self, integ) -> float:
         return 0.0   # no viscous damping: FIRE's mixing and freezes take the energy out
@@ -92,7 +96,9 @@ class Fire:
         st, s = integ.state, integ.s
         dt = st.dt
         dt_max = min(s.dt if s.dt is not None else s.safety * integ.lim.dt_crit, s.safety * st.dtc_min)
-        P, vMv_old, fMf = power(D, Dp, R, integ.invM, integ.Mf, integ.fixed_mask, 1.0 / dt, 0.5 * dt)
+        pw = integ.step_power     # formed with R by the fused residual pass, else one pass here
+        P, vMv_old, fMf = pw if pw is not None else \
+            power(D, Dp, R, integ.invM, integ.Mf, integ.fixed_mask, 1.0 / dt, 0.5 * dt)
         if n == 0 and integ.fresh:
             # D_-1 is the start rule's Taylor point (v_-1/2 = V_0 - dt/2 A_0), not a velocity the
             # run had: the first step is the scheme's own

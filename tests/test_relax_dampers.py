@@ -141,9 +141,10 @@ def test_pedestal_relaxation_reaches_the_static_drape(damping):
 
 
 def test_fire_with_the_residual_only_step_is_the_full_step_bitwise():
-    """FIRE rewrites D_n+1 from R alone (rewrites_step), so the fused step only forms R for it:
-    300 steps of the strip, FIRE mixing, identical to letting the fused step
-    compute the D_n+1 that FIRE then overwrites."""
+    """FIRE rewrites D_n+1 from R alone (rewrites_step), so the fused step only forms R for it,
+    and FIRE's power sums in the same pass (fused.residual_power): 300 steps of the strip, FIRE
+    mixing, identical to letting the fused step compute the D_n+1 that FIRE then overwrites and
+    FIRE its own power sums (fire.power)."""
     prob = wool_strip()
     s = {"damping": "fire", **FAST, "max_steps": 300}
     a, b = Integrator(prob, s, relax=True), Integrator(prob, s, relax=True)
@@ -151,6 +152,7 @@ def test_fire_with_the_residual_only_step_is_the_full_step_bitwise():
     b.damper_rewrites = False
     for it in (a, b):
         it.advance(300)
+    assert a.step_power is not None and b.step_power is None        # the two paths were taken
     assert a.state.damp_sum > 0.0                                     # FIRE mixed
     assert np.array_equal(a.state.D, b.state.D) and np.array_equal(a.state.D_prev, b.state.D_prev)
     assert a.state.damp_sum == b.state.damp_sum and a.state.dt == b.state.dt

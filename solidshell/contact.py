@@ -4,6 +4,8 @@ Bodies
 ------
 :class:`Sphere`, :class:`Plane` (a floor: the half-space below the plane is solid) and
 :class:`Pedestal` (a flat-topped vertical cylinder or box with an optional rounded top edge).
+Their distances and the laws below are compiled, one node at a time (``contact_kernels``); a
+user's own :class:`RigidBody` subclass gives ``signed_distance`` and goes through the same laws.
 Each body is a *solid*; its signed distance ``g(x)`` is positive outside, negative inside, and its
 ``normal`` is the unit outward gradient ``∇g``.
 
@@ -62,6 +64,7 @@ import math
 
 import numpy as np
 
+from . import contact_kernels as ck
 from .errors import InputError
 
 DEFAULT_PENALTY_FACTOR = 0.1
@@ -96,6 +99,12 @@ def _pos(v, name: str, allow_zero=False) -> float:
     return x
 
 
+def _params(*values) -> np.ndarray:
+    out = np.zeros(ck.PARAMS)
+    out[:len(values)] = values
+    return out
+
+
 def active_energy(kp, p) -> float:
     """1/2 sum k_i p_i^2 over the nodes in contact (p_i > 0) only, in node order: the same sum bit
     for bit whichever superset of the contact nodes is passed (the explicit solver evaluates only
@@ -115,8 +124,23 @@ class RigidBody:
     friction: float = 0.0  # Coulomb coefficient mu (0: frictionless, the default)
     lipschitz: float | None = None
 
-    def signed_distance(self, x: np.ndarray):  # pragma: no cover - interface
-        raise NotImplementedError
+    code: int = -1                 # contact_kernels.SPHERE, PLANE, CYLINDER or BOX; -1: a user's body
+    params: np.ndarray = np.zeros(ck.PARAMS)   # the body's numbers for the kernels
+
+    def signed_distance(self, x: np.ndarray):
+        """(g (N,), n (N,3)): signed distance of the points x (N,3), positive outside, and the
+        outward unit normal (contact_kernels.signed_distance; a subclass of code < 0 overrides this)."""
+        if self.code < 0:  # pragma: no cover - interface
+            raise NotImplementedError
+        return ck.distances(self.code, self.params, np.ascontiguousarray(x, dtype=float).reshape(-1, 3))
+
+    def given_distances(self, x):
+        """(g_in, n_in) for contact_kernels.body_forces: empty for the bodies the kernels know, the
+        signed distances of the points x otherwise."""
+        if self.code >= 0:
+            return ck._G0, ck._N0
+        g, n = self.signed_distance(x)
+        return np.ascontiguousarray(g, dtype=float), np.ascontiguousarray(n, dtype=float).reshape(-1, 3)
 
     def penetration(self, x):
         """(gap (N,), normal (N,3)) for points x (N,3): gap = g(x) - offset, negative when the point
@@ -130,11 +154,12 @@ class RigidBody:
 
         k : scalar or (N,) penalty stiffness [force/length] (see :func:`penalty_stiffness`).
         """
-        x = np.asarray(x, dtype=float).reshape(-1, 3)
-        gap, n = self.penetration(x)
-        p = np.maximum(-gap, 0.0)
-        kp = np.asarray(k, dtype=float) * p
-        return kp[:, None] * n, active_energy(kp, p)
+        x = np.ascontiguousarray(x, dtype=float).reshape(-1, 3)
+        f = np.zeros_like(x)
+        kk = np.ascontiguousarray(np.broadcast_to(np.asarray(k, dtype=float), (len(x),)))
+        e, _, _, _, _ = ck.body_forces(self.code, self.params, self.offset, 0.0, x, kk, kk, f, f, f, f,
+                                       *self.given_distances(x))
+        return f, e
 
     def active(self, x) -> np.ndarray:
         """(N,) bool: points in contact (gap < 0)."""
@@ -151,15 +176,7 @@ class Sphere(RigidBody):
         self.radius = _pos(radius, "sphere radius")
         self.offset = _pos(offset, "contact offset", allow_zero=True)
         self.friction = friction_coefficient(friction)
-
-    def signed_distance(self, x):
-        d = x - self.center
-        r = np.linalg.norm(d, axis=1)
-        safe = r > 0.0
-        n = np.zeros_like(d)
-        n[safe] = d[safe] / r[safe, None]
-        n[~safe] = (0.0, 0.0, 1.0)  # the centre itself: push up
-        return r - self.radius, n
+        self.code, self.params = ck.SPHERE, _params(*self.center, self.radius)
 
     def __repr__(self):
         return (f"Sphere(center={self.center.tolist()}, radius={self.radius}, offset={self.offset}, "
@@ -181,33 +198,11 @@ class Plane(RigidBody):
         self.normal = nn / L
         self.offset = _pos(offset, "contact offset", allow_zero=True)
         self.friction = friction_coefficient(friction)
-
-    def signed_distance(self, x):
-        return ((x - self.point) * self.normal).sum(axis=1), np.broadcast_to(self.normal, x.shape).copy()
+        self.code, self.params = ck.PLANE, _params(*self.point, *self.normal)
 
     def __repr__(self):
         return (f"Plane(point={self.point.tolist()}, normal={self.normal.tolist()}, offset={self.offset}, "
                 f"friction={self.friction})")
-
-
-def _box_sdf(a: np.ndarray, half: np.ndarray):
-    """Signed distance of points with coordinates a (N,k) to the box |a_j| <= half_j, and its
-    gradient with respect to a (N,k).  Outside: Euclidean distance to the box (edges and corners
-    are rounded); inside: minus the distance to the nearest face."""
-    s = np.where(a >= 0.0, 1.0, -1.0)
-    q = np.abs(a) - half
-    qp = np.maximum(q, 0.0)
-    L = np.linalg.norm(qp, axis=1)
-    m = q.max(axis=1)
-    g = L + np.minimum(m, 0.0)
-    grad = np.zeros_like(a)
-    out = L > 0.0
-    grad[out] = qp[out] / L[out, None]
-    inn = ~out
-    if np.any(inn):
-        j = np.argmax(q[inn], axis=1)
-        grad[np.flatnonzero(inn), j] = 1.0
-    return g, grad * s
 
 
 class Pedestal(RigidBody):
@@ -254,25 +249,9 @@ class Pedestal(RigidBody):
             raise InputError("pedestal edge_radius must be smaller than its radius/half width and half height")
         self.offset = _pos(offset, "contact offset", allow_zero=True)
         self.friction = friction_coefficient(friction)
-
-    def signed_distance(self, x):
-        r = self.edge_radius
-        d = x - self.top_center
-        zc = d[:, 2] + 0.5 * self.height  # z about the pedestal's mid-height
-        if self.kind == "cylinder":
-            rho = np.hypot(d[:, 0], d[:, 1])
-            a = np.column_stack([rho, zc])
-            g, ga = _box_sdf(a, np.array([self.radius - r, 0.5 * self.height - r]))
-            safe = rho > 0.0
-            er = np.zeros((len(x), 2))
-            er[safe] = d[safe, :2] / rho[safe, None]
-            er[~safe] = (1.0, 0.0)
-            n = np.column_stack([ga[:, 0:1] * er, ga[:, 1]])
-        else:
-            a = np.column_stack([d[:, 0], d[:, 1], zc])
-            hw = np.array([*self.half_widths, 0.5 * self.height]) - r
-            g, n = _box_sdf(a, hw)
-        return g - r, n
+        top = (*self.top_center, self.height, self.edge_radius)
+        self.code, self.params = (ck.CYLINDER, _params(*top, self.radius)) if self.kind == "cylinder" else \
+            (ck.BOX, _params(*top, *self.half_widths))
 
     def __repr__(self):
         dims = f"radius={self.radius}" if self.kind == "cylinder" else f"half_widths={self.half_widths.tolist()}"
@@ -307,36 +286,16 @@ def frictional_contact(body, x, k, k_t, anchor):
     f_t (m,3) their friction forces, E_t stick-spring energy 1/2 sum |f_t|^2 / k_t, new anchor
     (N,3), n_slip number of nodes slipping).  Only the nodes in contact are worked on.
     """
-    x = np.asarray(x, dtype=float).reshape(-1, 3)
-    gap, n = body.penetration(x)
-    p = np.maximum(-gap, 0.0)
-    kp = np.asarray(k, dtype=float) * p
-    f = kp[:, None] * n
-    e_n = active_energy(kp, p)
-    idx = np.flatnonzero(p > 0.0)
-    new = np.full_like(anchor, np.nan)
-    if idx.size == 0:
-        return f, e_n, idx, np.zeros((0, 3)), 0.0, new, 0
-    xa = x[idx]
-    na = n[idx]
-    a = anchor[idx]
-    fresh = np.isnan(a[:, 0])
-    if np.any(fresh):  # first touch: the anchor is where the node is (no tangential force yet)
-        a = a.copy()
-        a[fresh] = xa[fresh]
-    d = xa - a
-    s = d - np.einsum("ij,ij->i", d, na)[:, None] * na       # tangential stretch
-    kt = np.broadcast_to(np.asarray(k_t, dtype=float), p.shape)[idx]
-    ft = -kt[:, None] * s                                     # trial (stick) force
-    fmax = body.friction * kp[idx]                            # Coulomb cone mu |f_n|
-    mag = np.sqrt(np.einsum("ij,ij->i", ft, ft))
-    slip = mag > fmax
-    if np.any(slip):
-        ft[slip] *= (fmax[slip] / mag[slip])[:, None]         # return map onto the cone
-    new[idx] = xa + ft / kt[:, None]                          # anchor: stick stretch = |f_t| / k_t
-    f[idx] += ft
-    e_t = 0.5 * float(np.add.reduce(np.einsum("ij,ij->i", ft, ft) / kt))
-    return f, e_n, idx, ft, e_t, new, int(np.count_nonzero(slip))
+    x = np.ascontiguousarray(x, dtype=float).reshape(-1, 3)
+    N = len(x)
+    k = np.ascontiguousarray(np.broadcast_to(np.asarray(k, dtype=float), (N,)))
+    k_t = np.ascontiguousarray(np.broadcast_to(np.asarray(k_t, dtype=float), (N,)))
+    f, ft, new = np.zeros((N, 3)), np.zeros((N, 3)), np.full((N, 3), np.nan)
+    e_n, e_t, _, n_slip, _ = ck.body_forces(body.code, body.params, body.offset, body.friction, x, k, k_t,
+                                            np.ascontiguousarray(anchor, dtype=float).reshape(N, 3), f, ft, new,
+                                            *body.given_distances(x))
+    idx = np.flatnonzero(~np.isnan(new[:, 0]))
+    return f, e_n, idx, ft[idx], e_t, new, int(n_slip)
 
 
 # ---------------------------------------------------------------------- stiffness and time step

@@ -11,8 +11,8 @@ too (contact.active_energy sums over the nodes in contact only).  Once a node ha
 the candidates are selected anew at the current state.
 
 Cost: a selection is one signed-distance pass over all nodes; between selections a step costs one
-compiled pass over the nodes' translations plus the bodies' numpy code on the candidates (on the
-sphere 100x100 draped: ~1.5 k of 10 k nodes).  Bodies without a Lipschitz bound make every node a
+compiled pass over the nodes' translations plus one compiled contact pass over the candidates
+(contact_kernels.contact_pass; on the sphere 100x100 draped: ~1.5 k of 10 k nodes).  Bodies without a Lipschitz bound make every node a
 candidate, always.
 """
 

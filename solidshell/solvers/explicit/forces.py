@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ... import contact_kernels as ck
 from ...contact import contact_forces, frictional_contact
 
 
@@ -29,6 +30,19 @@ class Forces:
         self.quasi = bool(getattr(model, "quasi", False)) and hasattr(model, "interpenetration")
         self.q_mu = float(getattr(model, "mu", 0.5))
         self.fused = fused
+        self._all = np.arange(self.N)
+        # every body one of the kernels' (contact_kernels): one compiled pass over the nodes
+        self.compiled = bool(self.bodies) and all(getattr(b, "code", -1) >= 0 for b in self.bodies)
+        if self.compiled:
+            self.X0 = np.ascontiguousarray(self.X0, dtype=float)
+            self.codes = np.array([b.code for b in self.bodies], dtype=np.int64)
+            self.params = np.array([b.params for b in self.bodies], dtype=float)
+            self.offsets = np.array([b.offset for b in self.bodies], dtype=float)
+            self.mus = np.array(self.fric_of, dtype=float)
+            self.k_pen = np.ascontiguousarray(k_pen, dtype=float)
+            self._kt = np.ascontiguousarray(k_t, dtype=float) if k_t is not None else np.zeros(0)
+            self._ft = np.zeros((self.n_fric, self.N, 3))     # the friction forces of one pass
+            self._no_anchor = np.zeros((0, self.N, 3))
 
     def internal(self, D, want_energy):
         """(F(D) flat, strain energy or None)."""
@@ -68,6 +82,9 @@ class Forces:
         """Frictionless penalty contact: (C flat, energy, active nodes, deepest penetration).
         ``nodes``: evaluate only these (sorted; every node in contact must be among them,
         candidates.py), ``C``: the output buffer (see _into)."""
+        if self.compiled:
+            C, ec, _, nact, _, pen = self._pass(D, None, nodes, C, None)
+            return C, ec, nact, pen
         x, k, _ = self._points(D, nodes)
         fc, ec, nact = contact_forces(self.bodies, x, k)
         pen = float(np.max(np.linalg.norm(fc, axis=1) / k)) if nact else 0.0
@@ -75,22 +92,27 @@ class Forces:
 
     def contact_friction(self, D, anchors, nodes=None, C=None, new=None):
         """As :meth:`contact`, with Coulomb friction on the bodies with mu > 0
-        (contact.frictional_contact): also [(idx, f_t)] per frictional body, the stick energy, the
-        new anchors and the slip count.  ``anchors`` is not modified (a restart must see the saved
-        ones).  With ``nodes`` the new anchors go into ``new`` (n_fric, N, 3), NaN elsewhere."""
+        (contact.frictional_contact): also (FT (n_fric, m, 3), node indices (m,)), the friction
+        forces of the m nodes evaluated per frictional body, the stick energy, the new anchors and
+        the slip count.  ``anchors`` is not modified (a restart must see the saved ones).  With
+        ``nodes`` the new anchors go into ``new`` (n_fric, N, 3), NaN elsewhere."""
+        if self.compiled:
+            C, ec, et, nact, nslip, pen, FT, idx, a_new = self._pass(D, anchors, nodes, C, new, friction=True)
+            return C, ec, nact, pen, (FT, idx), et, a_new, nslip
         x, k, kt = self._points(D, nodes)
+        m = len(x)
         fc = np.zeros_like(x)
         ec = et = pen = 0.0
         nact = nslip = 0
-        fr = []
+        FT = np.zeros((self.n_fric, m, 3))
         a_in = anchors if nodes is None else anchors[:, nodes]
         a_new = np.empty_like(a_in)
         j = 0
         for b, mu in zip(self.bodies, self.fric_of):
             if mu > 0.0:
                 fb, eb, idx, ft, etb, a_new[j], ns = frictional_contact(b, x, k, kt, a_in[j])
+                FT[j, idx] = ft
                 j += 1
-                fr.append((idx if nodes is None else nodes[idx], ft))
                 et += etb
                 nslip += ns
                 if idx.size:
@@ -109,7 +131,29 @@ class Forces:
             new.fill(np.nan)
             new[:, nodes] = a_new
             a_new = new
+        fr = (FT, self._all if nodes is None else nodes)
         return self._into(fc, nodes, C), ec, nact, pen, fr, et, a_new, nslip
+
+    def _pass(self, D, anchors, nodes, C, new, friction=False):
+        """contact_kernels.contact_pass on ``nodes`` (None: all): (C, contact energy, stick energy,
+        nodes in contact, slipping, deepest |f_n| / k[, FT, nodes, new anchors])."""
+        idx = self._all if nodes is None else nodes
+        if C is None:
+            C = np.zeros(6 * self.N)
+        if friction:
+            if new is None:
+                new = np.full((self.n_fric, self.N, 3), np.nan)
+            else:
+                new.fill(np.nan)
+            FT = self._ft[:, :idx.size]
+            anc = anchors
+        else:
+            FT, anc, new = self._ft[:, :0], self._no_anchor, self._no_anchor
+        ec, et, nact, nslip, pen = ck.contact_pass(self.codes, self.params, self.offsets, self.mus, self.X0, D,
+                                                   idx, self.k_pen, self._kt, anc, new, C, FT)
+        if friction:
+            return C, ec, et, nact, nslip, pen, FT, idx, new
+        return C, ec, et, nact, nslip, pen
 
     def contact_energy(self, D, anchors):
         """(C flat, contact energy incl. friction stick energy, the stick energy) at D (no books)."""

@@ -25,6 +25,7 @@ from . import checkpoint, damping, ledger, observers, report, stepcontrol
 from .candidates import Candidates, contact_power, default_margin
 from .forces import Forces
 from .fused import FusedForces
+from ...contact_kernels import friction_work
 from .kernels import central_step, coefficients, dot, norm
 from .settings import RESTART_NEUTRAL, ExplicitSettings, RelaxSettings, parse_settings
 from .state import State
@@ -443,10 +444,8 @@ class Integrator:
     def _friction_work(self, f, Dn1, Dp) -> None:
         """Friction work by the scheme's own central rule f_t,n.(x_n+1 - x_n-1)/2; new anchors."""
         st = self.state
-        D6, Dp6 = Dn1.reshape(self.shape), Dp.reshape(self.shape)
-        for idx, ft in f["fr"]:
-            if idx.size:
-                st.fric_work += 0.5 * float(np.add.reduce((ft * (D6[idx, :3] - Dp6[idx, :3])).ravel()))
+        FT, nodes = f["fr"]
+        st.fric_work += 0.5 * friction_work(FT, nodes, Dn1, Dp)
         st.anchors = f["anchors"]
 
     def _after_step(self, sigint) -> str:

@@ -1,0 +1,207 @@
+"""Compiled contact: the bodies' signed distances, the penalty law and the Coulomb return map, one
+node at a time (``contact.py`` describes the laws; its bodies and functions call these, and so does
+the explicit solver's contact pass over its candidate nodes, ``contact_pass``).
+
+A body is a code (SPHERE, PLANE, CYLINDER, BOX) and a parameter row of PARAMS floats:
+
+* SPHERE   : centre (3), radius
+* PLANE    : point (3), unit normal (3)
+* CYLINDER : top centre (3), height, edge radius, radius        (a vertical pedestal)
+* BOX      : top centre (3), height, edge radius, half widths a, b
+
+Every function returns the same numbers the former numpy code did, to round-off: the sums of
+three squares are taken left to right, the box distance follows ``_box`` below term by term.
+Lengths in the scene's length unit, stiffnesses in force/length.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+SPHERE, PLANE, CYLINDER, BOX = 0, 1, 2, 3
+PARAMS = 8
+_G0, _N0 = np.zeros(0), np.zeros((0, 3))     # "no given distances" (body_forces' g_in, n_in)
+
+
+@njit(cache=True)
+def _box(a0, a1, a2, h0, h1, h2, k):
+    """Signed distance of the point a (its first k = 2 or 3 coordinates) to the box |a_j| <= h_j and
+    its gradient: Euclidean outside (edges and corners rounded), minus the distance to the nearest
+    face inside (the first face on a tie)."""
+    s0 = 1.0 if a0 >= 0.0 else -1.0
+    s1 = 1.0 if a1 >= 0.0 else -1.0
+    s2 = 1.0 if a2 >= 0.0 else -1.0
+    q0 = abs(a0) - h0
+    q1 = abs(a1) - h1
+    q2 = abs(a2) - h2 if k == 3 else -math.inf
+    p0, p1, p2 = max(q0, 0.0), max(q1, 0.0), max(q2, 0.0)
+    L = math.sqrt(p0 * p0 + p1 * p1 + p2 * p2) if k == 3 else math.sqrt(p0 * p0 + p1 * p1)
+    m = max(q0, q1, q2)
+    g = L + min(m, 0.0)
+    if L > 0.0:
+        return g, s0 * (p0 / L), s1 * (p1 / L), s2 * (p2 / L)
+    if q0 >= q1 and q0 >= q2:
+        return g, s0, 0.0, 0.0
+    if q1 >= q2:
+        return g, 0.0, s1, 0.0
+    return g, 0.0, 0.0, s2
+
+
+@njit(cache=True)
+def signed_distance(code, p, x0, x1, x2):
+    """(g, n0, n1, n2): the signed distance of the point x to the body (positive outside) and its
+    outward unit normal grad g."""
+    if code == SPHERE:
+        d0, d1, d2 = x0 - p[0], x1 - p[1], x2 - p[2]
+        r = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+        if r > 0.0:
+            return r - p[3], d0 / r, d1 / r, d2 / r
+        return r - p[3], 0.0, 0.0, 1.0        # the centre itself: push up
+    if code == PLANE:
+        g = (x0 - p[0]) * p[3] + (x1 - p[1]) * p[4] + (x2 - p[2]) * p[5]
+        return g, p[3], p[4], p[5]
+    er = p[4]                                  # a pedestal: the edge radius
+    d0, d1 = x0 - p[0], x1 - p[1]
+    zc = (x2 - p[2]) + 0.5 * p[3]              # z about the pedestal's mid-height
+    if code == CYLINDER:
+        rho = math.hypot(d0, d1)
+        g, ga0, ga1, _ = _box(rho, zc, 0.0, p[5] - er, 0.5 * p[3] - er, 0.0, 2)
+        if rho > 0.0:
+            e0, e1 = d0 / rho, d1 / rho
+        else:
+            e0, e1 = 1.0, 0.0
+        return g - er, ga0 * e0, ga0 * e1, ga1
+    g, n0, n1, n2 = _box(d0, d1, zc, p[5] - er, p[6] - er, 0.5 * p[3] - er, 3)
+    return g - er, n0, n1, n2
+
+
+@njit(cache=True)
+def distances(code, p, x):
+    """(g (N,), n (N,3)) of the points x (N,3)."""
+    N = x.shape[0]
+    g = np.empty(N)
+    n = np.empty((N, 3))
+    for i in range(N):
+        g[i], n[i, 0], n[i, 1], n[i, 2] = signed_distance(code, p, x[i, 0], x[i, 1], x[i, 2])
+    return g, n
+
+
+@njit(cache=True)
+def _stick(mu, kp, kt, x0, x1, x2, n0, n1, n2, a0, a1, a2):
+    """Coulomb friction of one node in contact (contact.py): the trial stick force -k_t (I - n n^T)(x - a)
+    return-mapped onto |f_t| <= mu k p.  (f_t (3), slipped)."""
+    if a0 != a0:                                # first touch: the anchor is where the node is
+        a0, a1, a2 = x0, x1, x2
+    d0, d1, d2 = x0 - a0, x1 - a1, x2 - a2
+    dn = d0 * n0 + d1 * n1 + d2 * n2
+    f0, f1, f2 = -kt * (d0 - dn * n0), -kt * (d1 - dn * n1), -kt * (d2 - dn * n2)
+    fmax = mu * kp
+    mag = math.sqrt(f0 * f0 + f1 * f1 + f2 * f2)
+    if mag > fmax:
+        c = fmax / mag
+        return f0 * c, f1 * c, f2 * c, True
+    return f0, f1, f2, False
+
+
+@njit(cache=True)
+def body_forces(code, p, offset, mu, x, k, kt, anchor, f, ft, new, g_in, n_in):
+    """One body on the points x (N,3), node stiffnesses k, kt (N,): the penalty force k p n plus,
+    when mu > 0, the friction force into f (N,3) (added); friction forces ft (N,3) and the new
+    anchors ``new`` (N,3; NaN off contact) written when mu > 0 (``anchor``: the previous ones, NaN
+    where a node was not in contact).  A body of code < 0 (a user's own RigidBody) gives its signed
+    distances and normals in g_in (N,), n_in (N,3).  Returns (penalty energy 1/2 sum k p^2, stick
+    energy 1/2 sum |f_t|^2 / k_t, nodes in contact, slipping nodes, deepest |f_n| / k)."""
+    en = 0.0
+    et = 0.0
+    nact = 0
+    nslip = 0
+    pen = 0.0
+    for i in range(x.shape[0]):
+        if code < 0:
+            g, n0, n1, n2 = g_in[i], n_in[i, 0], n_in[i, 1], n_in[i, 2]
+        else:
+            g, n0, n1, n2 = signed_distance(code, p, x[i, 0], x[i, 1], x[i, 2])
+        pi = max(-(g - offset), 0.0)
+        kp = k[i] * pi
+        fn0, fn1, fn2 = kp * n0, kp * n1, kp * n2
+        if mu > 0.0:
+            ft[i, 0] = ft[i, 1] = ft[i, 2] = 0.0
+            new[i, 0] = new[i, 1] = new[i, 2] = np.nan
+        if pi > 0.0:
+            en += kp * pi
+            nact += 1
+            pen = max(pen, math.sqrt(fn0 * fn0 + fn1 * fn1 + fn2 * fn2) / k[i])
+            if mu > 0.0:
+                t0, t1, t2, slip = _stick(mu, kp, kt[i], x[i, 0], x[i, 1], x[i, 2], n0, n1, n2,
+                                          anchor[i, 0], anchor[i, 1], anchor[i, 2])
+                ft[i, 0], ft[i, 1], ft[i, 2] = t0, t1, t2
+                new[i, 0], new[i, 1], new[i, 2] = x[i, 0] + t0 / kt[i], x[i, 1] + t1 / kt[i], x[i, 2] + t2 / kt[i]
+                et += (t0 * t0 + t1 * t1 + t2 * t2) / kt[i]
+                nslip += slip
+                fn0, fn1, fn2 = fn0 + t0, fn1 + t1, fn2 + t2
+        f[i, 0] += fn0
+        f[i, 1] += fn1
+        f[i, 2] += fn2
+    return 0.5 * en, 0.5 * et, nact, nslip, pen
+
+
+@njit(cache=True)
+def contact_pass(codes, params, offsets, mus, X0, D, nodes, k, kt, anchors, new, C, FT):
+    """Every body (each of code >= 0) on the mid-surface nodes ``nodes`` (ascending) of the sheet at D (6N,): their
+    contact forces into C (6N,) (the nodes' translation dofs overwritten), the frictional bodies'
+    forces into FT (n_fric, len(nodes), 3) and their new anchors into new (n_fric, N, 3) at the
+    nodes (anchors: (n_fric, N, 3), NaN off contact).  Returns (contact energy, stick energy, nodes
+    in contact counted per body, slipping nodes, deepest |f_n| / k) -- body_forces summed in body
+    order."""
+    m = nodes.size
+    x = np.empty((m, 3))
+    kk = np.empty(m)
+    kkt = np.empty(m)
+    for j in range(m):
+        i = nodes[j]
+        x[j, 0], x[j, 1], x[j, 2] = X0[i, 0] + D[6 * i], X0[i, 1] + D[6 * i + 1], X0[i, 2] + D[6 * i + 2]
+        kk[j] = k[i]
+        kkt[j] = kt[i] if kt.size else 0.0
+    f = np.zeros((m, 3))
+    a = np.empty((m, 3))
+    na = np.empty((m, 3))
+    ec = et = pen = 0.0
+    nact = nslip = 0
+    jf = 0
+    for b in range(codes.size):
+        mu = mus[b]
+        if mu > 0.0:
+            for j in range(m):
+                a[j, 0], a[j, 1], a[j, 2] = anchors[jf, nodes[j], 0], anchors[jf, nodes[j], 1], anchors[jf, nodes[j], 2]
+            e1, e2, n1, n2, pb = body_forces(codes[b], params[b], offsets[b], mu, x, kk, kkt, a, f, FT[jf], na,
+                                             _G0, _N0)
+            for j in range(m):
+                new[jf, nodes[j], 0], new[jf, nodes[j], 1], new[jf, nodes[j], 2] = na[j, 0], na[j, 1], na[j, 2]
+            jf += 1
+        else:
+            e1, e2, n1, n2, pb = body_forces(codes[b], params[b], offsets[b], 0.0, x, kk, kkt, a, f, a, a, _G0, _N0)
+        ec += e1
+        et += e2
+        nact += n1
+        nslip += n2
+        pen = max(pen, pb)
+    for j in range(m):
+        o = 6 * nodes[j]
+        C[o], C[o + 1], C[o + 2] = f[j, 0], f[j, 1], f[j, 2]
+    return ec, et, nact, nslip, pen
+
+
+@njit(cache=True)
+def friction_work(FT, nodes, Dn1, Dp):
+    """sum over the frictional bodies and ``nodes`` of f_t . (x_n+1 - x_n-1): the scheme's central
+    rule for the work of friction (times 2)."""
+    s = 0.0
+    for b in range(FT.shape[0]):
+        for j in range(nodes.size):
+            o = 6 * nodes[j]
+            s += FT[b, j, 0] * (Dn1[o] - Dp[o]) + FT[b, j, 1] * (Dn1[o + 1] - Dp[o + 1]) + \
+                FT[b, j, 2] * (Dn1[o + 2] - Dp[o + 2])
+    return s

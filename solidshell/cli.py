@@ -1,4 +1,4 @@
-"""Command line: ``solidshell scenes | mesh | run | sweep | verify | figures`` (also ``python -m solidshell ...``).
+"""Command line: ``solidshell scenes | mesh | run | sweep | verify | figures | bench`` (also ``python -m solidshell ...``).
 
     solidshell scenes
     solidshell mesh SCENE [--mesh 48x16x4] [--out DIR] [--force] [--allow-large]
@@ -8,6 +8,7 @@
                            [--retries N] [--limit N] [--list]     (solidshell.sweep; needs dask)
     solidshell verify [NAME ...] [--quick] [--out DIR] [--list] [--references] [--fenicsx]
     solidshell figures [FIG ...] [--quick] [--out DIR]     (the paper's figures, paper_figures/)
+    solidshell bench [NAME ...] [--quick] [--out DIR] [--list]   (work-precision, solidshell/bench/)
 
 SCENE is a packaged scene name (``solidshell scenes`` lists them) or the path of a .toml scene
 file.  ``--set`` overrides any scene key by its dotted name (``--set solver.static.c=2e-3``,
@@ -121,6 +122,8 @@ def _parser() -> argparse.ArgumentParser:
     w.add_argument("--no-progress", action="store_true", help="no progress bar or lines")
     from .verify.cli import add_parser as _add_verify
     _add_verify(sub)
+    from .bench.cli import add_parser as _add_bench
+    _add_bench(sub)
     f = sub.add_parser("figures", help="render the paper's figures (paper_figures/): Figs. 4-13, 19-22")
     f.add_argument("figs", nargs="*", metavar="FIG", help="figure numbers, e.g. 5 12 (default: all)")
     f.add_argument("--quick", action="store_true", help="coarser meshes and faster relaxation (minutes)")
@@ -275,6 +278,9 @@ def main(argv=None) -> int:
             return _cmd_verify(args)
         if args.command == "figures":
             return _cmd_figures(args)
+        if args.command == "bench":
+            from .bench.cli import run as _cmd_bench
+            return _cmd_bench(args)
         return _cmd_run(args)
     except InputError as e:
         _say(f"solidshell: error: {e}")

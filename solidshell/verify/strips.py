@@ -20,23 +20,28 @@ from .record import check, measure, observed_order
 ELASTICA_SRC = "reference/elastica.py (solve_bvp tol 1e-10, checked by shooting) -> elastica_strip.json"
 
 
-def strip_problem(n: int, cut: str, membrane: str = "full"):
-    """Mesh, model, fixed mask and gravity loads of the n x 1 strip (warp- or weft-cut)."""
+def strip_problem(n: int, cut: str, membrane: str = "full", kind: str = "quad"):
+    """Mesh, model, fixed mask and gravity loads of the n x 1 strip (warp- or weft-cut); ``kind``
+    "tri" cuts every quad into two triangles, the diagonals alternating (common.split_quads "x")."""
     from ..boundary import clamp, gravity_loads
     from ..material import Fabric
+    from ..mesh import ShellMesh
     from ..meshing import build_mesh
     from ..model import Model
+    from .common import split_quads
 
     mesh = build_mesh("strip", f"{n}x1", length=5.0, width=1.0)
+    if kind == "tri":
+        mesh = ShellMesh(mesh.nodes, tris=split_quads(mesh.quads, "x"), node_sets=mesh.node_sets)
     model = Model(mesh, Fabric.wool(warp_angle=0.0 if cut == "warp" else 90.0), membrane=membrane)
     return mesh, model, clamp(mesh, "clamped"), gravity_loads(model)
 
 
-def solve_strip(n: int, cut: str, method: str = "newton", membrane: str = "full", **kw):
-    """Solve the strip; returns dict(tip_x, tip_z, centreline (x, z) sorted by x, result)."""
+def solve_strip(n: int, cut: str, method: str = "newton", membrane: str = "full", kind: str = "quad", **kw):
+    """Solve the strip; returns dict(tip_x, tip_z, centreline (x, z) sorted by x, result, wall)."""
     from ..solvers.static import solve_static
 
-    mesh, model, fixed, loads = strip_problem(n, cut, membrane)
+    mesh, model, fixed, loads = strip_problem(n, cut, membrane, kind)
     t0 = time.perf_counter()
     res = solve_static(model, fixed, loads, method=method, **kw)
     wall = time.perf_counter() - t0

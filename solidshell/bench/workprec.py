@@ -146,6 +146,9 @@ def picture(result: dict, path: Path) -> None:
             ax.loglog([p[0] for p in pts], [p[1] for p in pts], "o-", color=f"C{i}", label=fam)
             for x, y, lab in pts:
                 ax.annotate(lab, (x, y), textcoords="offset points", xytext=(4, 4), fontsize=7, color=f"C{i}")
+        ref = next((r for r in result["rows"] if r["reference"]), None)
+        if ref is not None:          # its error is 0: not on a log axis; its cost is
+            ax.axvline(ref["wall_s"], color="k", lw=0.8, ls=":", label=f"reference: {ref['family']}, {ref['label']}")
         ax.axhline(TARGET, color="0.5", lw=0.8, ls="--")
         ax.text(ax.get_xlim()[0], TARGET, f" {TARGET:.0%}", va="bottom", fontsize=8, color="0.4")
         ax.set_xlabel("wall time [s]")

@@ -100,3 +100,21 @@ def test_compiled_contact_pass_is_the_per_body_path(body):
     for k in ("contact_work", "fric_work", "max_contact", "max_slip", "balance_err", "damp_sum"):
         assert getattr(sa, k) == getattr(sb, k), k
     assert sa.max_pen == pytest.approx(sb.max_pen, rel=1e-12)
+
+
+def test_a_second_contact_call_leaves_the_steps_friction_forces():
+    """The step's friction forces (returned as a view of a reused buffer) survive another contact
+    evaluation before the step books their work -- the modal damper differentiates the contact
+    force in between (damping/modal.contact_blocks)."""
+    prob = drop(Sphere(center=(0.0, 0.0, -2.0), radius=2.0, friction=0.3))
+    it = Integrator(prob, {"t_end": 1.0, "mass_scaling": 100.0})
+    D = np.zeros(6 * it.N)
+    D[2::6] = -0.5                                        # the sheet's middle pressed into the sphere
+    anchors = it.forces.contact_friction(D, np.full((1, it.N, 3), np.nan))[6]
+    D[0::6] += 1e-4                                       # then moved sideways: stick forces
+    new = np.full_like(anchors, np.nan)
+    FT, nodes = it.forces.contact_friction(D, anchors, np.arange(it.N), np.zeros(6 * it.N), new)[4]
+    keep = FT.copy()
+    assert np.count_nonzero(np.any(keep != 0.0, axis=2)) > 4
+    it.forces.contact_friction(D + 1e-3, anchors)
+    np.testing.assert_array_equal(FT, keep)

@@ -141,11 +141,14 @@ class Forces:
         if C is None:
             C = np.zeros(6 * self.N)
         if friction:
+            # the step's call (it passes its anchor buffer) reuses one FT buffer; any other call (a
+            # damper's finite difference between the step's contact and its friction work) gets its own
             if new is None:
                 new = np.full((self.n_fric, self.N, 3), np.nan)
+                FT = np.zeros((self.n_fric, idx.size, 3))
             else:
                 new.fill(np.nan)
-            FT = self._ft[:, :idx.size]
+                FT = self._ft[:, :idx.size]
             anc = anchors
         else:
             FT, anc, new = self._ft[:, :0], self._no_anchor, self._no_anchor

@@ -25,9 +25,10 @@ def test_plan_halves_the_letter_fields_of_the_recipe_form():
 
 
 def test_prolong_reproduces_linear_fields_exactly():
-    # the interpolation is linear on the coarse triangles, so a field linear in (X, Y) is carried
+    # the coarse shape functions reproduce a field linear in (X, Y), so its translations are carried
     # over to every fine node exactly (round-off only: 1e-12 of its size), including the nodes on
-    # the edges and at the centres of the coarse quads
+    # the edges and at the centres of the coarse quads (the directors take the interpolated length
+    # of the coarse ones: next test)
     coarse = build_mesh("square_on_square", "6x2x4")
     fine = build_mesh("square_on_square", "12x4x4")
 
@@ -37,7 +38,39 @@ def test_prolong_reproduces_linear_fields_exactly():
                                 0.02 * y, 0.5 - 0.01 * x])
 
     U = sequence.prolong(coarse, field(coarse.nodes), fine)
-    assert np.abs(U - field(fine.nodes)).max() <= 1e-12 * np.abs(field(fine.nodes)).max()
+    assert np.abs(U - field(fine.nodes))[:, :3].max() <= 1e-12 * np.abs(field(fine.nodes)).max()
+
+
+def test_prolong_is_the_coarse_bilinear_field_on_a_nested_mesh():
+    # 12x4x4 is 6x2x4 with every quad split in four: a coarse node keeps its value, a node at a
+    # coarse edge's midpoint takes the mean of the edge's two ends and a node at a coarse quad's
+    # centre the mean of its four corners (bilinear shape functions at (0, 0)), for any nodal
+    # values (translations; the directors keep the interpolated length, tested below).  Round-off
+    # only: 1e-12 of the values' size
+    coarse = build_mesh("square_on_square", "6x2x4")
+    fine = build_mesh("square_on_square", "12x4x4")
+    rng = np.random.default_rng(3)
+    Uc = np.zeros((coarse.n_nodes, 6))
+    Uc[:, :3] = rng.standard_normal((coarse.n_nodes, 3))
+    U = sequence.prolong(coarse, Uc, fine)
+    X, x = coarse.nodes, fine.nodes
+
+    def at(points):
+        d = np.linalg.norm(x[None, :, :] - points[:, None, :], axis=2)
+        assert d.min(axis=1).max() <= 1e-9
+        return U[np.argmin(d, axis=1)]
+
+    q = coarse.quads
+    tol = 1e-12 * np.abs(Uc).max()
+    assert np.abs(at(X) - Uc).max() <= tol
+    assert np.abs(at(X[q].mean(axis=1)) - Uc[q].mean(axis=1)).max() <= tol
+    assert np.abs(at(0.5 * (X[q[:, 0]] + X[q[:, 1]])) - 0.5 * (Uc[q[:, 0]] + Uc[q[:, 1]])).max() <= tol
+    # rotated directors: the prolonged ones have the interpolated length (1 here), not the
+    # shortened length of the interpolated vectors
+    phi = rng.uniform(-1.0, 1.0, coarse.n_nodes)
+    Uc[:, 3:] = np.column_stack([np.sin(phi), np.zeros_like(phi), np.cos(phi)]) - coarse.directors
+    U = sequence.prolong(coarse, Uc, fine)
+    assert np.abs(np.linalg.norm(fine.directors + U[:, 3:], axis=1) - 1.0).max() <= 1e-12
 
 
 def test_static_settings_sequence_and_start_state_are_checked():

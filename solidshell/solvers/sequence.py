@@ -59,6 +59,11 @@ MIN_ELEMENTS = 150
 
 AUTO_LEVELS = 2
 
+COARSE_TOLERANCES = dict(tol=1e-5, energy_tol=1e-8, disp_tol=1e-6)
+"""Convergence of a coarse level (static.py's tol, energy_tol, disp_tol): its state is only the
+start of the next level, which differs from it by the discretisation (~1 cm on square-pedestal
+24x8x4 -> 48x16x4), so the last quadratic Newton iterations of a coarse level buy nothing."""
+
 
 def _halve(density: str, form: str) -> str | None:
     parts = [int(p) for p in density.split("x")]
@@ -113,28 +118,65 @@ def _triangles(mesh):
     return tri, parent
 
 
-def _candidates(cent, size, x):
-    """(Nx, m) indices of the triangles (centroids ``cent``, largest bounding-box diagonal ``size``)
-    whose centroid lies in the 3 x 3 block of grid cells (cell width ``size``) around each point of
-    x, padded with -1.  A point inside a triangle is closer than ``size`` to its centroid, so the
-    triangle is among them.  A bucket grid in numpy: no scipy.spatial import (0.25-0.6 s, more
-    than the whole prolongation)."""
-    h = max(float(size), 1e-300)
-    lo = np.minimum(cent.min(axis=0), x.min(axis=0)) - h
-    cc = np.floor((cent - lo) / h).astype(np.int64)
-    cx = np.floor((x - lo) / h).astype(np.int64)
-    ny = int(max(cc[:, 1].max(), cx[:, 1].max())) + 2
-    key = cc[:, 0] * ny + cc[:, 1]
+def _candidates(lo, hi, x):
+    """(Nx, m) indices of the triangles whose bounding box [lo, hi] (widened by a quarter cell)
+    shares a grid cell with each point of x, padded with -1; the cell width is the median box
+    diagonal, so a point meets a few triangles (2-8 on the recipes' meshes).  A point inside a
+    triangle always meets it.  A bucket grid in numpy: no scipy.spatial import (0.25-0.6 s, more
+    than the whole prolongation) and no (points x all triangles) arrays."""
+    h = max(float(np.median(np.hypot(*(hi - lo).T))), 1e-300)
+    lo, hi = lo - 0.25 * h, hi + 0.25 * h
+    o = np.minimum(lo.min(axis=0), x.min(axis=0))
+    i0 = np.floor((lo - o) / h).astype(np.int64)
+    i1 = np.floor((hi - o) / h).astype(np.int64)
+    ix = np.floor((x - o) / h).astype(np.int64)
+    ny = int(max(i1[:, 1].max(), ix[:, 1].max())) + 1
+    n = i1 - i0 + 1                                              # cells per box along x and y
+    cnt = n[:, 0] * n[:, 1]
+    tri = np.repeat(np.arange(len(lo)), cnt)
+    k = np.arange(cnt.sum()) - np.repeat(np.cumsum(cnt) - cnt, cnt)
+    key = (i0[tri, 0] + k // n[tri, 1]) * ny + i0[tri, 1] + k % n[tri, 1]
     order = np.argsort(key, kind="stable")
-    skey = key[order]
-    near = ((cx[:, 0, None] + np.repeat(np.arange(-1, 2), 3)[None, :]) * ny
-            + cx[:, 1, None] + np.tile(np.arange(-1, 2), 3)[None, :])          # (Nx, 9) cell keys
+    skey, tri = key[order], tri[order]
+    near = ix[:, 0] * ny + ix[:, 1]
     a = np.searchsorted(skey, near, "left")
-    cnt = np.searchsorted(skey, near, "right") - a
-    m = int(cnt.max(initial=0))
-    j = np.arange(m)
-    idx = np.where(j < cnt[..., None], order[np.minimum(a[..., None] + j, len(order) - 1)], -1)
-    return idx.reshape(len(x), 9 * m)
+    c = np.searchsorted(skey, near, "right") - a
+    j = np.arange(int(c.max(initial=0)))
+    return np.where(j < c[:, None], tri[np.minimum(a[:, None] + j, len(tri) - 1)], -1)
+
+
+def _barycentric(A, B, C, x, cand):
+    """(Nx, m, 3) barycentric coordinates of the points x in the candidate triangles cand (Nx, m)."""
+    a, b, c = A[cand], B[cand], C[cand]
+    v0, v1, v2 = b - a, c - a, x[:, None, :] - a
+    det = v0[..., 0] * v1[..., 1] - v0[..., 1] * v1[..., 0]
+    l1 = (v2[..., 0] * v1[..., 1] - v2[..., 1] * v1[..., 0]) / det
+    l2 = (v0[..., 0] * v2[..., 1] - v0[..., 1] * v2[..., 0]) / det
+    return np.stack([1.0 - l1 - l2, l1, l2], axis=-1)
+
+
+def _locate(A, B, C, x):
+    """(triangle, barycentric weights (Nx, 3)) for every point of x: the triangle containing it,
+    or the least outside one (largest smallest barycentric coordinate)."""
+    cand = _candidates(np.minimum(np.minimum(A, B), C), np.maximum(np.maximum(A, B), C), x)
+    valid = cand >= 0
+    c0 = np.where(valid, cand, 0)
+    lam = _barycentric(A, B, C, x, c0)
+    score = np.where(valid, lam.min(axis=-1), -np.inf)
+    best = np.argmax(score, axis=1)
+    rows = np.arange(len(x))
+    t, w, sc = c0[rows, best], lam[rows, best], score[rows, best]
+    far = np.flatnonzero(sc < -1e-9)
+    for chunk in np.array_split(far, max(1, far.size // 64)) if far.size else ():
+        # outside every nearby triangle (a curved boundary cut by straight coarse edges): the
+        # least outside triangle of all, a few points at a time
+        allc = np.broadcast_to(np.arange(len(A)), (chunk.size, len(A)))
+        lam = _barycentric(A, B, C, x[chunk], allc)
+        bi = np.argmax(lam.min(axis=-1), axis=1)
+        r = np.arange(chunk.size)
+        better = lam[r, bi].min(axis=-1) > sc[chunk]
+        t[chunk[better]], w[chunk[better]] = bi[better], lam[r, bi][better]
+    return t, w
 
 
 def _bilinear_coords(Xq, x, xi, iters=8):
@@ -170,22 +212,7 @@ def prolong(coarse, Uc, fine) -> np.ndarray:
     P = coarse.nodes[:, :2]
     A, B, C = P[T[:, 0]], P[T[:, 1]], P[T[:, 2]]
     x = fine.nodes[:, :2]
-    ext = np.maximum(np.maximum(A, B), C) - np.minimum(np.minimum(A, B), C)
-    cand = _candidates((A + B + C) / 3.0, float(np.hypot(ext[:, 0], ext[:, 1]).max()), x)
-    valid = cand >= 0
-    c0 = np.where(valid, cand, 0)
-    # barycentric coordinates of every fine node in each of its candidate triangles
-    a, b, c = A[c0], B[c0], C[c0]
-    v0, v1, v2 = b - a, c - a, x[:, None, :] - a
-    det = v0[..., 0] * v1[..., 1] - v0[..., 1] * v1[..., 0]
-    l1 = (v2[..., 0] * v1[..., 1] - v2[..., 1] * v1[..., 0]) / det
-    l2 = (v0[..., 0] * v2[..., 1] - v0[..., 1] * v2[..., 0]) / det
-    lam = np.stack([1.0 - l1 - l2, l1, l2], axis=-1)           # (Nf, m, 3)
-    score = np.where(valid, lam.min(axis=-1), -np.inf)
-    best = np.argmax(score, axis=1)                             # inside, or the least outside
-    rows = np.arange(len(x))
-    t = c0[rows, best]
-    w = lam[rows, best]
+    t, w = _locate(A, B, C, x)
     out = np.einsum("nj,njc->nc", w, Uc[T[t]])
     q = parent[t]
     inq = np.flatnonzero(q >= 0)
@@ -253,7 +280,7 @@ def solve_sequenced(run, problem, settings: dict, progress, scene, density, make
         pb = make_problem(d)
         # a coarse state is only a start: its saddle check stays (a saddle would be a poor start),
         # the report of its smallest tangent eigenvalue (ARPACK, ~20 solves) is not needed
-        s = dict(settings, eig_max_dofs=0)
+        s = dict(settings, eig_max_dofs=0, **COARSE_TOLERANCES)
         if prev is not None:
             s.update(U0=prolong(prev[0], prev[1], pb.model.mesh), predictor=False)
         t = time.perf_counter()

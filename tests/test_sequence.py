@@ -111,6 +111,33 @@ def test_sequenced_solve_reaches_the_direct_equilibrium(monkeypatch):
     assert seq.summary["fold_count"] == direct.summary["fold_count"]
 
 
+def test_the_sequenced_fine_mesh_takes_cg_steps_to_the_same_equilibrium(monkeypatch):
+    """The fine mesh of a sequence takes inexact Newton steps (CG preconditioned by the last
+    factorisation; thresholds lowered so that square-pedestal 12x4x4 from 6x2x4 qualifies) and ends
+    on the equilibrium of the exact-step solve."""
+    from solidshell.runner import run_scene
+    from solidshell.solvers import static
+
+    monkeypatch.setattr(sequence, "MIN_ELEMENTS", 40)
+    monkeypatch.setattr(static, "PCG_MIN_DOFS", 0)
+    cg = run_scene("square-pedestal", mesh="12x4x4", solver="static", out_dir=None, progress=False,
+                   sequence=1)
+    exact = run_scene("square-pedestal", mesh="12x4x4", solver="static", out_dir=None,
+                      progress=False, sequence=1, pcg_iterations=0)
+    assert cg.converged and exact.converged and cg.summary["positive_definite"]
+    assert cg.summary["cg_steps"] > 0 and exact.summary["cg_steps"] == 0
+    assert cg.summary["cg_iterations"] >= cg.summary["cg_steps"]
+    # a CG step replaces an iteration's factorisation (every other iteration factorises at least
+    # once); measured 40 factorisations and 22 CG steps in 53 iterations against 61 in 52
+    s = cg.summary
+    assert s["factorizations"] >= s["iterations"] - s["cg_steps"]
+    assert s["factorizations"] < exact.summary["factorizations"]
+    # both stop at the Newton tolerance (relative residual 1e-8) on the same minimum: 1e-6 of max|U|
+    # separates that from another fold pattern (~10 % of max|U| apart)
+    assert np.abs(cg.U - exact.U).max() <= 1e-6 * np.abs(exact.U).max()
+    assert cg.summary["fold_count"] == exact.summary["fold_count"]
+
+
 def test_small_meshes_run_the_kernels_on_one_thread():
     import numba
 

@@ -61,8 +61,10 @@ AUTO_LEVELS = 2
 
 FINE_PCG_ITERATIONS = 6
 """The static ``pcg_iterations`` of the fine mesh started from a coarse level (unless the settings
-give one): square-pedestal 48x16x4, 35 factorisations instead of 59 and 19 % less CPU (3 gave 49
-and 13 %); from the flat sheet the same steps cost more than they save (static._newton_level)."""
+give one): square-pedestal 48x16x4, 35-39 factorisations instead of 59 on the fine mesh and 10-19 %
+less process CPU in interleaved runs at load ~6 (3 gave 49 and 13 %); one CG iteration (a
+back-substitution and a product) costs ~1/9 of a factorisation there.  From the flat sheet the same
+steps cost more than they save (static._newton_level)."""
 
 COARSE_TOLERANCES = dict(tol=1e-5, energy_tol=1e-8, disp_tol=1e-6)
 """Convergence of a coarse level (static.py's tol, energy_tol, disp_tol): its state is only the

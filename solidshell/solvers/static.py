@@ -31,12 +31,13 @@ Methods (``method=``)
     step, did not help on the strip and is off by default).  Also tried on the 20x1 strip and
     dropped: reusing the factorisation for later iterations (``reuse``; 82 -> 93..514
     factorisations) and chord corrections after each step with the same factorisation (77
-    iterations but 91-125 factorisations instead of 82).  What does pay on large meshes (>= 10 000
-    free dofs, ``pcg_iterations``): a Newton step found by conjugate gradients on the new tangent,
-    preconditioned by the last factorisation, factorising only when CG needs more than a few
-    iterations (square-pedestal 48x16x4: ~35 factorisations instead of 59).  Measured iterations (20x1 strip / disc
-    10x40): newton 81 / 85, paper c=1e-2 113 / 98, paper c=2e-2 67 / 54 -- but on the disc the
-    latter stops on a saddle (indefinite tangent) --, arc-length 53 / 391.
+    iterations but 91-125 factorisations instead of 82).  What does pay on the fine mesh of a mesh
+    sequence (>= 10 000 free dofs, ``pcg_iterations``): a Newton step found by conjugate gradients
+    on the new tangent, preconditioned by the last factorisation, factorising only when CG needs
+    more than a few iterations (square-pedestal 48x16x4: 35-39 factorisations instead of 59).
+    Measured iterations (20x1 strip / disc 10x40): newton 81 / 85, paper c=1e-2 113 / 98, paper
+    c=2e-2 67 / 54 -- but on the disc the latter stops on a saddle (indefinite tangent) --,
+    arc-length 53 / 391.
 ``"arclength"``  Crisfield's cylindrical arc-length method (load factor as an extra unknown, the
     quadratic constraint |Delta D| = Delta l, root chosen by the smallest angle with the previous
     increment; predictor sign from the previous increment, sign(Delta D_prev . K^-1 P)), which
@@ -407,17 +408,17 @@ def _newton_level(sys, D, lam, o, stats):
     tangent, preconditioned by the last factor (linear.pcg), to a relative residual
     min(PCG_FORCING, sqrt(rel)) in at most that many CG iterations; only if CG does not get there
     (or meets non-positive curvature) is the new tangent factorised.  A CG iteration costs one
-    back-substitution and one product with the tangent, ~1/8 of a factorisation at 18 432 dofs, and
+    back-substitution and one product with the tangent, ~1/9 of a factorisation at 18 432 dofs, and
     the trust region's model uses the step's own curvature p.K.p.  A CG step that needed more than
     half the iterations allowed is followed by a factorisation.  It pays where the tangent changes
     slowly from one iteration to the next: the fine level of a mesh sequence, which settles a
     prolonged coarse equilibrium (square-pedestal 48x16x4, load ~6, 2-3 rounds interleaved in one
-    process: 35 factorisations instead of 59 on the fine mesh, the same 51 iterations, process CPU
-    7.3 s against 9.0 s (medians), the same state to 1e-8 of max|U|; 3 CG iterations at most: 49
-    factorisations, 7.8 s).  From the flat sheet, where the folds form, CG fails too often: 6 CG
-    iterations cost 7 % more CPU on large-square-pedestal 45x15x4 (176 iterations, 165
-    factorisations against 167 and 193) and 15 % more on circle-pedestal; hence off by default
-    (``pcg_iterations = 0``) and switched on by solvers/sequence.py for the fine mesh."""
+    process: 35-39 factorisations instead of 59 on the fine mesh, the same 51 iterations, process
+    CPU 10-19 % lower (medians 7.3-8.1 s against 9.0 s), the same state to 2e-8 of max|U|; 3 CG
+    iterations at most: 49 factorisations, 13 %).  From the flat sheet, where the folds form, CG
+    fails too often: 6 CG iterations cost 7 % more CPU on large-square-pedestal 45x15x4 (176
+    iterations, 165 factorisations against 167 and 193) and 15 % more on circle-pedestal; hence off
+    by default (``pcg_iterations = 0``) and switched on by solvers/sequence.py for the fine mesh."""
     f = sys.free
     sigma = 0.0
     e_first = None
@@ -430,7 +431,7 @@ def _newton_level(sys, D, lam, o, stats):
     refresh = True
     it = 0
     try_cg = o.pcg_iterations > 0 and isinstance(sys.chol, Cholesky) and f.size >= PCG_MIN_DOFS
-    cg_next = False            # the last factor is unshifted and the last CG step (if any) was quick
+    cg_next = False        # the last factor is unshifted and the last CG step (if any) was quick
     while True:
         g = G[f]
         stats["D_last"] = D

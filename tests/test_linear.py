@@ -60,3 +60,42 @@ def test_ldl_inertia_counts_negative_eigenvalues():
     ev = np.linalg.eigvalsh(A.toarray())
     _, neg = ldl_inertia(A)
     assert neg == int(np.sum(ev < 0)) == 3
+
+
+def test_lower_csc_product_equals_the_full_symmetric_product():
+    from solidshell.solvers.linear import LowerCSC
+
+    rng = np.random.default_rng(1)
+    R = sp.random(60, 60, density=0.1, random_state=2, format="csc")
+    A = (R + R.T + sp.eye(60) * 5.0).tocsc()
+    L = LowerCSC.from_symmetric(A)
+    x = rng.standard_normal(60)
+    # the same sums in another order: round-off of the entries' size times the row length
+    assert np.abs(L.matvec()(x) - A @ x).max() <= 1e-13 * abs(A).max() * np.abs(x).sum()
+
+
+def test_pcg_with_a_nearby_factor_converges_and_stops_on_negative_curvature():
+    from solidshell.solvers.linear import pcg
+
+    A = laplacian(200)
+    b = np.random.default_rng(0).standard_normal(200)
+    ch = Cholesky()
+    assert ch.factor(A)
+    # the exact factor: one iteration, to round-off (cond ~1.6e4 times 1e-16)
+    x, k, ok, xAx = pcg(lambda v: A @ v, b, ch.solve, 1e-10, 5)
+    assert ok and k == 1 and np.linalg.norm(A @ x - b) <= 1e-10 * np.linalg.norm(b)
+    # A + 0.01 I preconditioned by A's factor: the spectrum of A^-1 (A + 0.01 I) is 1 + 0.01 / lambda(A),
+    # in [1.0025, 42] (lambda_min(A) = 2 - 2 cos(pi/201) = 2.4e-4), so CG's bound
+    # sqrt(42)/2 ln(2/1e-6) = 47 iterations reaches 1e-6 within the 60 allowed; x.A.x is the
+    # curvature of the returned x
+    A2 = laplacian(200, shift=0.01)
+    x, k, ok, xAx = pcg(lambda v: A2 @ v, b, ch.solve, 1e-6, 60)
+    assert ok and np.linalg.norm(A2 @ x - b) <= 1e-6 * np.linalg.norm(b)
+    assert xAx == pytest.approx(x @ (A2 @ x), rel=1e-10)
+    # a too small iteration budget: not converged, never claimed
+    x, k, ok, _ = pcg(lambda v: A2 @ v, b, ch.solve, 1e-12, 2)
+    assert not ok and k == 2
+    # an indefinite matrix: CG meets non-positive curvature and stops, not converged
+    A3 = laplacian(200, shift=-1.0)
+    _, _, ok, _ = pcg(lambda v: A3 @ v, b, ch.solve, 1e-8, 200)
+    assert not ok

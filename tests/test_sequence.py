@@ -25,9 +25,10 @@ def test_plan_halves_the_letter_fields_of_the_recipe_form():
 
 
 def test_prolong_reproduces_linear_fields_exactly():
-    # the interpolation is linear on the coarse triangles, so a field linear in (X, Y) is carried
+    # the coarse shape functions reproduce a field linear in (X, Y), so its translations are carried
     # over to every fine node exactly (round-off only: 1e-12 of its size), including the nodes on
-    # the edges and at the centres of the coarse quads
+    # the edges and at the centres of the coarse quads (the directors take the interpolated length
+    # of the coarse ones: next test)
     coarse = build_mesh("square_on_square", "6x2x4")
     fine = build_mesh("square_on_square", "12x4x4")
 
@@ -37,7 +38,39 @@ def test_prolong_reproduces_linear_fields_exactly():
                                 0.02 * y, 0.5 - 0.01 * x])
 
     U = sequence.prolong(coarse, field(coarse.nodes), fine)
-    assert np.abs(U - field(fine.nodes)).max() <= 1e-12 * np.abs(field(fine.nodes)).max()
+    assert np.abs(U - field(fine.nodes))[:, :3].max() <= 1e-12 * np.abs(field(fine.nodes)).max()
+
+
+def test_prolong_is_the_coarse_bilinear_field_on_a_nested_mesh():
+    # 12x4x4 is 6x2x4 with every quad split in four: a coarse node keeps its value, a node at a
+    # coarse edge's midpoint takes the mean of the edge's two ends and a node at a coarse quad's
+    # centre the mean of its four corners (bilinear shape functions at (0, 0)), for any nodal
+    # values (translations; the directors keep the interpolated length, tested below).  Round-off
+    # only: 1e-12 of the values' size
+    coarse = build_mesh("square_on_square", "6x2x4")
+    fine = build_mesh("square_on_square", "12x4x4")
+    rng = np.random.default_rng(3)
+    Uc = np.zeros((coarse.n_nodes, 6))
+    Uc[:, :3] = rng.standard_normal((coarse.n_nodes, 3))
+    U = sequence.prolong(coarse, Uc, fine)
+    X, x = coarse.nodes, fine.nodes
+
+    def at(points):
+        d = np.linalg.norm(x[None, :, :] - points[:, None, :], axis=2)
+        assert d.min(axis=1).max() <= 1e-9
+        return U[np.argmin(d, axis=1)]
+
+    q = coarse.quads
+    tol = 1e-12 * np.abs(Uc).max()
+    assert np.abs(at(X) - Uc).max() <= tol
+    assert np.abs(at(X[q].mean(axis=1)) - Uc[q].mean(axis=1)).max() <= tol
+    assert np.abs(at(0.5 * (X[q[:, 0]] + X[q[:, 1]])) - 0.5 * (Uc[q[:, 0]] + Uc[q[:, 1]])).max() <= tol
+    # rotated directors: the prolonged ones have the interpolated length (1 here), not the
+    # shortened length of the interpolated vectors
+    phi = rng.uniform(-1.0, 1.0, coarse.n_nodes)
+    Uc[:, 3:] = np.column_stack([np.sin(phi), np.zeros_like(phi), np.cos(phi)]) - coarse.directors
+    U = sequence.prolong(coarse, Uc, fine)
+    assert np.abs(np.linalg.norm(fine.directors + U[:, 3:], axis=1) - 1.0).max() <= 1e-12
 
 
 def test_static_settings_sequence_and_start_state_are_checked():
@@ -76,6 +109,33 @@ def test_sequenced_solve_reaches_the_direct_equilibrium(monkeypatch):
     du = np.abs(seq.U - direct.U).max() / np.abs(direct.U).max()
     assert du <= 1e-6
     assert seq.summary["fold_count"] == direct.summary["fold_count"]
+
+
+def test_the_sequenced_fine_mesh_takes_cg_steps_to_the_same_equilibrium(monkeypatch):
+    """The fine mesh of a sequence takes inexact Newton steps (CG preconditioned by the last
+    factorisation; thresholds lowered so that square-pedestal 12x4x4 from 6x2x4 qualifies) and ends
+    on the equilibrium of the exact-step solve."""
+    from solidshell.runner import run_scene
+    from solidshell.solvers import static
+
+    monkeypatch.setattr(sequence, "MIN_ELEMENTS", 40)
+    monkeypatch.setattr(static, "PCG_MIN_DOFS", 0)
+    cg = run_scene("square-pedestal", mesh="12x4x4", solver="static", out_dir=None, progress=False,
+                   sequence=1)
+    exact = run_scene("square-pedestal", mesh="12x4x4", solver="static", out_dir=None,
+                      progress=False, sequence=1, pcg_iterations=0)
+    assert cg.converged and exact.converged and cg.summary["positive_definite"]
+    assert cg.summary["cg_steps"] > 0 and exact.summary["cg_steps"] == 0
+    assert cg.summary["cg_iterations"] >= cg.summary["cg_steps"]
+    # a CG step replaces an iteration's factorisation (every other iteration factorises at least
+    # once); measured 40 factorisations and 22 CG steps in 53 iterations against 61 in 52
+    s = cg.summary
+    assert s["factorizations"] >= s["iterations"] - s["cg_steps"]
+    assert s["factorizations"] < exact.summary["factorizations"]
+    # both stop at the Newton tolerance (relative residual 1e-8) on the same minimum: 1e-6 of max|U|
+    # separates that from another fold pattern (~10 % of max|U| apart)
+    assert np.abs(cg.U - exact.U).max() <= 1e-6 * np.abs(exact.U).max()
+    assert cg.summary["fold_count"] == exact.summary["fold_count"]
 
 
 def test_small_meshes_run_the_kernels_on_one_thread():

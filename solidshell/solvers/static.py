@@ -31,9 +31,13 @@ Methods (``method=``)
     step, did not help on the strip and is off by default).  Also tried on the 20x1 strip and
     dropped: reusing the factorisation for later iterations (``reuse``; 82 -> 93..514
     factorisations) and chord corrections after each step with the same factorisation (77
-    iterations but 91-125 factorisations instead of 82).  Measured iterations (20x1 strip / disc
-    10x40): newton 81 / 85, paper c=1e-2 113 / 98, paper c=2e-2 67 / 54 -- but on the disc the
-    latter stops on a saddle (indefinite tangent) --, arc-length 53 / 391.
+    iterations but 91-125 factorisations instead of 82).  What does pay on the fine mesh of a mesh
+    sequence (>= 10 000 free dofs, ``pcg_iterations``): a Newton step found by conjugate gradients
+    on the new tangent, preconditioned by the last factorisation, factorising only when CG needs
+    more than a few iterations (square-pedestal 48x16x4: 35-39 factorisations instead of 59).
+    Measured iterations (20x1 strip / disc 10x40): newton 81 / 85, paper c=1e-2 113 / 98, paper
+    c=2e-2 67 / 54 -- but on the disc the latter stops on a saddle (indefinite tangent) --,
+    arc-length 53 / 391.
 ``"arclength"``  Crisfield's cylindrical arc-length method (load factor as an extra unknown, the
     quadratic constraint |Delta D| = Delta l, root chosen by the smallest angle with the previous
     increment; predictor sign from the previous increment, sign(Delta D_prev . K^-1 P)), which
@@ -91,7 +95,7 @@ import numpy as np
 from ..errors import InputError
 from ..problem import SolveResult, no_progress
 from .blas import kernel_threads, single_threaded_blas
-from .linear import FACTORIZATIONS, Cholesky, LowerCSC, SuperLUDefinite, as_csc, ldl_inertia
+from .linear import FACTORIZATIONS, Cholesky, LowerCSC, SuperLUDefinite, as_csc, ldl_inertia, pcg
 
 __all__ = ["StaticResult", "solve_static", "run", "METHODS"]
 
@@ -346,11 +350,27 @@ class _Opts:
     tr_shrink: float = 0.25
     tr_grow: float = 0.75
     reuse: int = 0
+    pcg_iterations: int = 0
 
 
 def _converged(rel, e_ratio, o):
     return rel <= o.tol and e_ratio <= o.energy_tol
 
+
+PCG_FORCING = 0.1
+"""Largest relative residual of the preconditioned-CG Newton step (``pcg_iterations``): the forcing
+term of an inexact Newton method, min(PCG_FORCING, sqrt(rel)) -- a step exact to 10 % in the
+global phase, tighter as the residual falls."""
+
+PCG_BELOW = 1e-4
+"""Below this relative residual every Newton step factorises: the quadratic phase is one or two
+exact steps from the tolerance, and a CG step there needed more iterations than it saved."""
+
+PCG_MIN_DOFS = 10000
+"""CG steps only on problems with at least this many free dofs: a factorisation's cost grows faster
+with the size than a back-substitution's.  Measured (load ~6): square-pedestal 24x8x4 (4608 dofs)
+from flat took 104 iterations and 2.64 s CPU with CG steps against 97 and 2.40 s without; the
+20-element strips and 12x4x4 gained nothing either."""
 
 _ROUNDOFF = 1e-11
 """An energy change below this fraction of the energy scale |Pi| + |lam P.D| is round-off: Pi is a
@@ -381,7 +401,24 @@ def _newton_level(sys, D, lam, o, stats):
     iterations while the trust region cuts the step (refreshing it after a full Newton step, a poor
     model ratio or a non-descent direction).  Measured on the wool strip 20x1 it *costs* more than
     it saves (reuse 0/2/4/8: 82/93/130/514 factorisations): the tangent changes too fast with the
-    rotating geometry.  Default 0: a fresh factorisation every iteration."""
+    rotating geometry.  Default 0: a fresh factorisation every iteration.
+
+    ``o.pcg_iterations`` > 0 (an inexact Newton step): after an iteration whose tangent factorised
+    without a shift, the next Newton step is first sought by conjugate gradients on the *new*
+    tangent, preconditioned by the last factor (linear.pcg), to a relative residual
+    min(PCG_FORCING, sqrt(rel)) in at most that many CG iterations; only if CG does not get there
+    (or meets non-positive curvature) is the new tangent factorised.  A CG iteration costs one
+    back-substitution and one product with the tangent, ~1/9 of a factorisation at 18 432 dofs, and
+    the trust region's model uses the step's own curvature p.K.p.  A CG step that needed more than
+    half the iterations allowed is followed by a factorisation.  It pays where the tangent changes
+    slowly from one iteration to the next: the fine level of a mesh sequence, which settles a
+    prolonged coarse equilibrium (square-pedestal 48x16x4, load ~6, 2-3 rounds interleaved in one
+    process: 35-39 factorisations instead of 59 on the fine mesh, the same 51 iterations, process
+    CPU 10-19 % lower (medians 7.3-8.1 s against 9.0 s), the same state to 2e-8 of max|U|; 3 CG
+    iterations at most: 49 factorisations, 13 %).  From the flat sheet, where the folds form, CG
+    fails too often: 6 CG iterations cost 7 % more CPU on large-square-pedestal 45x15x4 (176
+    iterations, 165 factorisations against 167 and 193) and 15 % more on circle-pedestal; hence off
+    by default (``pcg_iterations = 0``) and switched on by solvers/sequence.py for the fine mesh."""
     f = sys.free
     sigma = 0.0
     e_first = None
@@ -393,6 +430,8 @@ def _newton_level(sys, D, lam, o, stats):
     since = 0
     refresh = True
     it = 0
+    try_cg = o.pcg_iterations > 0 and isinstance(sys.chol, Cholesky) and f.size >= PCG_MIN_DOFS
+    cg_next = False        # the last factor is unshifted and the last CG step (if any) was quick
     while True:
         g = G[f]
         stats["D_last"] = D
@@ -408,8 +447,24 @@ def _newton_level(sys, D, lam, o, stats):
             break
         it += 1
         stats["iterations"] += 1
-        if refresh or lu is None or since >= o.reuse:
+        inexact = False
+        new_tangent = False
+        if try_cg and cg_next and lu is not None and sigma == 0.0 and rel >= PCG_BELOW:
             _, A = sys.free_tangent(D)
+            new_tangent = True
+            x, k, inexact, pKp = pcg(A.matvec(), g, lu.solve, min(PCG_FORCING, math.sqrt(rel)),
+                                     o.pcg_iterations)
+            sys.n_solves += k
+            stats["cg_iterations"] = stats.get("cg_iterations", 0) + k
+            cg_next = inexact and 2 * k <= o.pcg_iterations
+        else:
+            cg_next = True
+        if inexact:
+            fresh = False
+            stats["cg_steps"] = stats.get("cg_steps", 0) + 1
+        elif refresh or lu is None or since >= o.reuse:
+            if not new_tangent:
+                _, A = sys.free_tangent(D)
             scale = np.abs(A.diagonal())
             scale[scale == 0.0] = max(float(scale.max(initial=0.0)), 1.0)
             try:
@@ -427,12 +482,16 @@ def _newton_level(sys, D, lam, o, stats):
             since += 1
             fresh = False
         p = np.zeros_like(D)
-        p[f] = -lu.solve(g)
-        sys.n_solves += 1
+        if inexact:
+            p[f] = -x
+        else:
+            p[f] = -lu.solve(g)
+            sys.n_solves += 1
         gp = float(np.dot(g, p[f]))
         if not np.isfinite(gp) or gp >= 0.0:
             if not fresh:
                 refresh = True
+                cg_next = False
                 continue
             if gp == 0.0 and rel <= o.tol:
                 stats["criterion"] = "residual"
@@ -480,9 +539,11 @@ def _newton_level(sys, D, lam, o, stats):
             Pit, Gt = sys.potential_and_gradient(Dt, lam)
             if trust and np.isfinite(Pit):
                 # 1-D trust region along the (shifted) Newton step, radius in max-norm:
-                # model decrease m(a) = g.p (a - a^2/2) since p = -(K + sigma S)^-1 g
+                # model decrease m(a) = g.p (a - a^2/2) since p = -(K + sigma S)^-1 g (a CG step:
+                # g.p a + p.K.p a^2/2 with its own curvature)
                 dec = Pit - Pi
-                pred = gp * (alpha - 0.5 * alpha * alpha)
+                pred = (gp * (alpha - 0.5 * alpha * alpha) if not inexact
+                        else gp * alpha + 0.5 * alpha * alpha * pKp)
                 rho = dec / pred if pred < 0.0 else 0.0
                 step = alpha * pmax
                 if abs(pred) <= _ROUNDOFF * _energy_scale(sys, D, lam, Pi):
@@ -976,7 +1037,7 @@ def solve_static(model, fixed, loads, load_factors=None, method="newton", prescr
                  max_cutbacks=8, curvilinear=False, line_search="trust", trust_radius=0.02,
                  arc_length_initial=0.1, max_arc_step=None, max_arc_steps=500,
                  check_stability=True, eig_max_dofs=60000, max_saddle_escapes=5, saddle_step=0.05,
-                 contact=None, contact_stiffness=None, factorization="cholmod",
+                 contact=None, contact_stiffness=None, factorization="cholmod", pcg_iterations=0,
                  progress=None) -> StaticResult:
     """Static equilibrium of ``model`` under dead ``loads`` and ``prescribed`` fixed dofs.
 
@@ -1018,6 +1079,10 @@ def solve_static(model, fixed, loads, load_factors=None, method="newton", prescr
     factorization : "cholmod" (default: CHOLMOD supernodal Cholesky of the positive-definite
         tangents, SuperLU where the paper's scheme meets an indefinite one) or "superlu" (SuperLU's
         LDL^T throughout, as before CHOLMOD was added; 3-5 times slower factorisations)
+    pcg_iterations : newton: conjugate-gradient iterations on a new tangent, preconditioned by the
+        last factorisation, tried before factorising it (an inexact Newton step; default 0: every
+        iteration factorises; cholmod only, >= PCG_MIN_DOFS free dofs; see ``_newton_level``).  The
+        mesh sequencing sets 6 on the fine mesh, started from the prolonged coarse equilibrium
     progress : callback(fraction, text): called at the start and at every iteration
 
     info["status"]: "converged", "not_converged", "saddle" (converged to a saddle that could not be
@@ -1035,14 +1100,15 @@ def solve_static(model, fixed, loads, load_factors=None, method="newton", prescr
                              check_stability=check_stability, eig_max_dofs=eig_max_dofs,
                              max_saddle_escapes=max_saddle_escapes, saddle_step=saddle_step,
                              contact=contact, contact_stiffness=contact_stiffness,
-                             factorization=factorization, progress=progress)
+                             factorization=factorization, pcg_iterations=pcg_iterations,
+                             progress=progress)
 
 
 def _solve_static(model, fixed, loads, load_factors, method, prescribed, *, tol, energy_tol,
                   disp_tol, max_iter, c, L_f, max_step, U0, predictor, increment, min_increment,
                   max_cutbacks, curvilinear, line_search, trust_radius, arc_length_initial,
                   max_arc_step, max_arc_steps, check_stability, eig_max_dofs, max_saddle_escapes,
-                  saddle_step, contact, contact_stiffness, factorization, progress):
+                  saddle_step, contact, contact_stiffness, factorization, pcg_iterations, progress):
     """The body of :func:`solve_static` (which sets the kernel threads around it)."""
     t0 = time.perf_counter()
     user_progress = progress or no_progress
@@ -1081,7 +1147,8 @@ def _solve_static(model, fixed, loads, load_factors, method, prescribed, *, tol,
               max_iter=int(max_iter if max_iter is not None else (5000 if method == "paper" else 1000)),
               c=float(c), L_f=Lf, max_step=float(max_step) if max_step is not None else 0.5 * Lf,
               curvilinear=bool(curvilinear), line_search=str(line_search),
-              radius0=float(trust_radius) * Lf, radius_min=1e-9 * Lf)
+              radius0=float(trust_radius) * Lf, radius_min=1e-9 * Lf,
+              pcg_iterations=int(pcg_iterations))
     if not (o.c > 0.0):
         raise InputError(f"c must be positive, got {c!r}")
     D = np.zeros(6 * n) if U0 is None else np.asarray(U0, dtype=float).reshape(-1).copy()
@@ -1161,6 +1228,9 @@ def _solve_static(model, fixed, loads, load_factors, method, prescribed, *, tol,
     if method == "newton":
         info["shifted_iterations"] = int(stats["shifted_iterations"])
         info["max_tangent_shift"] = float(stats["max_shift"])
+        # Newton steps found by preconditioned CG instead of a factorisation (pcg_iterations)
+        info["cg_steps"] = int(stats.get("cg_steps", 0))
+        info["cg_iterations"] = int(stats.get("cg_iterations", 0))
     if method == "arclength":
         # > 1 means the path crossed a bifurcation (a second eigenvalue through zero): there is no
         # branch switching, and the path may turn onto another branch there

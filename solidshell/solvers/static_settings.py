@@ -51,6 +51,9 @@ class StaticSettings(SettingsModel):
     saddle_step: Finite = Field(0.05, gt=0.0, description="largest escape step, fraction of L_f")
     contact_stiffness: Optional[Finite] = Field(None, gt=0.0)
     factorization: Literal["cholmod", "superlu"] = "cholmod"
+    pcg_iterations: int = Field(
+        0, ge=0, description="CG iterations preconditioned by the last factor before a new "
+        "factorisation (0: exact Newton steps; unset: 6 on a sequenced fine mesh, else 0)")
     sequence: Union[Literal["auto"], int] = Field(
         0, description="coarse meshes solved first (solvers/sequence.py): 'auto' or a count >= 0")
     U0: StateArray = None     # (N, 6) starting state [length] (e.g. a scene's [perturbation])

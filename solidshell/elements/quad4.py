@@ -9,11 +9,10 @@ Membrane strains (``membrane=``):
 
 ``"full"``  the compatible Green membrane strains at the 2x2 Gauss points (the paper's element).
     The bilinear membrane has a parasitic in-plane shear (gamma_xy linear in xi, eta) that locks
-    in-plane bending (MacNeal-Harder in-plane beam: 0.093 of the reference), and when a flat element
-    is twisted by a fold running across it, its Gauss points see a mean stretch -|h|^2/3 that its
-    edges do not (h: the hourglass vector sum_i xi_i eta_i x_i / 4).  With a fabric's tensile
-    rigidity ~1e4 times its bending rigidity per cm^2 both stiffen coarse meshes: square-pedestal DC
-    0.679 / 0.596 / 0.562 on 24x8x4 / 48x16x4 / 96x32x4 (5.9 % change between the finest two).
+    in-plane bending, and when a flat element is twisted by a fold running across it, its Gauss
+    points see a mean stretch -|h|^2/3 that its edges do not (h: the hourglass vector
+    sum_i xi_i eta_i x_i / 4).  With a fabric's tensile rigidity ~1e4 times its bending rigidity per
+    cm^2 both stiffen coarse meshes (measurements: docs/elements.md, section 4).
 ``"ans"``  an assumed membrane strain field, in a Cartesian frame at the element centre (x along
     a_xi):  eps_xx = e1 + b4 (eta - eta_c),  eps_yy = e2 + b5 (xi - xi_c),  gamma_xy = e3  (the field
     of Pian & Sumihara's membrane element).
@@ -30,22 +29,19 @@ Membrane strains (``membrane=``):
     - b4, b5 (in-plane bending) from five tying strains: the stretches of the two xi-edges and the
       two eta-edges at their mid-points and the shear a_xi . a_eta at the centre, which a Cartesian
       field (e, b4, b5) must reproduce (a 5x5 solve per element, done once).
-    In-plane bending of a rectangle is then exact for nu = 0 (MacNeal-Harder in-plane beam 0.904 at
-    nu = 0.3; the rest is eps_yy not following -nu eps_xx).  By MacNeal's theorem an element that
-    passes the patch test must lock for some distortion: the trapezoidal beam gives 0.044 (full:
-    0.026).  Five independent parameters: no spurious zero-energy mode.  Measured: Scordelis-Lo roof
-    -5.4/-2.7/-1.1 % (full) -> +5.0/+0.6/-0.25 % (ans) on 8^2/16^2/32^2; square-pedestal DC
-    0.629/0.569/0.553 on the uniform meshes and 0.573/0.552/0.548 (0.57 % change) on meshes graded
-    towards the pedestal corners (``grading = 8`` of meshing.square_on_square).  All of this is
-    beyond the paper, whose quadrilateral integrates the compatible membrane strains by the 2x2
-    rule; ``"full"`` stays the default.
+    In-plane bending of a rectangle is then exact for nu = 0; by MacNeal's theorem an element that
+    passes the patch test must lock for some distortion (the trapezoidal beam).  Five independent
+    parameters: no spurious zero-energy mode.  The MacNeal-Harder, Scordelis-Lo and square-pedestal
+    measurements of both membranes: docs/elements.md, section 4.  All of this is beyond the paper,
+    whose quadrilateral integrates the compatible membrane strains by the 2x2 rule; ``"full"``
+    stays the default.
     Stored form: the field's 22 raw tying products (12 compatible strains at the Gauss points, 5
     tying strains, 5 twist terms) enter only through the five parameters, so their rigidity is
     P^T C5 P (rank 5), and each product is a fixed combination (R_MEM) of the six products of the
     centre tangents and the hourglass vector (a bilinear quad's tangents are a_xi + eta h and
     a_eta + xi h).  The kernels see six membrane "tying" products with a 6x6 rigidity (Cs is 10x10
-    instead of the 4x4 shear block): core's force kernel costs ~2x the compatible quad's, its
-    force+tangent ~1.3x, and the lane kernel (lanes_ans.py) about the same as lanes.py's.
+    instead of the 4x4 shear block); its cost against the compatible quad's: docs/elements.md,
+    section 4.
 """
 
 from __future__ import annotations

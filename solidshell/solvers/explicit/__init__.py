@@ -29,13 +29,10 @@ __all__ = ["run", "run_relax", "scaled_mass", "SMALL_MESH_ELEMENTS", "Integrator
 SMALL_MESH_ELEMENTS = 1000
 """Below this many elements the loop runs the force kernel on one thread by default: a step then
 takes microseconds and starting/joining the kernel's worker threads every step costs more than it
-saves.  Measured on the quiet 2-core machine (benchmarks/explicit_throughput.py --threads 1|2, two
-passes, load ~1): 400 quads 1.18/1.20 M element-steps/s on 1 thread vs 0.45/1.83 M on 2; 900 quads
-1.27/1.23 M vs 1.87/1.48 M; 1600 quads 1.30/1.21 M vs 2.09/1.56 M; 2500 quads 1.18/1.19 M vs
-1.98/2.31 M (benchmarks/dynamic_speed.py).  The results are bitwise the same on any number of
-threads (element forces in parallel, one serial scatter).  On a machine whose cores are busy with
-other jobs, two threads are much slower (a worker waits a whole time slice for a core: 0.31 M vs
-1.76 M at 2500 quads under load 5); pass ``threads=1`` there."""
+saves (the 1- against 2-thread measurements behind the threshold: docs/benchmarks.md, "Threads").
+The results are bitwise the same on any number of threads (element forces in parallel, fixed
+chunks, one serial sum).  On a machine whose cores are busy with other jobs two threads are much
+slower (a worker waits a whole time slice for a core); pass ``threads=1`` there."""
 
 
 @contextmanager

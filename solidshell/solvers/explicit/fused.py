@@ -11,12 +11,8 @@ One step is two compiled passes and no allocation:
 2. assembly and update, serial: the chunks' slots and the other blocks' forces are summed into the
    dofs (elements in mesh order, block by block); then R = P - F (+ C), D_n+1 of Eq. (23)
    with the operation order of ``kernels.central_step``, the prescribed values, finiteness and
-   v_n.M.v_n in one pass.  (A node-ordered gather, parallel over nodes, took 24 % of a one-thread
-   step against 62 % for the element pass -- a node's contributions sit 128 bytes apart in the lane
-   layout -- and on 2 threads of the loaded machine a second parallel region per step made the
-   loop 0.95x the previous path: every region waits for its slowest thread.  The serial scatter
-   of the lane blocks was 9 % of a one-thread step of the 100x100 sheet; scattered inside the
-   element pass it costs 5 % less CPU on one thread, and runs on both threads.)
+   v_n.M.v_n in one pass.  (Why scatter inside the element pass and not gather by node afterwards:
+   the measurements are in docs/elements.md, section 8.)
 
 Nothing here depends on the thread count: elements are evaluated block by block by the same
 instructions and every sum is serial in a fixed order.

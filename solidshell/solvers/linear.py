@@ -7,8 +7,7 @@ Two factorisations, for two jobs:
     Newton needs exactly this: it factors K_t + sigma diag|K_t| with the smallest sigma that works.
     The tangents of one solve share a sparsity pattern, so the symbolic analysis (fill-reducing
     ordering, supernodes) is done once and reused; only the lower triangle is handed over.
-    Measured on the 18 432 free dofs of square-pedestal 48x16x4 (0.95 M nonzeros): numeric
-    factorisation 36-55 ms against 150-240 ms for SuperLU (below), symbolic analysis 17-28 ms once.
+    Several times faster than SuperLU (below) on the drapes (timings: docs/solvers.md, section 5).
 
 ``ldl_inertia``  SuperLU with diagonal pivoting in symmetric mode: an LDL^T-type factorisation of
     any symmetric non-singular matrix, with its inertia (the number of negative pivots equals the
@@ -148,8 +147,8 @@ class Cholesky:
     analysis (AMD ordering, supernodes), so any sequence of matrices is accepted.
 
     The CHOLMOD matrix (a cvxopt spmatrix) is built once per pattern and only its values are
-    replaced afterwards (``spmatrix.V``): building it from triplets every iteration, as before,
-    cost as much as a third of the numeric factorisation on square-pedestal 48x16x4.
+    replaced afterwards (``spmatrix.V``): rebuilding it from triplets every iteration cost up to a
+    third of a numeric factorisation (docs/solvers.md, section 5).
     """
 
     def __init__(self):

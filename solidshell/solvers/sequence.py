@@ -4,18 +4,13 @@ first, and start the requested mesh from the prolonged coarse equilibrium.
 Why: the energy Newton spends most of its iterations in the global phase, carrying the flat sheet
 to its folded shape with trust-region-limited steps (static.py's module notes).  On a coarse mesh
 those iterations cost a fraction (factorisation ~ dofs^1.2-1.5, kernels ~ elements); the fine mesh
-then only has to settle the folds it resolves better.  Measured on square-pedestal 48x16x4 (one
-run, 2 shared cores): 107 Newton iterations from the flat sheet, 80 + 27 + 51 on 12x4x4 -> 24x8x4
--> 48x16x4, to the same equilibrium (drape coefficient 0.5957, 4 folds, smallest tangent
-eigenvalue 1.5728e-4 both ways).
+then only has to settle the folds it resolves better (iteration counts: docs/solvers.md, section 6).
 
 A drape is multi-stable, so the fine equilibrium reached from a coarse start need not be the one
-reached from the flat sheet.  Measured: square-pedestal 48x16x4 reaches the same state (max|dU| =
-2.5e-10 max|U|, benchmarks/out/issue13_static_startup.md); square-on-disc 30x240 does *not*: from
-15x120 (372 iterations) it took 315 iterations on 30x240 -- no saving -- and ended on 12 folds (DC
-0.071) instead of the 8 folds (DC 0.058) of the plain solve.  Sequencing is therefore off by default
-(``sequence = 0``) and switched on per scene where the verification shows the same equilibrium
-(square-pedestal.toml: ``[solver.static] sequence = "auto"``).  It is skipped (the plain solve
+reached from the flat sheet: square-pedestal 48x16x4 reaches the same state, square-on-disc 30x240
+does *not* (12 folds instead of the plain solve's 8, and no saving; docs/solvers.md, section 6).
+Sequencing is therefore off by default (``sequence = 0``) and switched on per scene where the
+verification shows the same equilibrium (square-pedestal.toml: ``[solver.static] sequence = "auto"``).  It is skipped (the plain solve
 runs) for meshes that are not a recipe density, for small meshes and when a coarse level fails.
 
 Coarse densities (``plan``): every letter field of the recipe's density form (``AxBx4``: A and B;
@@ -30,15 +25,10 @@ bilinear in a quad (the parametric point by Newton on the bilinear map), linear 
 node outside every coarse element (a curved boundary cut by straight coarse edges) takes the
 extrapolation of the nearest one.  On the recipes' nested meshes this is the coarse finite-element
 field itself (the triangle-wise interpolation used before put each coarse quad's centre node on one
-diagonal); each director then gets the interpolated length of the coarse ones.  Measured on
-square-pedestal 48x16x4 (load ~7): 31 + 51 iterations on 24x8x4 and 48x16x4 against 33 + 52 before,
-the first fine tangent positive definite with shift sigma = 0.1 instead of 1 (9 factorisations in
-the first iteration instead of 10), the same final state (max|dU| 2.5e-10 max|U|).  The prolonged
-state is still far from equilibrium in energy: the fine equilibrium itself, sampled at the 24x8x4
-nodes and prolonged back, has 363 units of strain energy on 48x16x4 against its own 3.3 (28 on
-24x8x4): the O(h^2) interpolation error of the positions is membrane strain, and the membrane
-stiffness is ~1e4 times the bending one.  The first fine iterations (shifted, short steps) relax
-it.  Meshes must be flat (the recipes' are): a curved reference surface is not sequenced.
+diagonal); each director then gets the interpolated length of the coarse ones.  The prolonged
+state is still far from equilibrium in energy (the O(h^2) interpolation error of the positions is
+membrane strain): the first fine iterations, shifted and short, relax it (docs/solvers.md,
+section 6).  Meshes must be flat (the recipes' are): a curved reference surface is not sequenced.
 """
 
 from __future__ import annotations
@@ -51,8 +41,7 @@ __all__ = ["plan", "prolong", "solve_sequenced", "AUTO_MIN_ELEMENTS", "MIN_ELEME
 
 AUTO_MIN_ELEMENTS = 2000
 """``sequence = "auto"`` sequences meshes of at least this many elements: below it a plain solve
-takes seconds and the coarse levels would save little (square-pedestal 24x8x4, 768 quads: 97
-iterations, ~2 s on a quiet machine)."""
+takes seconds and the coarse levels would save little (docs/solvers.md, section 6)."""
 
 MIN_ELEMENTS = 150
 """No coarse level below this many elements: such a mesh cannot carry the drape's folds."""

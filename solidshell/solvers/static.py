@@ -28,16 +28,10 @@ Methods (``method=``)
     membrane rigidity of a fabric is 1e5-1e6 times its bending rigidity over L^2, so the quadratic
     convergence radius of Newton is tiny and the global phase is governed by the step control (the
     curvilinear ``curvilinear=True`` option, a second-order "geodesic acceleration" correction of the
-    step, did not help on the strip and is off by default).  Also tried on the 20x1 strip and
-    dropped: reusing the factorisation for later iterations (``reuse``; 82 -> 93..514
-    factorisations) and chord corrections after each step with the same factorisation (77
-    iterations but 91-125 factorisations instead of 82).  What does pay on the fine mesh of a mesh
-    sequence (>= 10 000 free dofs, ``pcg_iterations``): a Newton step found by conjugate gradients
-    on the new tangent, preconditioned by the last factorisation, factorising only when CG needs
-    more than a few iterations (square-pedestal 48x16x4: 35-39 factorisations instead of 59).
-    Measured iterations (20x1 strip / disc 10x40): newton 81 / 85, paper c=1e-2 113 / 98, paper
-    c=2e-2 67 / 54 -- but on the disc the latter stops on a saddle (indefinite tangent) --,
-    arc-length 53 / 391.
+    step, did not help on the strip and is off by default).  On the fine mesh of a mesh sequence
+    (>= 10 000 free dofs, ``pcg_iterations``) a Newton step is first sought by conjugate gradients
+    on the new tangent, preconditioned by the last factorisation.  What was tried and dropped, and
+    the iteration counts of every method: docs/solvers.md, sections 2 and 10.
 ``"arclength"``  Crisfield's cylindrical arc-length method (load factor as an extra unknown, the
     quadratic constraint |Delta D| = Delta l, root chosen by the smallest angle with the previous
     increment; predictor sign from the previous increment, sign(Delta D_prev . K^-1 P)), which
@@ -399,9 +393,9 @@ def _newton_level(sys, D, lam, o, stats):
 
     ``o.reuse`` > 0 reuses the factorisation of the (shifted) tangent for up to that many further
     iterations while the trust region cuts the step (refreshing it after a full Newton step, a poor
-    model ratio or a non-descent direction).  Measured on the wool strip 20x1 it *costs* more than
-    it saves (reuse 0/2/4/8: 82/93/130/514 factorisations): the tangent changes too fast with the
-    rotating geometry.  Default 0: a fresh factorisation every iteration.
+    model ratio or a non-descent direction).  It costs more than it saves on the strip (docs/solvers.md,
+    section 2): the tangent changes too fast with the rotating geometry.  Default 0: a fresh
+    factorisation every iteration.
 
     ``o.pcg_iterations`` > 0 (an inexact Newton step): after an iteration whose tangent factorised
     without a shift, the next Newton step is first sought by conjugate gradients on the *new*
@@ -1055,9 +1049,9 @@ def solve_static(model, fixed, loads, load_factors=None, method="newton", prescr
     disp_tol : newton also stops when the Newton correction of a positive-definite, unshifted K_t
         is below disp_tol max|D| (scale-free; the error of D is then ~ disp_tol |D|)
     max_iter : iterations per load step (default 1000 for newton/arclength -- newton then cuts the
-        step back --, 5000 for paper).  The trust-region Newton needs 80-300 iterations on the
-        paper's drapes (square-on-disc 30x240: 276-279), and a cap near that count turned a
-        converging run into a cut-back cascade when round-off changed its path (300 did, once)
+        step back --, 5000 for paper): well above the iterations the trust-region Newton needs on the
+        paper's drapes, since a cap near that count cuts back a converging run (docs/solvers.md,
+        section 8)
     c, L_f : the paper's multiplier constant (1e-3..1e-2) and free-hanging length (default: largest
         distance from a free node to the nearest fixed one)
     max_step : cap on max|dD| per Newton update [length] (default L_f / 2), method newton

@@ -297,3 +297,28 @@ def test_settings_schema_defaults_and_registry():
         validate("explicit", {})
     with pytest.raises(InputError, match="max_steps"):
         validate("relax", {"max_steps": "abc"})
+
+
+def test_fire_on_a_new_mesh_steps_at_that_mesh_s_own_stable_step():
+    """FIRE's largest step is safety x the smallest critical step of the problem it steps
+    (state.dtc_min).  A state moved from a fine mesh onto a coarser one (an adaptive merge) gets
+    the coarse mesh's estimate there, not the fine mesh's smaller one: on the falling plate (no
+    freeze: gravity's power F.v stays positive) the step stays at safety x the coarse critical step
+    (exactly: FIRE's growth is capped at it) and is more than 1.5 x the fine mesh's (halving the
+    elements about halves the membrane-limited step: 1.48e-3 against 7.48e-4 s).  Before, dtc_min carried the fine mesh's limit
+    over and FIRE cut the coarse mesh's step back to it at its first growth."""
+    s = dict(damping="fire", mass_scaling=1e4, mass_scaling_mode="director", max_steps=400)
+    a = Integrator(falling_plate(4), s, relax=True)
+    a.advance(100)
+    st, dtc_fine = a.state, a.lim.dt_crit
+    w, wp, resets = st.D[2], st.D_prev[2], st.resets      # (the start on the fine mesh froze thrice)
+    coarse = falling_plate(2)
+    N = coarse.model.n_nodes
+    st.D, st.D_prev = np.zeros((N, 6)), np.zeros((N, 6))
+    st.D[:, 2], st.D_prev[:, 2] = w, wp
+    b = Integrator.from_state(coarse, st, s, relax=True)
+    assert b.lim.dt_crit > 1.5 * dtc_fine
+    assert b.state.dtc_min == b.lim.dt_crit
+    b.advance(100)
+    assert b.state.resets == resets and b.state.fire_n > 50
+    assert b.state.dt == 0.9 * b.lim.dt_crit

@@ -322,3 +322,22 @@ def test_fire_on_a_new_mesh_steps_at_that_mesh_s_own_stable_step():
     b.advance(100)
     assert b.state.resets == resets and b.state.fire_n > 50
     assert b.state.dt == 0.9 * b.lim.dt_crit
+
+
+def test_fingerprint_tells_per_quad_membranes_apart():
+    """A model with one membrane per quad (an adaptive mesh's coarse "ans" and finest "full") is
+    fingerprinted by its membrane array: the same choice gives the same digest, one quad changed
+    another (a restart on another mesh's membranes is refused), and one value for all quads keeps
+    the digest of the plain string (uniform runs' checkpoints still continue)."""
+    mesh = plate(2, 2, 1.0, 1.0)
+    n = len(mesh.quads)
+
+    def fp(membrane):
+        m = Model(mesh, ISO, membrane=membrane)
+        return checkpoint.fingerprint(Problem(m, np.zeros((mesh.n_nodes, 6), bool), np.zeros((mesh.n_nodes, 6))),
+                                      {}, m.lumped_mass())["material"]
+
+    mixed = ["ans"] + ["full"] * (n - 1)
+    assert fp(tuple(mixed)) == fp(list(mixed))
+    assert fp(tuple(mixed)) != fp(tuple(["full"] * n)) != fp("full")
+    assert fp("full") == checkpoint.digest([ISO, False, 0.5, "full"])

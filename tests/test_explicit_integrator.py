@@ -297,3 +297,47 @@ def test_settings_schema_defaults_and_registry():
         validate("explicit", {})
     with pytest.raises(InputError, match="max_steps"):
         validate("relax", {"max_steps": "abc"})
+
+
+def test_fire_on_a_new_mesh_steps_at_that_mesh_s_own_stable_step():
+    """FIRE's largest step is safety x the smallest critical step of the problem it steps
+    (state.dtc_min).  A state moved from a fine mesh onto a coarser one (an adaptive merge) gets
+    the coarse mesh's estimate there, not the fine mesh's smaller one: on the falling plate (no
+    freeze: gravity's power F.v stays positive) the step stays at safety x the coarse critical step
+    (exactly: FIRE's growth is capped at it) and is more than 1.5 x the fine mesh's (halving the
+    elements about halves the membrane-limited step: 1.48e-3 against 7.48e-4 s).  Before, dtc_min carried the fine mesh's limit
+    over and FIRE cut the coarse mesh's step back to it at its first growth."""
+    s = dict(damping="fire", mass_scaling=1e4, mass_scaling_mode="director", max_steps=400)
+    a = Integrator(falling_plate(4), s, relax=True)
+    a.advance(100)
+    st, dtc_fine = a.state, a.lim.dt_crit
+    w, wp, resets = st.D[2], st.D_prev[2], st.resets      # (the start on the fine mesh froze thrice)
+    coarse = falling_plate(2)
+    N = coarse.model.n_nodes
+    st.D, st.D_prev = np.zeros((N, 6)), np.zeros((N, 6))
+    st.D[:, 2], st.D_prev[:, 2] = w, wp
+    b = Integrator.from_state(coarse, st, s, relax=True)
+    assert b.lim.dt_crit > 1.5 * dtc_fine
+    assert b.state.dtc_min == b.lim.dt_crit
+    b.advance(100)
+    assert b.state.resets == resets and b.state.fire_n > 50
+    assert b.state.dt == 0.9 * b.lim.dt_crit
+
+
+def test_fingerprint_tells_per_quad_membranes_apart():
+    """A model with one membrane per quad (an adaptive mesh's coarse "ans" and finest "full") is
+    fingerprinted by its membrane array: the same choice gives the same digest, one quad changed
+    another (a restart on another mesh's membranes is refused), and one value for all quads keeps
+    the digest of the plain string (uniform runs' checkpoints still continue)."""
+    mesh = plate(2, 2, 1.0, 1.0)
+    n = len(mesh.quads)
+
+    def fp(membrane):
+        m = Model(mesh, ISO, membrane=membrane)
+        return checkpoint.fingerprint(Problem(m, np.zeros((mesh.n_nodes, 6), bool), np.zeros((mesh.n_nodes, 6))),
+                                      {}, m.lumped_mass())["material"]
+
+    mixed = ["ans"] + ["full"] * (n - 1)
+    assert fp(tuple(mixed)) == fp(list(mixed))
+    assert fp(tuple(mixed)) != fp(tuple(["full"] * n)) != fp("full")
+    assert fp("full") == checkpoint.digest([ISO, False, 0.5, "full"])

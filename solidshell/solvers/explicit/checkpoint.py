@@ -113,12 +113,17 @@ def fingerprint(problem, settings: dict, mass: np.ndarray) -> dict[str, str]:
     (``settings``: the ones that shape the run)."""
     model = problem.model
     mesh = getattr(model, "mesh", None)
+    membrane = getattr(model, "membrane", None)
+    if isinstance(membrane, tuple):
+        # one value per quad (an adaptive mesh's coarse "ans" and finest "full"): one array, not a
+        # tuple fed item by item (1600 hash updates, 2 % of each remesh on square-pedestal)
+        membrane = np.asarray(membrane, dtype=str)
     items = {
         "mesh nodes": getattr(mesh, "nodes", model.n_nodes),
         "mesh elements": [getattr(mesh, "quads", None), getattr(mesh, "tris", None),
                           getattr(mesh, "directors", None)],
         "material": [getattr(model, "material", type(model).__name__), getattr(model, "quasi", None),
-                     getattr(model, "mu", None), getattr(model, "membrane", None)],
+                     getattr(model, "mu", None), membrane],
         "masses": mass,
         "loads": problem.loads,
         "supports": problem.fixed,

@@ -594,15 +594,24 @@ class Integrator:
         self.state = st
         if getattr(self.damper, "varies_alpha", False):
             self.alpha = float(st.damper_alpha)   # the estimate the run had reached
-        if reestimate_step:   # warm-started from the state's top mode when it has one (e.g. carried over a remesh)
+        if reestimate_step:
+            # warm-started from the state's top mode when it has one (e.g. carried over a remesh);
+            # forward differences from the state's force, half the evaluations of the central ones:
+            # omega within 1.5e-7 of them after every remesh of the adaptive square-pedestal run
+            # (docs/adaptivity.md), where this estimate was 30 % of the remeshing
             lim = stepcontrol.estimate(self.model, self.M, self.free_mask, st.D, self.bodies, self.n_fric,
                                        self.s, self.alpha, self.force_fn,
-                                       v0=st.mode if np.any(st.mode) else None)
+                                       v0=st.mode if np.any(st.mode) else None, difference="forward")
         else:
             lim = stepcontrol.limit(st.omega_el, st.method, self.M, self.bodies, self.n_fric, self.s, self.alpha)
         self._bind(lim)
         if reestimate_step:
-            st.omega_el, st.method, st.dtc_min = lim.omega_el, lim.method, min(st.dtc_min, lim.dt_crit)
+            # dtc_min is the smallest critical step of the problem being stepped (FIRE's dt_max is
+            # safety x it): a new segment is a new mesh, whose estimate at this state replaces the
+            # earlier meshes' (an earlier, stiffer mesh's limit capped the adaptive square-pedestal
+            # FIRE run at 0.81 x its own stable step: docs/adaptivity.md)
+            st.omega_el, st.method = lim.omega_el, lim.method
+            st.dtc_min = lim.dt_crit if new_segment else min(st.dtc_min, lim.dt_crit)
             st.mode = lim.mode if lim.mode is not None else np.zeros(6 * self.N)
         self._prepare(fresh=False)
         if reestimate_step:

@@ -16,6 +16,7 @@ FIELDS = {
     # position and time: D_n, D_n-1, the step n and the step dt, t = t_base + (n - n_base) dt
     "D": "a", "D_prev": "a", "step": "i", "dt": "f", "n_base": "i", "t_base": "f",
     # step control: the estimate the run started from, re-checks, reductions, the smallest dt_crit
+    # of the current mesh (start or remesh estimate and re-checks since)
     "omega_el": "f", "method": "s", "dt_initial": "f", "mode": "a", "rechecks": "i", "reductions": "i",
     "dtc_min": "f",
     # energy ledger: the current segment's references, totals carried across segments

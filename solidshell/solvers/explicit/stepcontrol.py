@@ -35,18 +35,19 @@ class StepLimit:
     mode: np.ndarray | None = None   # the top mode (warm start of the re-checks)
 
 
-def omega_sheet(model, M, free_mask, D, s, force=None, v0=None):
+def omega_sheet(model, M, free_mask, D, s, force=None, v0=None, difference="central"):
     """(omega_el, method, force evaluations, mode) at the flat state D: Lanczos (or the method
     asked), or 2 / critical_time_step when the user gave it.  ``force``: the internal force U (N,6)
     -> F to differentiate (default model.internal_force; the integrator passes its fused lane
     kernel, the same force to round-off at a third of the cost); ``v0``: a start vector, e.g. the
-    previous mesh's top mode carried over."""
+    previous mesh's top mode carried over; ``difference``: the directional derivative's
+    difference (timestep.estimate_omega_max: "forward" halves the force evaluations)."""
     if s.critical_time_step is not None:
         return 2.0 / s.critical_time_step, "given", 0, None
     try:
         est = estimate_omega_max(force or model.internal_force, M, free_mask, D.reshape(M.shape),
                                  method=s.critical_step_method, tol=s.critical_step_tol,
-                                 tangent=getattr(model, "tangent", None), v0=v0)
+                                 tangent=getattr(model, "tangent", None), v0=v0, difference=difference)
     except ValueError as exc:
         raise InputError(f"cannot estimate the critical time step: {exc}") from None
     return est.omega_max, s.critical_step_method, est.n_force_evals, est.mode
@@ -67,10 +68,12 @@ def limit(omega_el, method, M, bodies, n_fric, s, alpha, n_evals=0, seconds=0.0,
                      n_evals, seconds, mode)
 
 
-def estimate(model, M, free_mask, D, bodies, n_fric, s, alpha, force=None, v0=None) -> StepLimit:
-    """The critical step at the flat state D (the start estimate); ``force``, ``v0`` as in omega_sheet."""
+def estimate(model, M, free_mask, D, bodies, n_fric, s, alpha, force=None, v0=None,
+             difference="central") -> StepLimit:
+    """The critical step at the flat state D (the start estimate); ``force``, ``v0``, ``difference``
+    as in omega_sheet."""
     t0 = time.perf_counter()
-    w, method, n_ev, mode = omega_sheet(model, M, free_mask, D, s, force, v0)
+    w, method, n_ev, mode = omega_sheet(model, M, free_mask, D, s, force, v0, difference)
     return limit(w, method, M, bodies, n_fric, s, alpha, n_ev, time.perf_counter() - t0, mode)
 
 

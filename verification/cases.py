@@ -75,6 +75,16 @@ def run_recorded(call, row: dict) -> dict | None:
     return summary
 
 
+def run_and_store(cache: Path, name: str, row: dict, call, keys) -> dict:
+    """run_recorded, then the summary's ``keys`` into ``row`` (when the run returned), and the row
+    into the cache; returns the row."""
+    s = run_recorded(call, row)
+    if s is not None:
+        row.update({k: s.get(k) for k in keys})
+    store(cache, name, row)
+    return row
+
+
 def cell(v, spec: str = "", no: str = "NO") -> str:
     """A table cell: '–' for a missing value, yes / ``no`` for a bool, a float by ``spec``
     (format-spec mini-language), anything else by str."""

@@ -65,12 +65,8 @@ def run_case(name: str) -> dict:
 
     scene, mesh, solver, overrides, settings, label = CASES[name]
     row = dict(case=name, scene=scene, mesh=mesh, solver=solver, overrides=overrides, settings=settings, label=label)
-    s = cases.run_recorded(lambda: run_scene(scene, mesh=mesh, solver=solver, out_dir=None, progress=False,
-                                             overrides=overrides, **settings), row)
-    if s is not None:
-        row.update({k: s.get(k) for k in KEYS})
-    cases.store(CACHE, name, row)
-    return row
+    return cases.run_and_store(CACHE, name, row, lambda: run_scene(
+        scene, mesh=mesh, solver=solver, out_dir=None, progress=False, overrides=overrides, **settings), KEYS)
 
 
 def report() -> list:

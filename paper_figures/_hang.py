@@ -4,7 +4,12 @@ isometric views above, side views below (looking along -x, across the held edge,
 turned 25 deg so that a sheet seen edge-on still shows its face), one colour scale for the figure;
 every panel of a row has the same frame.  --quick: a 12x12 mesh with the director masses x1e4 (the translational masses,
 which carry the swing, are the true ones; tested against the unscaled run in
-verification/dynamic_scenes.py for x10)."""
+verification/dynamic_scenes.py for x10).
+
+Threads: the solver's default (2 on 2 cores: 1600 and 2500 quads); the explicit loop's state does
+not depend on the count (element pass over 4 fixed chunks, serial sums; tests/test_lanes.py,
+tests/test_dynamic_scenes.py), so on a shared machine run ``NUMBA_NUM_THREADS=1 solidshell figures
+9 10``, which is several times faster there (paper_figures/_sphere.py has the measurement)."""
 
 from __future__ import annotations
 

@@ -4,7 +4,8 @@ alpha = 1/s (the paper: eight folds), all masses x100.  Run on the exactly equiv
 (README "Dynamic runs and relaxation"): with all masses x s, Eq. (23) is the unscaled run with
 damping alpha*sqrt(s) in time stretched by sqrt(s), so the paper's alpha = 5 and 1 are alpha = 50
 and 10 with only the director masses x100 (verification/dynamic_scenes.py: disc-a50-dir100,
-disc-a10-dir100).  --quick: 8x64, director masses x1e4, at most 90 s of wall time each (the state
+disc-a10-dir100), Rayleigh damping named (the scene's relax preset is FIRE, which ignores alpha:
+before 2eacc4d (a) and (b) were one FIRE run).  --quick: 8x64, director masses x1e4, at most 90 s of wall time each (the state
 reached is shown, steady or not: see the json).
 
     python -m paper_figures.fig11 [--quick] [--out DIR]
@@ -25,6 +26,7 @@ def make(out_dir: Path, quick: bool = False) -> dict:
     m = "8x64" if quick else "30x240"
     extra = dict(mass_scaling=1e4, mass_scaling_mode="director", max_wall_time=90.0) if quick else \
         dict(mass_scaling=100.0, mass_scaling_mode="director")
+    extra["damping"] = "rayleigh"     # the scene's [solver.relax] preset is FIRE, which ignores alpha
     rows, recs = [], []
     for tag, a_paper in (("a", 5.0), ("b", 1.0)):
         out, rec = common.run("square-on-disc", mesh=m, solver="relax", alpha=10.0 * a_paper, **extra)

@@ -23,13 +23,11 @@ kinetic damping.  threads = 1 (numba) for every case (the machine is shared).
 
 from __future__ import annotations
 
-import argparse
-import json
 import os
-import subprocess
-import sys
-import time
 from pathlib import Path
+
+from verification import cases
+from verification.cases import cell
 
 HERE = Path(__file__).resolve().parent
 OUT = HERE / "out"
@@ -79,8 +77,11 @@ CASES = {
     # settings the paper does not state: friction, C_t, E_z, the penalty, and seeded starts
     "s60-pursuit-repeat": ("60x60", dict(PAPER_EQ, max_wall_time=900.0), {},
                            "pursuit: s60-green-a50 again on today's code (1 thread)"),
-    "s60-pursuit-threads2": ("60x60", dict(PAPER_EQ, threads=2, max_wall_time=1800.0), {},
-                             "pursuit: s60-green-a50 on 2 threads (as paper_figures/fig12.py runs it)"),
+    # what `solidshell figures 12` ran before 2eacc4d: the scene's relax preset "fast" filled damping = FIRE
+    # (alpha ignored); the thread count is not a variable (tests/test_dynamic_scenes.py: bitwise on 1 and 2)
+    "s60-pursuit-fire": ("60x60", dict(damping="fire", mass_scaling=100, mass_scaling_mode="director", threads=1,
+                                       max_wall_time=900.0), {},
+                         "pursuit: FIRE, director x100 (the scene's preset; figures 12 before 2eacc4d)"),
     "s60-pursuit-mu0": ("60x60", dict(PAPER_EQ, max_wall_time=900.0), {"contact.0.friction": 0.0},
                         "pursuit: paper path, frictionless"),
     "s60-pursuit-ct35": ("60x60", dict(PAPER_EQ, max_wall_time=900.0), {"material.transverse_shear": CT_INPLANE},
@@ -181,28 +182,24 @@ NOTES: list[str] = [
     "instead of 1379 s wall: the time-stretch identity, plus the director masses, holds up on the whole scene.",
     "Issue 12 item 5, the paper's 60x60 sharp folds (Fig. 12c) pursued on the paper's path (alpha 50, director x100; "
     "2026-12-01, one case at a time, 1 thread, load 4-5): s60-pursuit-repeat (today's code) reproduces s60-green-a50 "
-    "(steady t = 2.52 s, DC 0.2515, 4 folds, no interpenetrated node).  The same settings on 2 threads (the solver's "
-    "default for 3600 quads; `solidshell figures 12`, out of this cache: paper_figures/fig12.py) ended ASYMMETRIC "
-    "(folds at 88, 164, 268, 344 deg), steady at t = 3.27 s, DC 0.210, with 12 nodes interpenetrated at the end: the "
-    "symmetric path is sensitive to round-off (the parallel force sum's order) and one of the reachable states has "
-    "the paper's sharp folds.  C_t = 34.8 gf/cm (s60-pursuit-ct35, Table 1's in-plane shear rigidity taken as "
+    "(steady t = 2.52 s, DC 0.2515, 4 folds, no interpenetrated node).  `solidshell figures 12` of that day "
+    "(out of this cache) ended ASYMMETRIC (folds at 88, 164, 268, 344 deg), steady at t = 3.27 s, DC 0.210, with 12 "
+    "nodes interpenetrated at the end; it was first put down to its 2 threads, but it was not the paper's path: "
+    "paper_figures/_sphere.py named no damping, so the scene's relax preset 'fast' made it a FIRE run (alpha "
+    "ignored; mended in 2eacc4d), and the thread count changes no bit of a run (tests/test_dynamic_scenes.py; "
+    "sphere 32x32 with the figure's settings, 12000 steps, Rayleigh and FIRE: 1 and 2 threads identical).  FIRE "
+    "on today's code is case s60-pursuit-fire: another state again (the FIRE path also went through the code "
+    "changes of 2026-12-01 afternoon, which move it by round-off).  C_t = 34.8 gf/cm (s60-pursuit-ct35, Table 1's in-plane shear rigidity taken as "
     "G h, x5/6; the default is 391) changes nothing (DC 0.2501, no interpenetration).  Frictionless "
     "(s60-pursuit-mu0, the paper's sphere): NOT steady -- the cloth slides off on this path too (min z -68 cm at the "
     "900 s cap, t = 14.6 s), 28 nodes interpenetrated at t = 12.1 s, after it left the sphere.  A seeded start (s60-pursuit-seed1, random <= 0.08 cm, "
     "seed 1) ends slightly asymmetric, DC 0.231, with 4 interpenetrated nodes (from t = 1.51 s): a broken symmetry "
     "brings the interpenetration.  E_z = 0.1 T_mean (s60-pursuit-ez01) changes nothing (DC 0.2513, no "
-    "interpenetration).  Not run for lack of time: s60-pursuit-ct3, -ct35-mu0, -pen001, -seed2, -threads2.",
+    "interpenetration).  Not run for lack of time: s60-pursuit-ct3, -ct35-mu0, -pen001, -seed2.",
     "Timings: one case at a time from a clean checkout of commit 8cf3ae2 (the solver with friction; the element "
     "kernels as of f5ecebd), numba threads = 1, on a 2-core machine shared with another engineer's runs (load "
     "averages in the table).",
 ]
-
-
-def _uptime() -> str:
-    try:
-        return " ".join(Path("/proc/loadavg").read_text().split()[:3])
-    except OSError:
-        return subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip()
 
 
 def run_case(name: str) -> dict:
@@ -211,34 +208,13 @@ def run_case(name: str) -> dict:
     mesh, settings, overrides, label = CASES[name]
     out = RUNS / name
     row = dict(case=name, mesh=mesh, label=label, settings=settings, overrides=overrides,
-               thickness_strain=overrides.get("model.thickness_strain", "green"), run_dir=str(out),
-               load_start=_uptime(), started=time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime()))
-    t0 = time.perf_counter()
-    try:
-        o = run_scene("sphere", mesh=mesh, solver="relax", out_dir=out, progress=False, overrides=overrides,
-                      **settings)
-        s = o.summary
-        row.update({k: s.get(k) for k in KEYS})
-        row["error"] = None
-    except Exception as exc:  # recorded, not hidden
-        row["error"] = f"{type(exc).__name__}: {exc}"
-    row["total_wall_s"] = time.perf_counter() - t0
-    row["load_end"] = _uptime()
-    CACHE.mkdir(parents=True, exist_ok=True)
-    (CACHE / f"{name}.json").write_text(json.dumps(row, indent=1, default=str))
-    return row
-
-
-def _f(v, fmt):
-    return "–" if v is None else format(v, fmt)
+               thickness_strain=overrides.get("model.thickness_strain", "green"), run_dir=str(out))
+    return cases.run_and_store(CACHE, name, row, lambda: run_scene(
+        "sphere", mesh=mesh, solver="relax", out_dir=out, progress=False, overrides=overrides, **settings), KEYS)
 
 
 def report() -> list:
-    rows = []
-    for name in CASES:
-        p = CACHE / f"{name}.json"
-        if p.exists():
-            rows.append(json.loads(p.read_text()))
+    rows, missing = cases.cached(CACHE, CASES)
     lines = ["# Cloth on a sphere by dynamic relaxation, with Coulomb friction (Sec. 4.2-4.3, issue #5)", "",
              "Generated by `python -m verification.dynamic_sphere --report` from `verification/out/dynamic_sphere/`. "
              "Scene `sphere` (30x30 cm wool on a 10 cm sphere, friction 0.3 unless said), `--solver relax`, "
@@ -264,12 +240,12 @@ def report() -> list:
         lines.append(
             f"| {r['case']} | {r.get('label', '')} | {r['mesh']} | {r['thickness_strain']} | {ms} | {fr[0] if fr else 0:g} | "
             f"{'yes' if r.get('steady_state_reached') else 'NO (' + str(r.get('status')) + ')'} | "
-            f"{_f(r.get('t_final'), '.3f')} | {r.get('steps')} | {_f(r.get('dt'), '.3e')} | "
-            f"{_f(r.get('critical_time_step'), '.3e')} | {_f(r.get('wall_time_s'), '.0f')} | "
-            f"{_f(r.get('element_steps_per_second'), '.3g')} | {r.get('fold_count')} | "
-            f"{_f(r.get('drape_coefficient'), '.4f')} | {r.get('max_interpenetrated_nodes')} "
-            f"({_f(r.get('max_interpenetration_time'), '.2f')}) | {r.get('interpenetrated_nodes')} | "
-            f"{_f(r.get('energy_balance_error'), '.2e')} | "
+            f"{cell(r.get('t_final'), '.3f')} | {r.get('steps')} | {cell(r.get('dt'), '.3e')} | "
+            f"{cell(r.get('critical_time_step'), '.3e')} | {cell(r.get('wall_time_s'), '.0f')} | "
+            f"{cell(r.get('element_steps_per_second'), '.3g')} | {r.get('fold_count')} | "
+            f"{cell(r.get('drape_coefficient'), '.4f')} | {r.get('max_interpenetrated_nodes')} "
+            f"({cell(r.get('max_interpenetration_time'), '.2f')}) | {r.get('interpenetrated_nodes')} | "
+            f"{cell(r.get('energy_balance_error'), '.2e')} | "
             f"{('–' if fw is None else format(fw / W if W else 0.0, '.3f'))} | {jumps} | "
             f"{r['load_start']} -> {r['load_end']} |")
     lines.append("")
@@ -277,38 +253,19 @@ def report() -> list:
     lines.append("")
     for r in rows:
         lines.append(f"* {r['case']}: {r.get('error') or r.get('message')}")
-    missing = [n for n in CASES if not (CACHE / f"{n}.json").exists()]
     if missing:
         lines += ["", "Not run (no result in the cache): " + ", ".join(missing) + "."]
     if NOTES:
         lines += ["", "Notes:", ""] + [f"* {n}" for n in NOTES]
-    OUT.mkdir(parents=True, exist_ok=True)
-    (OUT / "dynamic_sphere.md").write_text("\n".join(lines) + "\n")
-    (OUT / "dynamic_sphere.json").write_text(json.dumps(dict(cases=rows, notes=NOTES, not_run=missing), indent=1,
-                                                        default=str))
-    print("\n".join(lines))
+    text = "\n".join(lines) + "\n"
+    cases.write_report(OUT, "dynamic_sphere", text, dict(cases=rows, notes=NOTES, not_run=missing), echo=text[:-1])
     return rows
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--case", action="append", default=[])
-    ap.add_argument("--report", action="store_true")
-    ap.add_argument("--list", action="store_true")
-    a = ap.parse_args(argv)
-    if a.list:
-        for n, (m, s, o, lab) in CASES.items():
-            print(f"{n:20s} {m:8s} {lab}")
-    for c in a.case:
-        if c not in CASES:
-            sys.exit(f"unknown case {c!r}; --list shows them")
-        r = run_case(c)
-        print(json.dumps({k: r.get(k) for k in ("case", "error", "steady_state_reached", "t_final", "steps",
-                                                "wall_time_s", "fold_count", "max_interpenetrated_nodes",
-                                                "energy_balance_error", "load_start", "load_end", "message")},
-                         default=str))
-    if a.report:
-        report()
+    cases.main(argv, __doc__, CASES, run_case, report, lambda n, c: f"{n:20s} {c[0]:8s} {c[3]}",
+               echo_keys=("case", "error", "steady_state_reached", "t_final", "steps", "wall_time_s", "fold_count",
+                          "max_interpenetrated_nodes", "energy_balance_error", "load_start", "load_end", "message"))
 
 
 if __name__ == "__main__":

@@ -13,7 +13,8 @@ import json
 import sys
 from pathlib import Path
 
-from verification.static_scenes import OUT, RUNS, _fmt, run_case
+from verification.cases import cell
+from verification.static_scenes import OUT, RUNS, run_case
 
 SCENE, MESH = "square-pedestal", "24x8x4"
 WOOL = dict(bending_warp=0.083, bending_weft=0.063, torsion=0.027, weight=0.019)   # Table 1
@@ -59,11 +60,11 @@ def main(argv=None):
              "pos. def. | last state written | message |", "|" + "---|" * 11]
     for r in rows:
         msg = (r.get("message") or "").replace("|", "/")
-        lines.append(f"| {r['case']} | {r['solver']} | {_fmt(r.get('converged'))} | "
-                     f"{_fmt(r.get('iterations'))} | {_fmt(r.get('linear_solves'))} | "
-                     f"{_fmt(r.get('drape_coefficient'))} | {_fmt(r.get('fold_count'))} | "
-                     f"{_fmt(r.get('wall_time_s'), '.1f')} | {_fmt(r.get('positive_definite'))} | "
-                     f"{_fmt(r.get('run_dir_written'))} | {msg} |")
+        lines.append(f"| {r['case']} | {r['solver']} | {cell(r.get('converged'))} | "
+                     f"{cell(r.get('iterations'))} | {cell(r.get('linear_solves'))} | "
+                     f"{cell(r.get('drape_coefficient'), '.3f')} | {cell(r.get('fold_count'))} | "
+                     f"{cell(r.get('wall_time_s'), '.1f')} | {cell(r.get('positive_definite'))} | "
+                     f"{cell(r.get('run_dir_written'))} | {msg} |")
     OUT.mkdir(exist_ok=True)
     (OUT / "static_stress.json").write_text(json.dumps(rows, indent=1, default=str))
     (OUT / "static_stress.md").write_text("\n".join(lines) + "\n")

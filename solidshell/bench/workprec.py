@@ -11,6 +11,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
 
+from ..verify.runner import fmt_value
+
 TARGET = 0.01
 """The error the tables name the cheapest configuration for (1 %, issue 12)."""
 
@@ -92,11 +94,7 @@ def cheapest(result: dict, key: str, target: float = TARGET):
 
 
 def _fmt(v) -> str:
-    if v is None:
-        return "–"
-    if isinstance(v, float):
-        return f"{v:.3g}"
-    return str(v)
+    return fmt_value(v, 3, "–")
 
 
 def table(result: dict) -> str:

@@ -41,11 +41,12 @@ def prepare_out(out_dir) -> Path:
     return p
 
 
-def _fmt(v) -> str:
+def fmt_value(v, digits: int = 6, missing: str = "-") -> str:
+    """A table cell: floats to ``digits`` significant digits, None as ``missing``."""
     if v is None:
-        return "-"
+        return missing
     if isinstance(v, float):
-        return f"{v:.6g}"
+        return f"{v:.{digits}g}"
     return str(v)
 
 
@@ -57,7 +58,7 @@ def line(r: Record) -> str:
     err = "-" if r.error is None else f"{r.error:.2e}"
     tol = "-" if r.tolerance is None else f"{r.tolerance:.2g}"
     extra = f"  ({r.note})" if r.note else ""
-    return f"{r.name:<58} {_fmt(r.value):>13} {_fmt(r.reference_value):>13} {err:>10} {tol:>8}  {res}{extra}"
+    return f"{r.name:<58} {fmt_value(r.value):>13} {fmt_value(r.reference_value):>13} {err:>10} {tol:>8}  {res}{extra}"
 
 
 def run_checks(checks, quick: bool = False, log=print) -> dict:

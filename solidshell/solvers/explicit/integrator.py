@@ -19,13 +19,13 @@ import time
 
 import numpy as np
 
+from ...contact_kernels import friction_work
 from ...errors import InputError, SolverError
 from ...problem import SolveResult, no_progress
 from . import checkpoint, damping, ledger, observers, report, stepcontrol
 from .candidates import Candidates, contact_power, default_margin
 from .forces import Forces
 from .fused import FusedForces
-from ...contact_kernels import friction_work
 from .kernels import central_step, coefficients, dot, norm
 from .settings import RESTART_NEUTRAL, ExplicitSettings, RelaxSettings, parse_settings
 from .state import State

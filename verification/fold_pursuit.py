@@ -49,6 +49,14 @@ CASES = {
     "sod20-newton-pert12": ("square-on-disc", "20x160", "static", _pert(12, 2.0), {}, "newton, 12-fold start 2 cm"),
     "sod30-newton-pert12": ("square-on-disc", "30x240", "static", _pert(12, 2.0), {}, "newton, 12-fold start 2 cm"),
     "sod30-newton-pert10": ("square-on-disc", "30x240", "static", _pert(10, 2.0), {}, "newton, 10-fold start 2 cm"),
+    # square-on-disc by dynamic relaxation (Fig. 11a: the paper's 10 folds at alpha = 5 1/s, all masses
+    # x100 = alpha 50 with director masses x100, fig11.py): from the flat sheet this path ends on 8
+    # folds; does it keep a 10-fold start, i.e. is the static 10-fold equilibrium (sod30-newton-pert10)
+    # also a steady state of the paper's damping path?
+    "sod30-relax-a50-pert10": ("square-on-disc", "30x240", "relax", _pert(10, 2.0),
+                               dict(damping="rayleigh", alpha=50.0, mass_scaling=100.0, mass_scaling_mode="director",
+                                    max_wall_time=2700.0),
+                               "relax, Rayleigh alpha 50 director x100 (Fig. 11a's path), 10-fold start 2 cm"),
     # circle-pedestal 10x40 with lambda doubled (the 20x80 runs are fig06.py's)
     "circ10-paper-c2e-3": ("circle-pedestal", "10x40", "static",
                            {"solver.static.method": "paper", "solver.static.c": 2e-3}, {},

@@ -125,7 +125,11 @@ class RigidBody:
     lipschitz: float | None = None
 
     code: int = -1                 # contact_kernels.SPHERE, PLANE, CYLINDER or BOX; -1: a user's body
-    params: np.ndarray = np.zeros(ck.PARAMS)   # the body's numbers for the kernels
+
+    @property
+    def params(self) -> np.ndarray:
+        """(contact_kernels.PARAMS,) the body's numbers for the kernels, from its attributes now."""
+        return np.zeros(ck.PARAMS)
 
     def signed_distance(self, x: np.ndarray):
         """(g (N,), n (N,3)): signed distance of the points x (N,3), positive outside, and the
@@ -176,7 +180,11 @@ class Sphere(RigidBody):
         self.radius = _pos(radius, "sphere radius")
         self.offset = _pos(offset, "contact offset", allow_zero=True)
         self.friction = friction_coefficient(friction)
-        self.code, self.params = ck.SPHERE, _params(*self.center, self.radius)
+        self.code = ck.SPHERE
+
+    @property
+    def params(self) -> np.ndarray:
+        return _params(*self.center, self.radius)
 
     def __repr__(self):
         return (f"Sphere(center={self.center.tolist()}, radius={self.radius}, offset={self.offset}, "
@@ -198,7 +206,11 @@ class Plane(RigidBody):
         self.normal = nn / L
         self.offset = _pos(offset, "contact offset", allow_zero=True)
         self.friction = friction_coefficient(friction)
-        self.code, self.params = ck.PLANE, _params(*self.point, *self.normal)
+        self.code = ck.PLANE
+
+    @property
+    def params(self) -> np.ndarray:
+        return _params(*self.point, *self.normal)
 
     def __repr__(self):
         return (f"Plane(point={self.point.tolist()}, normal={self.normal.tolist()}, offset={self.offset}, "
@@ -249,9 +261,12 @@ class Pedestal(RigidBody):
             raise InputError("pedestal edge_radius must be smaller than its radius/half width and half height")
         self.offset = _pos(offset, "contact offset", allow_zero=True)
         self.friction = friction_coefficient(friction)
+        self.code = ck.CYLINDER if self.kind == "cylinder" else ck.BOX
+
+    @property
+    def params(self) -> np.ndarray:
         top = (*self.top_center, self.height, self.edge_radius)
-        self.code, self.params = (ck.CYLINDER, _params(*top, self.radius)) if self.kind == "cylinder" else \
-            (ck.BOX, _params(*top, *self.half_widths))
+        return _params(*top, self.radius) if self.kind == "cylinder" else _params(*top, *self.half_widths)
 
     def __repr__(self):
         dims = f"radius={self.radius}" if self.kind == "cylinder" else f"half_widths={self.half_widths.tolist()}"

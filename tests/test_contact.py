@@ -252,3 +252,14 @@ def test_a_users_body_gets_the_same_laws():
             ra, rb = frictional_contact(a, x, 50.0, 80.0, anchor), frictional_contact(b, x, 50.0, 80.0, anchor)
             for u, v in zip(ra, rb):
                 np.testing.assert_array_equal(u, v)
+
+
+def test_a_body_changed_after_construction_is_seen():
+    """The kernels' parameters are read from the body's attributes at each call, so a body a
+    script moves or resizes is seen at its new place (exact: a distance along the axis)."""
+    s = Sphere((0.0, 0.0, 0.0), 1.0)
+    s.center, s.radius = np.array([0.0, 0.0, 1.0]), 2.0
+    assert s.signed_distance(np.array([[0.0, 0.0, 4.0]]))[0][0] == 1.0
+    p = Pedestal((0.0, 0.0, 0.0), half_widths=(1.0, 1.0), height=3.0)
+    p.top_center = np.array([0.0, 0.0, -1.0])
+    assert p.signed_distance(np.array([[0.0, 0.0, 0.5]]))[0][0] == 1.5

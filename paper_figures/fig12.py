@@ -44,7 +44,7 @@ def make(out_dir: Path, quick: bool = False) -> dict:
     common.save_state(out_dir, NAME, out, interpenetrated=flagged)
     norm = common.height_norm(X)
     fig = plt.figure(figsize=(13.5, 4.6))
-    gs = fig.add_gridspec(1, 3, wspace=0.18, width_ratios=[1, 1.15, 1])
+    gs = fig.add_gridspec(1, 3, wspace=0.3, width_ratios=[1, 1.15, 1])   # room for (b)'s z label
     axes = [fig.add_subplot(gs[0, i]) for i in range(3)]
     sm = common.panel(axes[0], out, X, "top", norm=norm, title="(a) top view")
     common.panel(axes[1], out, X, "side", norm=norm, title="(b) side view")

@@ -105,14 +105,6 @@ def _params(*values) -> np.ndarray:
     return out
 
 
-def active_energy(kp, p) -> float:
-    """1/2 sum k_i p_i^2 over the nodes in contact (p_i > 0) only, in node order: the same sum bit
-    for bit whichever superset of the contact nodes is passed (the explicit solver evaluates only
-    nodes near a body, explicit/candidates.py), and no BLAS (see explicit.kernels.dot)."""
-    act = p > 0.0
-    return 0.5 * float(np.add.reduce(kp[act] * p[act]))
-
-
 class RigidBody:
     """Base class: subclasses implement :meth:`signed_distance` -> (g (N,), n (N,3)).
 

@@ -1,7 +1,7 @@
 """Contact evaluated at the candidate nodes only (solvers/explicit/candidates.py) must give the run
 that evaluates every node, bit for bit: the proof (a non-candidate's gap stays > 0 while no node
 has moved margin / L) leaves nothing to round-off, and the energy sums run over the nodes in
-contact only (contact.active_energy, candidates.contact_power)."""
+contact only (contact_kernels.body_forces, candidates.contact_power)."""
 
 import numpy as np
 import pytest

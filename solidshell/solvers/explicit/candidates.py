@@ -7,7 +7,7 @@ were selected.  While no node has moved more than margin / L since the selection
 step, one pass over the nodes), a node that is not a candidate has a gap > margin - L |dx| > 0 to
 every body: no penalty force, no friction, no anchor -- so contact evaluated at the candidates
 gives the forces, anchors, counts and deepest penetration of all nodes exactly, and the energies
-too (contact.active_energy sums over the nodes in contact only).  Once a node has moved that far
+too (contact_kernels.body_forces sums over the nodes in contact only).  Once a node has moved that far
 the candidates are selected anew at the current state.
 
 Cost: a selection is one signed-distance pass over all nodes; between selections a step costs one

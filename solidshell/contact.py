@@ -106,7 +106,9 @@ def _params(*values) -> np.ndarray:
 
 
 class RigidBody:
-    """Base class: subclasses implement :meth:`signed_distance` -> (g (N,), n (N,3)).
+    """Base class.  The bodies here set ``code`` and ``params`` (the compiled distances of
+    ``contact_kernels``); a user's subclass implements :meth:`signed_distance` -> (g (N,), n (N,3))
+    instead, and gets the same penalty and friction laws.
 
     ``lipschitz``: a bound L on |g(x) - g(y)| / |x - y| (1 for an exact distance, as for every body
     here), or None when unknown.  With it the explicit solver checks contact only at the nodes

@@ -45,6 +45,7 @@ class RunOutput:
     files: list = field(default_factory=list)
     run_id: str = ""                        # uuid4 hex, also in summary.json and every file
     series: list | None = None              # adaptive runs: [(t, ShellMesh, U)], each frame on its own mesh
+    projected_boundary: np.ndarray | None = None   # the analysed drape's outline (analysis.projected_boundary)
 
     @property
     def converged(self):
@@ -581,14 +582,15 @@ def _run(sc, kind, mesh_arg, out_dir, cb, settings, timings, t_start, overrides=
     timings["total"] = time.perf_counter() - t_start
     summary["timings"] = {k: round(v, 4) for k, v in timings.items()}
     summary["warnings"] = list(dict.fromkeys(warnings))      # in order, each once
-    summary.pop("projected_boundary", None)
+    boundary = summary.pop("projected_boundary", None)
     if folder is not None:
         summary["files"] = sorted({Path(f).name for f in files} | {"summary.json"})
         files.append(folder.finish(summary))
     cb(1.0, "interrupted" if summary["interrupted"] else "done")
     summary = sio.to_jsonable(summary)
     return RunOutput(summary=summary, U=U, mesh=mesh, out_dir=folder.path if folder else None, scene=sc,
-                     result=result, files=[Path(f) for f in files], run_id=run_id, series=series)
+                     result=result, files=[Path(f) for f in files], run_id=run_id, series=series,
+                     projected_boundary=None if boundary is None else np.asarray(boundary, float))
 
 
 def adapt_settings(scene: Scene, kind: str):

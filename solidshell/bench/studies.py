@@ -7,6 +7,7 @@ the compiled kernels, so the times compare configurations, not compilation.
 from __future__ import annotations
 
 import time
+from functools import partial
 
 import numpy as np
 
@@ -15,7 +16,6 @@ from .workprec import Config, Study
 
 # ------------------------------------------------------------------------------- helpers
 def _scene_run(scene, mesh, solver, overrides=None, adaptive=None, **kw) -> dict:
-    from ..analysis import projected_boundary
     from ..runner import run_scene
 
     t = time.perf_counter()
@@ -26,7 +26,7 @@ def _scene_run(scene, mesh, solver, overrides=None, adaptive=None, **kw) -> dict
     return {"wall_s": wall, "dc": s.get("drape_coefficient"), "folds": s.get("fold_count"),
             "converged": bool(s.get("converged")), "steps": s.get("steps"),
             "nodes": s.get("max_active_nodes") or s["counts"]["nodes"],
-            "boundary": projected_boundary(out.mesh, out.U)[:, :2].tolist(),
+            "boundary": out.projected_boundary[:, :2].tolist(),
             "show": {"DC": s.get("drape_coefficient"), "folds": s.get("fold_count"),
                      "nodes": s.get("max_active_nodes") or s["counts"]["nodes"],
                      "steps / its": s.get("steps") or s.get("iterations")}}
@@ -55,8 +55,8 @@ def _dc_errors(row, ref, half_size):
 def _warm(scene, mesh, solver):
     from ..runner import run_scene
 
-    run_scene(scene, mesh=mesh, solver=solver, out_dir=None, progress=False, max_steps=50) if solver == "relax" \
-        else run_scene(scene, mesh=mesh, solver=solver, out_dir=None, progress=False)
+    steps = {"max_steps": 50} if solver == "relax" else {}
+    run_scene(scene, mesh=mesh, solver=solver, out_dir=None, progress=False, **steps)
 
 
 # ------------------------------------------------------------------------------- strip
@@ -72,11 +72,11 @@ def _strip_configs(quick):
 
     solve_strip(5, "warp")                      # warm-up: the kernels' cache loads
     meshes = (5, 10, 20) if quick else (5, 10, 20, 40, 80)
-    out = [Config("static Newton, quads", f"{n}x1", one(n), cost=n) for n in meshes]
-    out += [Config("static Newton, triangles", f"{n}x1 ({2 * n} tri)", one(n, "tri"), cost=2 * n) for n in meshes]
+    out = [Config("static Newton, quads", f"{n}x1", one(n)) for n in meshes]
+    out += [Config("static Newton, triangles", f"{n}x1 ({2 * n} tri)", one(n, "tri")) for n in meshes]
     mid = 10 if quick else 20
-    out += [Config("paper's lambda scheme (Eq. 18), quads", f"{mid}x1", one(mid, method="paper", c=2e-2), cost=mid),
-            Config("arc-length, quads", f"{mid}x1", one(mid, method="arclength"), cost=mid)]
+    out += [Config("paper's lambda scheme (Eq. 18), quads", f"{mid}x1", one(mid, method="paper", c=2e-2)),
+            Config("arc-length, quads", f"{mid}x1", one(mid, method="arclength"))]
     return out
 
 
@@ -170,11 +170,10 @@ def _throughput_configs(quick):
             mesh = build_mesh("square", f"{n}x{n}", size=30.0)
             model = Model(mesh, Fabric.wool())
             U = np.random.default_rng(0).standard_normal((mesh.n_nodes, 6)) * 1e-3
-            f = (lambda: model.internal_force(U)) if which == "force" else \
-                (lambda: model.tangent(U)) if which == "tangent" else None
             if which == "fused":
-                fused = FusedForces(model)
-                f = lambda: fused.element_pass(U)          # noqa: E731
+                f = partial(FusedForces(model).element_pass, U)
+            else:
+                f = partial(model.internal_force if which == "force" else model.tangent, U)
             f()
             reps, t = 0, time.perf_counter()
             while time.perf_counter() - t < 1.0 or reps < 3:
@@ -194,10 +193,10 @@ def _throughput_configs(quick):
         return {"wall_s": time.perf_counter() - t, "rate": rate,
                 "show": {"elements / s": rate, "elements": n * n}}
 
-    return [Config("kernel", "internal force (Model.internal_force)", kernel("force"), cost=n * n),
-            Config("kernel", "lane element pass (explicit, FusedForces)", kernel("fused"), cost=n * n),
-            Config("kernel", "force + tangent (Model.tangent)", kernel("tangent"), cost=n * n),
-            Config("loop", f"sphere {n}x{n}, 1000 relaxation steps", loop, cost=n * n)]
+    return [Config("kernel", "internal force (Model.internal_force)", kernel("force")),
+            Config("kernel", "lane element pass (explicit, FusedForces)", kernel("fused")),
+            Config("kernel", "force + tangent (Model.tangent)", kernel("tangent")),
+            Config("loop", f"sphere {n}x{n}, 1000 relaxation steps", loop)]
 
 
 THROUGHPUT = Study("throughput", "element kernels and the explicit loop: evaluations per second", (),

@@ -28,7 +28,6 @@ class Config:
     label: str
     run: Callable[[], dict]
     reference: bool = False
-    cost: float = 0.0                  # elements or dofs, for the table
 
 
 @dataclass
@@ -72,7 +71,7 @@ def run_study(study: Study, quick: bool, say=print) -> dict:
         t = time.perf_counter()
         row = dict(c.run())
         row.setdefault("wall_s", time.perf_counter() - t)
-        row.update(family=c.family, label=c.label, reference=c.reference, cost=c.cost, load_before=before,
+        row.update(family=c.family, label=c.label, reference=c.reference, load_before=before,
                    load_after=load())
         rows.append(row)
         say(f"    {row['wall_s']:.2f} s  " + ", ".join(f"{k} {v:.6g}" for k, v in row.items()

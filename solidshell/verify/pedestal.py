@@ -41,7 +41,7 @@ SELF = "Richardson limit of 24x8x4, 48x16x4, 96x32x4 (our own meshes: self-conve
 
 def solve_pedestal(mesh: str, overrides: dict | None = None, material: dict | None = None):
     """Static Newton solve of square-pedestal; returns (RunOutput, projected boundary (P,2), wall s)."""
-    from .. import analysis, scenes
+    from .. import scenes
     from ..runner import run_scene
 
     sc = scenes.load(SCENE)
@@ -52,7 +52,7 @@ def solve_pedestal(mesh: str, overrides: dict | None = None, material: dict | No
     with timed() as t:
         out = run_scene(sc, mesh=mesh, solver="static", out_dir=None, progress=False, overrides=overrides,
                         method="newton")
-    return out, analysis.projected_boundary(out.mesh, out.U)[:, :2], t()
+    return out, out.projected_boundary[:, :2], t()
 
 
 @check("pedestal-convergence", "pedestal", "square-pedestal DC on 24x8x4, 48x16x4, 96x32x4 (assumed membrane, "

@@ -7,6 +7,8 @@ matrix (6N, 6N) with dof index 6*node + k.
 
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 from numba import get_num_threads
 
@@ -19,6 +21,10 @@ _THICKNESS_STRAINS = ("green", "quasi")
 
 TANGENT_CHUNK = 1024
 """Elements per kernel call when tangents are assembled (Model._force_and_tangent_into)."""
+
+
+_TYPE_CONSTANTS = ("alpha", "beta", "tie")
+"""Entries of an element type's constants shared by all its elements (not per element)."""
 
 
 class _Block:
@@ -39,6 +45,15 @@ class _Block:
         self.beta = np.ascontiguousarray(c["beta"], dtype=float)
         self.tie = np.ascontiguousarray(c["tie"], dtype=float)
         self.gp_membrane = bool(np.any(c["Cmb"][:, :, 0]))
+
+    def take(self, sel) -> "_Block":
+        """This block with only the elements ``sel`` (indices): the constants are sliced, not folded
+        again."""
+        b = copy.copy(self)
+        b.conn = np.ascontiguousarray(self.conn[sel])
+        b.dofs = np.ascontiguousarray(self.dofs[sel])
+        b.c = {k: (v if k in _TYPE_CONSTANTS else np.ascontiguousarray(v[sel])) for k, v in self.c.items()}
+        return b
 
     def args(self, xo, xn, U, quasi, mu, sl=slice(None)):
         """Kernel arguments: current positions/directors xo, xn (N,3) and the displacements U (N,6)
@@ -103,6 +118,19 @@ class Model:
             self.blocks.append(_Block(tri3, mesh.tris, Xo, Xn, material, "full"))
         self._pattern = None
         self._mass = None
+
+    def around(self, nodes) -> "Model":
+        """This model with only the elements that touch ``nodes`` (indices): the same mesh, node
+        numbering and masses.  Its energy differs from the whole model's by terms that do not depend
+        on those nodes' dofs, so its force on them is the whole force, and its tangent block on them
+        the whole block: a local solve (adapt/settle.py) at the cost of the elements it involves."""
+        touch = np.zeros(self.n_nodes, dtype=bool)
+        touch[np.asarray(nodes, dtype=np.int64)] = True
+        sub = copy.copy(self)
+        sub.blocks = [b.take(np.flatnonzero(touch[b.conn].any(axis=1))) for b in self.blocks]
+        sub.blocks = [b for b in sub.blocks if len(b.conn)]
+        sub._pattern = None
+        return sub
 
     n_nodes = property(lambda self: self.mesh.n_nodes)
     n_dofs = property(lambda self: 6 * self.mesh.n_nodes)

@@ -134,3 +134,36 @@ def test_settling_new_nodes_moves_only_their_positions_and_lowers_the_potential_
     moved = np.abs(S[Nc:, :3] - U[Nc:, :3]).max(axis=1)
     assert moved[~fixed[Nc:, 0]].max() > 0.0
     assert _pi(model, loads, S) < _pi(model, loads, S_dir.reshape(U.shape))
+
+
+def test_model_around_nodes_has_the_whole_force_and_tangent_on_their_dofs():
+    """Model.around(nodes) keeps only the elements touching ``nodes``: its force on their dofs is
+    the whole model's (the other elements do not depend on them), to round-off (1e-12 relative:
+    the same element terms summed in another grouping), and its tangent block on them too."""
+    model, fixed, loads, U = _case()
+    nodes = np.array([3, 17, 30])
+    sub = model.around(nodes)
+    assert sum(len(b.conn) for b in sub.blocks) < sum(len(b.conn) for b in model.blocks)
+    dofs = (6 * nodes[:, None] + np.arange(6)).ravel()
+    F, Fs = model.internal_force(U).ravel(), sub.internal_force(U).ravel()
+    assert np.allclose(Fs[dofs], F[dofs], rtol=0, atol=1e-12 * np.abs(F).max())
+    K, Ks = model.tangent(U).toarray(), sub.tangent(U).toarray()
+    assert np.allclose(Ks[np.ix_(dofs, dofs)], K[np.ix_(dofs, dofs)], rtol=0, atol=1e-12 * np.abs(K).max())
+
+
+def test_settling_a_region_moves_only_its_directors_and_equals_the_held_minimisation():
+    """DirectorSettler(region=...) settles the directors of the region's nodes with every other dof
+    held, evaluating only the elements around them: every dof outside the region's directors stays
+    bit for bit, the region's director residual (whole model) falls by the settler's rtol (1e-3),
+    and the potential falls."""
+    model, fixed, loads, U = _case()
+    region = np.flatnonzero(model.mesh.nodes[:, 0] > 2.4)
+    S, rep = DirectorSettler(model, loads, fixed, region=region)(U)
+    S = S.reshape(U.shape)
+    keep = np.ones(U.shape, dtype=bool)
+    keep[region, 3:] = False
+    assert np.array_equal(S[keep], U[keep])
+    idx = director_dofs(fixed, region=region)
+    r = np.linalg.norm((loads.ravel() - model.internal_force(S).ravel())[idx])
+    assert rep.converged and r <= 1e-3 * rep.residual_before
+    assert _pi(model, loads, S) < _pi(model, loads, U)

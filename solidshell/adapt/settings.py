@@ -39,6 +39,9 @@ class AdaptSettings(SettingsModel):
     project_boundary : place new nodes on a curved boundary (a circular sheet or rim) on the true curve
     settle_directors : after each transfer, put the director dofs of both time levels at equilibrium
                 with the positions (settle.py); False keeps the bare DK directors of Eq. (32)
+    settle_scope : "changed" (the default: only the directors of the nodes of elements the pass made,
+                the rest held, at the cost of the elements around them) or "all" (every director of
+                the sheet, at the cost of the whole tangent; docs/adaptivity.md)
     settle_new_nodes : settle the positions of the inserted nodes with the directors (from the DK
                 placement, their neighbours held): the membrane stretch a DK mid-edge node on the cubic
                 leaves, and the out-of-balance force and oscillation that follow, go
@@ -64,6 +67,7 @@ class AdaptSettings(SettingsModel):
     transfer: Literal["dk", "linear"] = "dk"
     project_boundary: bool = True
     settle_directors: bool = True
+    settle_scope: Literal["changed", "all"] = "changed"
     settle_new_nodes: bool | None = None
     coarse_membrane: Literal["scene", "ans"] = "scene"
 

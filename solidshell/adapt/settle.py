@@ -42,11 +42,15 @@ class SettleReport:
     converged: bool
 
 
-def director_dofs(fixed: np.ndarray, nodes=None) -> np.ndarray:
-    """Flat indices of the free director dofs U_n (columns 3-5 of the (N, 6) dof table), and of
-    every free dof of ``nodes`` (the nodes a remesh inserted, when their positions settle too)."""
+def director_dofs(fixed: np.ndarray, nodes=None, region=None) -> np.ndarray:
+    """Flat indices of the free director dofs U_n (columns 3-5 of the (N, 6) dof table) of the nodes
+    ``region`` (default: all), and of every free dof of ``nodes`` (the nodes a remesh inserted,
+    when their positions settle too)."""
     sel = np.zeros(fixed.shape, dtype=bool)
-    sel[:, 3:] = True
+    if region is None:
+        sel[:, 3:] = True
+    else:
+        sel[np.asarray(region, dtype=np.int64), 3:] = True
     if nodes is not None:
         sel[np.asarray(nodes, dtype=np.int64)] = True
     return np.flatnonzero((sel & ~fixed).ravel())
@@ -57,13 +61,18 @@ class DirectorSettler:
     (N,6) bool), and the positions of ``nodes`` too when given (the inserted nodes), by Newton steps
     on that block K_nn of the tangent, each backtracked until Pi falls, with Levenberg shifts where
     K_nn is not convex there (the Newton step is then not a descent direction).  K_nn is refreshed
-    every step: the Green thickness strain makes the block strongly nonlinear."""
+    every step: the Green thickness strain makes the block strongly nonlinear.  ``region`` (node
+    indices): only those nodes' directors settle (and ``nodes``' positions), the rest is held, and
+    only the elements touching them are evaluated (Model.around)."""
 
-    def __init__(self, model, loads, fixed, nodes=None):
-        self.model = model
+    def __init__(self, model, loads, fixed, nodes=None, region=None):
         self.fixed = np.asarray(fixed, dtype=bool)
         self.P = np.asarray(loads, dtype=float).ravel()
-        self.idx = director_dofs(self.fixed, nodes)
+        self.idx = director_dofs(self.fixed, nodes, region)
+        if region is not None:
+            moved = np.union1d(region, [] if nodes is None else nodes).astype(np.int64)
+            model = model.around(moved)
+        self.model = model
         self._chol = Cholesky()          # CHOLMOD; one symbolic analysis for all steps (one pattern)
         self._lower = None               # K_nn's lower-triangle pattern, built at the first step
         self._K = None

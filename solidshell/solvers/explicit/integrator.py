@@ -601,7 +601,8 @@ class Integrator:
             # (docs/adaptivity.md), where this estimate was 30 % of the remeshing
             lim = stepcontrol.estimate(self.model, self.M, self.free_mask, st.D, self.bodies, self.n_fric,
                                        self.s, self.alpha, self.force_fn,
-                                       v0=st.mode if np.any(st.mode) else None, difference="forward")
+                                       v0=st.mode if np.any(st.mode) else None, difference="forward",
+                                       tol=stepcontrol.WARM_TOL if np.any(st.mode) else None)
         else:
             lim = stepcontrol.limit(st.omega_el, st.method, self.M, self.bodies, self.n_fric, self.s, self.alpha)
         self._bind(lim)

@@ -35,18 +35,24 @@ class StepLimit:
     mode: np.ndarray | None = None   # the top mode (warm start of the re-checks)
 
 
-def omega_sheet(model, M, free_mask, D, s, force=None, v0=None, difference="central"):
+WARM_TOL = 1e-4
+"""Relative tolerance of omega^2 in the estimates warm-started from a known top mode (the mid-run
+re-checks, the re-estimate on a new mesh): omega within 5e-5, far inside the step's safety factor."""
+
+
+def omega_sheet(model, M, free_mask, D, s, force=None, v0=None, difference="central", tol=None):
     """(omega_el, method, force evaluations, mode) at the flat state D: Lanczos (or the method
     asked), or 2 / critical_time_step when the user gave it.  ``force``: the internal force U (N,6)
     -> F to differentiate (default model.internal_force; the integrator passes its fused lane
     kernel, the same force to round-off at a third of the cost); ``v0``: a start vector, e.g. the
     previous mesh's top mode carried over; ``difference``: the directional derivative's
-    difference (timestep.estimate_omega_max: "forward" halves the force evaluations)."""
+    difference (timestep.estimate_omega_max: "forward" halves the force evaluations); ``tol``:
+    instead of the settings' critical_step_tol (WARM_TOL for a warm start)."""
     if s.critical_time_step is not None:
         return 2.0 / s.critical_time_step, "given", 0, None
     try:
         est = estimate_omega_max(force or model.internal_force, M, free_mask, D.reshape(M.shape),
-                                 method=s.critical_step_method, tol=s.critical_step_tol,
+                                 method=s.critical_step_method, tol=tol or s.critical_step_tol,
                                  tangent=getattr(model, "tangent", None), v0=v0, difference=difference)
     except ValueError as exc:
         raise InputError(f"cannot estimate the critical time step: {exc}") from None
@@ -69,11 +75,11 @@ def limit(omega_el, method, M, bodies, n_fric, s, alpha, n_evals=0, seconds=0.0,
 
 
 def estimate(model, M, free_mask, D, bodies, n_fric, s, alpha, force=None, v0=None,
-             difference="central") -> StepLimit:
-    """The critical step at the flat state D (the start estimate); ``force``, ``v0``, ``difference``
-    as in omega_sheet."""
+             difference="central", tol=None) -> StepLimit:
+    """The critical step at the flat state D (the start estimate); ``force``, ``v0``, ``difference``,
+    ``tol`` as in omega_sheet."""
     t0 = time.perf_counter()
-    w, method, n_ev, mode = omega_sheet(model, M, free_mask, D, s, force, v0, difference)
+    w, method, n_ev, mode = omega_sheet(model, M, free_mask, D, s, force, v0, difference, tol)
     return limit(w, method, M, bodies, n_fric, s, alpha, n_ev, time.perf_counter() - t0, mode)
 
 
@@ -104,7 +110,7 @@ def recheck(model, M, free_mask, D, mode, lim: StepLimit, alpha, force=None):
     estimate fails (e.g. an indefinite state: keep the step, the energy check still watches).
     ``force`` as in omega_sheet."""
     try:
-        est = estimate_omega_max(force or model.internal_force, M, free_mask, D.reshape(M.shape), tol=1e-4,
+        est = estimate_omega_max(force or model.internal_force, M, free_mask, D.reshape(M.shape), tol=WARM_TOL,
                                  v0=mode if np.any(mode) else None)
     except ValueError:
         return None, mode

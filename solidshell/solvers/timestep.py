@@ -67,7 +67,7 @@ def critical_time_step(omega_max: float, alpha: float = 0.0) -> float:
 
 def estimate_omega_max(force, mass, free, U=None, *, method: str = "lanczos", fd_step: float = 1e-7,
                        tol: float = 1e-6, maxiter: int | None = None, seed: int = 0, tangent=None,
-                       v0=None, difference: str = "central", ncv: int = 40) -> OmegaEstimate:
+                       v0=None, difference: str = "central") -> OmegaEstimate:
     """Highest natural frequency of M^-1 K on the free dofs.
 
     force   : callable U (N,6) -> internal force (N,6) (``model.internal_force``)
@@ -90,7 +90,7 @@ def estimate_omega_max(force, mass, free, U=None, *, method: str = "lanczos", fd
               per product, error O(e) -- ~1e-6 of omega^2 at fd_step 1e-7, far inside the step's
               safety factor; what an adaptive run's re-estimate after each remesh uses)
     """
-    from scipy.sparse.linalg import LinearOperator, eigsh
+    from scipy.sparse.linalg import eigsh
 
     M = np.asarray(mass, dtype=float)
     shape = M.shape
@@ -151,23 +151,10 @@ def estimate_omega_max(force, mass, free, U=None, *, method: str = "lanczos", fd
             count[0] += 2
             return s * (fp - fm) / (2.0 * e)
 
-        conv = False
-        if method == "lanczos" and v0 is not None:
-            lam, vec, conv = lanczos_top(Av, start, tol, min(n, _WARM_STEPS))
-        if method == "lanczos" and conv:
-            pass
-        elif method == "lanczos":
-            op = LinearOperator((n, n), matvec=Av, dtype=float)
-            ncv = min(n, ncv)
-            try:
-                lam, vec = eigsh(op, k=1, which="LA", tol=tol, v0=start, ncv=ncv, maxiter=maxiter or 2000)
-                lam, vec, conv = float(lam[0]), vec[:, 0], True
-            except Exception as exc:  # ArpackNoConvergence: keep the best Ritz value, say so
-                ev = getattr(exc, "eigenvalues", None)
-                evec = getattr(exc, "eigenvectors", None)
-                if ev is None or len(ev) == 0:
-                    raise
-                lam, vec, conv = float(np.max(ev)), evec[:, int(np.argmax(ev))], False
+        if method == "lanczos":
+            lam, vec, conv = lanczos_top(Av, start, tol, min(n, _WARM_STEPS)) if v0 is not None else (0.0, None, False)
+            if not conv:
+                lam, vec, conv = _arpack_top(Av, n, start, tol, maxiter)
         elif method == "power":
             x = start / np.linalg.norm(start)
             lam, conv = 0.0, False
@@ -195,23 +182,43 @@ def estimate_omega_max(force, mass, free, U=None, *, method: str = "lanczos", fd
                          converged=conv, mode=mode)
 
 
+def _arpack_top(Av, n, start, tol, maxiter):
+    """(lambda, x, converged): ARPACK's implicitly restarted Lanczos (``eigsh``, 40 vectors) on the
+    operator ``Av``; without convergence the best Ritz pair found, converged False."""
+    from scipy.sparse.linalg import LinearOperator, eigsh
+
+    op = LinearOperator((n, n), matvec=Av, dtype=float)
+    try:
+        lam, vec = eigsh(op, k=1, which="LA", tol=tol, v0=start, ncv=min(n, 40), maxiter=maxiter or 2000)
+        return float(lam[0]), vec[:, 0], True
+    except Exception as exc:  # ArpackNoConvergence: keep the best Ritz value, say so
+        ev = getattr(exc, "eigenvalues", None)
+        evec = getattr(exc, "eigenvectors", None)
+        if ev is None or len(ev) == 0:
+            raise
+        return float(np.max(ev)), evec[:, int(np.argmax(ev))], False
+
+
 _WARM_STEPS = 100
 """Lanczos steps of a warm-started estimate before ARPACK takes over (warm starts after a remesh
 converge in 10-60)."""
 
 
 _STALL = 1e-2
+"""A warm-started Lanczos also stops once its top Ritz value rises by less than _STALL * tol of
+itself in a step: in the dense cluster at the top of a sheet's spectrum the Ritz vector mixes
+near-equal modes and its residual falls slowly while the value has converged."""
 
 
 def lanczos_top(Av, start, tol: float, k_max: int):
     """(theta, x, converged): the largest Ritz value of the symmetric operator ``Av`` and its Ritz
     vector, by Lanczos from ``start`` with full reorthogonalisation, the top Ritz pair's residual
     ||A x - theta x|| = beta_k |s_k| checked at every step and the iteration stopped once it is
-    below tol * theta.
+    below tol * theta, or once theta stalls (_STALL).
 
     Why not ARPACK here: ``eigsh`` builds its whole ncv-vector basis (40) before its first
     convergence test, so even a start vector close to the top mode costs ncv + 1 products; a warm
-    start (the previous mesh's or the previous check's mode) passes the test after 10-30 products.
+    start (the previous mesh's or the previous check's mode) passes the test after 10-60 products.
     The Ritz value is a lower bound of the top eigenvalue, and within residual^2 / gap of it once
     converged, as ARPACK's is.  Memory: k_max vectors of the operator's size."""
     from scipy.linalg import eigh_tridiagonal

@@ -20,7 +20,8 @@ the unit of work).
 
 lanes.py's helpers are inlined here: numba's on-disk cache of this module is keyed on this file
 only, so after a change of those helpers (or of their names) delete this module's cache files
-(``__pycache__/lanes_tri*.nbi/.nbc``) or touch this file; tests/test_lanes_tri.py catches a
+(``__pycache__/lanes_tri*.nbi/.nbc``) or touch this file (and likewise solvers/explicit/fused.py,
+whose lanes_tri_scatter inlines this module's ``_block``); tests/test_lanes_tri.py catches a
 mismatch with core either way.
 """
 
@@ -45,14 +46,14 @@ N_CZ = 9               # Cz rows (3x3 nodal thickness)
 N_XS = 12 * NN         # scratch rows: x_o | x_n | U_o | U_n per node
 N_FE = 6 * NN          # force rows: U_o, U_n per node
 
-FLOPS_PER_ELEMENT = 567
+FLOPS_PER_ELEMENT = 518
 """Floating-point operations of one element (Green thickness strain), counted from this source as
-executed, as lanes.FLOPS_PER_ELEMENT is: current coordinates 18; membrane and bending 239 (8
-tangent differences 24, strains 92 (membrane 35, curvatures 57), stresses 30, energy 12,
-generalised forces 60, nodal forces 21); shear 174 (3 ties x 45 -- tangent 3, director 6, their
-displacement parts 9, strain 17 -- stresses 15, energy 6, nodal forces 36 + 18 less the 3 + 3
-starting from the Gauss point's);  thickness 3 x 8 strains, 15 stresses, 6 energy, 3 x 6 director
-forces = 63 plus the 3 x 5 of adding them to the nodes' (their share of _store)."""
+executed, as lanes.FLOPS_PER_ELEMENT is (a negation counted as one): current coordinates 18;
+membrane and bending 231 (8 tangent differences 24, strains 93 -- membrane 36, curvatures 57 --,
+stresses 30, energy 12, generalised forces 60, node 0's forces 12); shear 193 (3 ties x 32 --
+tangent 3, director 6, their displacement parts 3 + 6, strain 14 --, stresses 15, energy 7, U_o
+forces 36, U_n forces 3 + 36); thickness 76 (strains 33, stresses 15, energy 7, director forces
+3 + 18)."""
 
 
 def covers(c) -> bool:

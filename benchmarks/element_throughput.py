@@ -8,7 +8,8 @@ Model.force_and_tangent including CSR assembly.  Numba's first-call (compile or 
 reported separately; figures are medians over repeats.  Compare figures within one run: the machine
 is shared.  For the quadrilateral with the compatible membrane the lane kernel of the explicit
 solver (elements/lanes.py, elements in SIMD lanes) is timed beside core.energy_force, interleaved,
-with the ratio, its flop rate (lanes.FLOPS_PER_ELEMENT) and the largest relative force difference.
+with the ratio, its flop rate (lanes.FLOPS_PER_ELEMENT) and the largest relative force difference;
+the triangle the same way with its lane kernel (elements/lanes_tri.py).
 The assumed-membrane quadrilateral (membrane="ans") is timed the same way on the same sheet: its
 lane kernel (elements/lanes_ans.py) beside the full lane kernel, core.energy_force on its compact
 10-tie form and on the dense 26-tie form it had before the factorisation (quad4.dense_membrane),
@@ -26,7 +27,7 @@ import numpy as np
 from numba import get_num_threads
 
 from solidshell import IsotropicShell, ShellMesh
-from solidshell.elements import core, lanes, lanes_ans, quad4
+from solidshell.elements import core, lanes, lanes_ans, lanes_tri, quad4
 from solidshell.model import Model
 
 
@@ -63,19 +64,21 @@ def main(argv=None):
         one_pass(args)
 
 
-def lane_comparison(mesh, model, U, repeats):
-    """core.energy_force vs lanes.quad_forces on the same quads, interleaved (wall and CPU medians)."""
+def lane_comparison(mesh, model, U, repeats, mod=lanes):
+    """core.energy_force vs the lane kernel of ``mod`` (lanes: quad_forces, lanes_tri: tri_forces)
+    on the same elements, interleaved (wall and CPU medians)."""
     b = model.blocks[0]
-    M = len(b.conn)
+    M, nn = b.conn.shape
     xo, xn, Uc = model._current(U)
-    fe, we = np.empty((M, 4, 6)), np.empty(M)
-    pk = lanes.pack(b.conn, b.c, b.c["r_zq"])
+    fe, we = np.empty((M, nn, 6)), np.empty(M)
+    pk = mod.pack(b.conn, b.c, b.c["r_zq"])
     L = lanes.LANES
-    xs, fs, ws = np.empty((pk["B"], 48 * L)), np.empty((pk["B"], 24 * L)), np.empty((pk["B"], L))
+    xs, fs, ws = np.empty((pk["B"], 12 * nn * L)), np.empty((pk["B"], 6 * nn * L)), np.empty((pk["B"], L))
     nth = get_num_threads()
+    kernel = lanes_tri.tri_forces if mod is lanes_tri else mod.quad_forces
     old = lambda: core.energy_force(*b.args(xo, xn, Uc, False, 0.5), fe, we, nth)
-    new = lambda: lanes.quad_forces(mesh.nodes, mesh.directors, Uc, pk["conn"], pk["Cmb"], pk["Cs"], pk["Cz"],
-                                    pk["r_z"], False, 0.5, xs, fs, ws)
+    new = lambda: kernel(mesh.nodes, mesh.directors, Uc, pk["conn"], pk["Cmb"], pk["Cs"], pk["Cz"],
+                         pk["r_z"], False, 0.5, xs, fs, ws)
     old()
     new()
     t = {"core": [], "lanes": []}
@@ -86,11 +89,11 @@ def lane_comparison(mesh, model, U, repeats):
             fn()
             t[k].append(time.perf_counter() - t0)
             c[k].append(time.process_time() - c0)
-    diff = np.abs(lanes.unpack_forces(fs, M) - fe).max() / np.abs(fe).max()
+    diff = np.abs(mod.unpack_forces(fs, M) - fe).max() / np.abs(fe).max()
     for k in t:
         tw, tc = float(np.median(t[k])), float(np.median(c[k]))
         print(f"  {k:5s} force kernel   {M / tw / 1e6:8.3f} M elem/s wall, {M / tc / 1e6:6.3f} M elem/s per CPU-s"
-              + (f", {lanes.FLOPS_PER_ELEMENT * M / tw / 1e9:5.2f} GFLOP/s wall" if k == "lanes" else ""))
+              + (f", {mod.FLOPS_PER_ELEMENT * M / tw / 1e9:5.2f} GFLOP/s wall" if k == "lanes" else ""))
     print(f"  lanes / core: {np.median(t['core']) / np.median(t['lanes']):.2f} (wall), "
           f"{np.median(c['core']) / np.median(c['lanes']):.2f} (CPU); max |f_lanes - f_core| / max |f| = {diff:.1e}")
 
@@ -189,6 +192,9 @@ def one_pass(args):
         if not tri and membrane == "full":
             print(f"{name} M={M:6d}: lane kernel vs core kernel (interleaved)")
             lane_comparison(mesh, model, U, args.repeats)
+        if tri:
+            print(f"{name} M={M:6d}: lane kernel vs core kernel (interleaved)")
+            lane_comparison(mesh, model, U, args.repeats, lanes_tri)
         if not tri and membrane == "ans":
             ans_comparison(mesh, U, args.repeats)
         print(f"{name} M={M:6d}  first call (compile/cache load) {first:6.2f} s")

@@ -152,10 +152,11 @@ def test_pack_refuses_the_compatible_membrane():
 def test_fused_step_with_assumed_membrane_follows_the_previous_path():
     """The explicit solver's fused step on a mesh whose quads are "ans" and "full" in runs (three
     blocks, the adaptive mesh's coarse/fine split) plus triangles: the ans blocks go through the
-    lane kernel, and 60 steps of a sheet falling onto a plane follow Model.internal_force +
-    central_step to round-off (1e-11 relative: per-step differences of 1e-16 grown by 60 steps of
-    a stable scheme)."""
-    from solidshell.solvers.explicit.fused import FusedForces, lanes_ans_scatter, lanes_scatter
+    lane kernel (the triangles through lanes_tri's), and 60 steps of a sheet falling onto a plane
+    follow Model.internal_force + central_step to round-off (1e-11 relative: per-step differences
+    of 1e-16 grown by 60 steps of a stable scheme)."""
+    from solidshell.solvers.explicit.fused import (FusedForces, lanes_ans_scatter, lanes_scatter,
+                                                   lanes_tri_scatter)
     from test_lanes import fused_follows_previous_path
 
     base = distorted_warped_mesh()
@@ -166,7 +167,7 @@ def test_fused_step_with_assumed_membrane_follows_the_previous_path():
     model = Model(mesh, WOOL30, thickness_strain="quasi", membrane=choice)
     ff = FusedForces(model)
     assert [p[2]["kernel"] for p in ff.parts if p[0] == "lanes"] == \
-        [lanes_ans_scatter, lanes_scatter, lanes_ans_scatter]
+        [lanes_ans_scatter, lanes_scatter, lanes_ans_scatter, lanes_tri_scatter]
     fused_follows_previous_path(model, z_plane=mesh.nodes[:, 2].min() + 0.01)   # the lowest nodes start in contact
     # and the force itself at a deformed state, against the model's
     U = random_motion(mesh, 8)

@@ -4,10 +4,10 @@ One step is two compiled passes and no allocation:
 
 1. the element pass: every element's force and energy into one flat buffer -- quadrilaterals with
    the compatible membrane by the lane kernel (``elements/lanes.py``, elements in SIMD lanes),
-   with the assumed membrane by ``elements/lanes_ans.py`` (same layout), each block's forces
-   scattered into the dofs right after it, in parallel over CHUNKS fixed chunks of blocks (see
-   CHUNKS: the sums of ``assembly.scatter_add_vec``'s order but at chunk boundaries); triangles by
-   ``elements/core.energy_force``;
+   with the assumed membrane by ``elements/lanes_ans.py``, triangles by ``elements/lanes_tri.py``
+   (same layout), each block's forces scattered into the dofs right after it, in parallel over
+   CHUNKS fixed chunks of blocks (see CHUNKS: the sums of ``assembly.scatter_add_vec``'s order
+   but at chunk boundaries); any other block by ``elements/core.energy_force``;
 2. assembly and update, serial: the chunks' slots and the other blocks' forces are summed into the
    dofs (elements in mesh order, block by block); then R = P - F (+ C), D_n+1 of Eq. (23)
    with the operation order of ``kernels.central_step``, the prescribed values, finiteness and
@@ -24,7 +24,7 @@ import numpy as np
 from numba import get_num_threads, njit, prange
 
 from ...assembly import scatter_add_vec
-from ...elements import core, lanes, lanes_ans, quad4
+from ...elements import core, lanes, lanes_ans, lanes_tri, quad4, tri3
 from ...elements.core import _FM
 from .kernels import dof_power
 
@@ -39,12 +39,13 @@ scatter_add_vec's sum bit for bit except at the few nodes on a chunk boundary (r
 
 
 @njit(forceinline=True, error_model="numpy")
-def _scatter_block(b, dest, fe, F):
-    """Block b's element forces into F at ``dest`` (elements in order, node by node, dof by dof;
-    a negative dest is a padded lane).  No fast-math: every += stays one rounded addition in order."""
+def _scatter_block(b, dest, fe, F, nn):
+    """Block b's element forces (nn nodes each: a literal, so that the node loop is unrolled as
+    for a fixed size) into F at ``dest`` (elements in order, node by node, dof by dof; a negative
+    dest is a padded lane).  No fast-math: every += stays one rounded addition in order."""
     L = dest.shape[2]
     for k in range(L):
-        for i in range(4):
+        for i in range(nn):
             o = dest[b, i, k]
             if o < 0:
                 continue
@@ -59,7 +60,7 @@ def lanes_scatter(X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we, bounds
     for ch in prange(bounds.size - 1):
         for b in range(bounds[ch], bounds[ch + 1]):
             lanes._block(b, X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we)
-            _scatter_block(b, dest, fe, F)
+            _scatter_block(b, dest, fe, F, 4)
 
 
 @njit(cache=True, parallel=True, fastmath=_FM, error_model="numpy")
@@ -68,7 +69,16 @@ def lanes_ans_scatter(X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we, bo
     for ch in prange(bounds.size - 1):
         for b in range(bounds[ch], bounds[ch + 1]):
             lanes_ans._block(b, X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we)
-            _scatter_block(b, dest, fe, F)
+            _scatter_block(b, dest, fe, F, 4)
+
+
+@njit(cache=True, parallel=True, fastmath=_FM, error_model="numpy")
+def lanes_tri_scatter(X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we, bounds, dest, F):
+    """lanes_scatter for triangles (lanes_tri._block: the same layout, 3 nodes, fe (B, 18 LANES))."""
+    for ch in prange(bounds.size - 1):
+        for b in range(bounds[ch], bounds[ch + 1]):
+            lanes_tri._block(b, X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we)
+            _scatter_block(b, dest, fe, F, 3)
 
 
 @njit(cache=True)
@@ -81,8 +91,8 @@ def add_slots(F_all, slot0, slot_node):
 
 
 def chunk_plan(conn, M, N, chunks=CHUNKS):
-    """(bounds (chunks+1,) block ranges, dest (B, 4, LANES) dof offsets, slot_node (S,)) for the
-    lane layout conn (B, 4, LANES) of M elements on N nodes: see CHUNKS.  dest is 6 p for an owned
+    """(bounds (chunks+1,) block ranges, dest (B, nn, LANES) dof offsets, slot_node (S,)) for the
+    lane layout conn (B, nn, LANES) of M elements on N nodes: see CHUNKS.  dest is 6 p for an owned
     node, 6 N + 6 s for slot s, -1 for a padded lane."""
     B, _, L = conn.shape
     bounds = np.round(np.linspace(0, B, chunks + 1)).astype(np.int64)
@@ -162,7 +172,9 @@ def _uses_lanes(b) -> bool:
 
 class FusedForces:
     """Internal force of a ``solidshell.model.Model`` into preallocated buffers, and the fused step.
-    ``use_lanes=False`` evaluates every block by core.energy_force (for comparisons)."""
+    ``use_lanes=False`` evaluates every block by core.energy_force (for comparisons).  ``parts``:
+    (kind, block, packed lanes or None, offset, size) per block, kind "lanes" (pk["kernel"] one of
+    lanes_scatter, lanes_ans_scatter, lanes_tri_scatter; pk["nn"] nodes per element) or "core"."""
 
     def __init__(self, model, use_lanes: bool = True):
         self.model = model
@@ -174,11 +186,20 @@ class FusedForces:
         base = 0
         for b in model.blocks:
             M, nn = b.conn.shape
-            ans = use_lanes and lanes_ans.covers(b.c)      # the assumed-membrane quad (same layout)
-            if use_lanes and (_uses_lanes(b) or ans):
-                pk = (lanes_ans if ans else lanes).pack(b.conn, b.c, b.c["r_zq"])
-                pk["kernel"] = lanes_ans_scatter if ans else lanes_scatter
-                size = pk["B"] * 24 * lanes.LANES
+            kernel = None
+            if not use_lanes:
+                pass
+            elif b.module is quad4 and lanes_ans.covers(b.c):     # the assumed-membrane quad
+                mod, kernel = lanes_ans, lanes_ans_scatter
+            elif _uses_lanes(b):
+                mod, kernel = lanes, lanes_scatter
+            elif b.module is tri3 and lanes_tri.covers(b.c):
+                mod, kernel = lanes_tri, lanes_tri_scatter
+            if kernel is not None:
+                pk = mod.pack(b.conn, b.c, b.c["r_zq"])
+                pk["kernel"] = kernel
+                pk["nn"] = nn
+                size = pk["B"] * 6 * nn * lanes.LANES
                 self.parts.append(("lanes", b, pk, base, size))
             else:
                 size = M * nn * 6
@@ -196,9 +217,9 @@ class FusedForces:
         self.views = []
         for kind, b, pk, o, size in self.parts:
             if kind == "lanes":
-                self.views.append((self.fe[o:o + size].reshape(pk["B"], 24 * lanes.LANES),
+                self.views.append((self.fe[o:o + size].reshape(pk["B"], 6 * pk["nn"] * lanes.LANES),
                                    np.zeros((pk["B"], lanes.LANES))))
-                pk["xs"] = np.zeros((pk["B"], 48 * lanes.LANES))   # the lane kernel's scratch
+                pk["xs"] = np.zeros((pk["B"], 12 * pk["nn"] * lanes.LANES))   # the lane kernel's scratch
             else:
                 M, nn = b.conn.shape
                 self.views.append((self.fe[o:o + size].reshape(M, nn, 6), np.zeros(M)))

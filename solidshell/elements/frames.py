@@ -40,5 +40,6 @@ def covariant_maps(A1, A2, ex, ey):
 
 
 def fold(T: np.ndarray, C: np.ndarray, scale: np.ndarray) -> np.ndarray:
-    """T^T C T * scale over leading axes: the rigidity acting on natural strains."""
-    return np.einsum("...ra,rs,...sb->...ab", T, C, T) * scale[..., None, None]
+    """T^T C T * scale over leading axes: the rigidity acting on natural strains (batched matrix
+    products: the three-operand einsum took 6x as long)."""
+    return (np.swapaxes(T, -1, -2) @ C @ T) * scale[..., None, None]

@@ -156,16 +156,21 @@ def tying_raw(alpha, beta, tie, xo, xn):
     return tie[:, 2] * np.sum(a * b, -1)
 
 
+_DN_ROWS = np.ascontiguousarray(DN_GP.transpose(0, 2, 1).reshape(-1, DN_GP.shape[1]))
+"""DN_GP as rows (point g, direction k) x node i: the tangents of all points by one product."""
+
+
 def raw_strains(xo, xn):
     """Raw natural strains of elements with nodal (M,4,3) positions/directors: (M,4,6), (M,4), (M,4).
     The same products the kernel forms (core.py); used here for the reference state."""
-    a = np.einsum("gik,mic->mgkc", DN_GP, xo)
-    b = np.einsum("gik,mic->mgkc", DN_GP, xn)
+    M = len(xo)
+    a = (_DN_ROWS @ xo).reshape(M, len(DN_GP), 2, 3)      # batched products: einsum took 10x as long
+    b = (_DN_ROWS @ xn).reshape(M, len(DN_GP), 2, 3)
     dot = lambda u, v: np.sum(u * v, -1)
     mb = np.stack([0.5 * dot(a[:, :, 0], a[:, :, 0]), 0.5 * dot(a[:, :, 1], a[:, :, 1]),
                    dot(a[:, :, 0], a[:, :, 1]), dot(a[:, :, 0], b[:, :, 0]), dot(a[:, :, 1], b[:, :, 1]),
                    dot(a[:, :, 0], b[:, :, 1]) + dot(a[:, :, 1], b[:, :, 0])], -1)
-    s = dot(np.einsum("ti,mic->mtc", ALPHA, xo), np.einsum("ti,mic->mtc", BETA, xn))
+    s = dot(ALPHA @ xo, BETA @ xn)
     z = 0.5 * dot(xn, xn)
     return mb, s, z
 

@@ -595,10 +595,10 @@ class Integrator:
         if getattr(self.damper, "varies_alpha", False):
             self.alpha = float(st.damper_alpha)   # the estimate the run had reached
         if reestimate_step:
-            # warm-started from the state's top mode when it has one (e.g. carried over a remesh);
-            # forward differences from the state's force, half the evaluations of the central ones:
-            # omega within 1.5e-7 of them after every remesh of the adaptive square-pedestal run
-            # (docs/adaptivity.md), where this estimate was 30 % of the remeshing
+            # warm-started from the state's top mode when it has one (e.g. carried over a remesh),
+            # to the re-checks' tolerance (a plain Lanczos that stops when the top pair converges);
+            # forward differences from the state's force, half the evaluations of the central
+            # ones: this estimate was 30-43 % of the remeshing before (docs/adaptivity.md)
             lim = stepcontrol.estimate(self.model, self.M, self.free_mask, st.D, self.bodies, self.n_fric,
                                        self.s, self.alpha, self.force_fn,
                                        v0=st.mode if np.any(st.mode) else None, difference="forward",

@@ -110,44 +110,28 @@ def test_forward_difference_estimate_agrees_with_half_the_force_evaluations(stri
         estimate_omega_max(f, M, ~strip.fixed, difference="backward")
 
 
-def test_warm_started_estimate_stops_as_soon_as_the_top_pair_converges(strip, strip_modes):
-    """A start vector (the previous mesh's or check's top mode) is refined by plain Lanczos,
-    checked at every step (timestep.lanczos_top), instead of ARPACK's 40-vector basis.  From the
-    exact top mode it stops after one product (plus F at the state); from that mode with 30 % noise
-    in every component it still agrees with the dense eigenvalue to the asked 1e-4 (omega to 5e-5:
-    the tolerance the re-estimate after a remesh and the mid-run re-checks use, far inside the
-    step's safety factor 0.9) in fewer force evaluations than the cold ARPACK estimate."""
+def test_warm_started_estimate_at_the_recheck_tolerance(strip, strip_modes):
+    """The re-estimate after a mesh change starts from the previous mesh's top mode at the mid-run
+    re-checks' tolerance (stepcontrol.WARM_TOL = 1e-4 on omega^2): from the exact top mode, or that
+    mode with 30 % noise in every component, omega agrees with the dense eigenvalue to 5e-5 (the
+    tolerance's square root; far inside the step's safety factor 0.9) and never costs more force
+    evaluations than the cold estimate at the start tolerance 1e-6.  (A plain Lanczos stopped when
+    its top Ritz value stalled was tried here and rejected: from a carried mode with little weight
+    on newly refined elements it stalled on a lower cluster, omega 10 % low, and an adaptive FIRE run
+    blew up -- docs/adaptivity.md.)"""
+    from solidshell.solvers.explicit.stepcontrol import WARM_TOL
+
     w2, phi, fr = strip_modes
     M = strip.model.lumped_mass()
     f = strip.model.internal_force
     top = np.zeros(M.size)
     top[fr] = phi[:, np.argmax(w2)]
-    cold = estimate_omega_max(f, M, ~strip.fixed, difference="forward", tol=1e-4)
-    exact = estimate_omega_max(f, M, ~strip.fixed, difference="forward", tol=1e-4, v0=top)
-    assert exact.converged and exact.n_force_evals <= 3
-    assert exact.omega_max == pytest.approx(math.sqrt(w2.max()), rel=1e-5)
+    cold = estimate_omega_max(f, M, ~strip.fixed, difference="forward")
     noisy = top + 0.3 * np.abs(top).max() * np.random.default_rng(3).standard_normal(top.size)
-    warm = estimate_omega_max(f, M, ~strip.fixed, difference="forward", tol=1e-4, v0=noisy)
-    assert warm.converged and warm.n_force_evals < cold.n_force_evals
-    assert warm.omega_max == pytest.approx(math.sqrt(w2.max()), rel=5e-5)
-    assert warm.omega_max <= math.sqrt(w2.max()) * (1 + 1e-6)     # a Ritz value: from below
-
-
-def test_lanczos_top_on_a_clustered_spectrum_matches_the_dense_eigenvalue():
-    """The top of a solid-shell spectrum is a dense cluster (one thickness mode per node): a
-    diagonal operator with 50 eigenvalues within 1 % of the largest, 450 spread below.  From a
-    random start the top Ritz value meets the dense answer to twice the asked tolerance (1e-6
-    relative: in a cluster the Ritz value creeps up, and the stall test -- increments below 1e-2 of
-    the tolerance -- may stop it at ~1e-6), never above it (a Ritz value is a lower bound)."""
-    from solidshell.solvers.timestep import lanczos_top
-
-    rng = np.random.default_rng(0)
-    lam = np.concatenate([1.0 - 0.01 * rng.random(50), 0.9 * rng.random(450)])
-    lam[7] = 1.0
-    theta, x, conv = lanczos_top(lambda v: lam * v, rng.standard_normal(lam.size), 1e-6, 400)
-    assert conv and theta <= 1.0 + 1e-12
-    assert theta == pytest.approx(1.0, rel=2e-6)
-    assert np.linalg.norm(x) == pytest.approx(1.0)
+    for v0 in (top, noisy):
+        warm = estimate_omega_max(f, M, ~strip.fixed, difference="forward", tol=WARM_TOL, v0=v0)
+        assert warm.converged and warm.n_force_evals <= cold.n_force_evals
+        assert warm.omega_max == pytest.approx(math.sqrt(w2.max()), rel=5e-5)
 
 
 def test_mass_scaling_modes(strip):

@@ -79,18 +79,14 @@ def estimate_omega_max(force, mass, free, U=None, *, method: str = "lanczos", fd
     fd_step : the largest component of the perturbation e v in the directional derivative
               (in the dofs' own units; 1e-7 is far below the sheet's thickness and director length
               and, with a central difference, far above round-off in F)
-    tol     : relative accuracy of the eigenvalue omega^2 (the top Ritz pair's residual over the
-              Ritz value)
+    tol     : relative accuracy of the eigenvalue omega^2
     seed    : the start vector is drawn from this seed, so the estimate is reproducible
-    v0      : a start vector (e.g. the top mode of a nearby state or of the previous mesh), then
-              checked at every Lanczos step (:func:`lanczos_top`), ARPACK only if that has not
-              converged in 100 steps
     difference : "central" (K v from F(U + e v) - F(U - e v): two force evaluations per product,
               error O(e^2)) or "forward" (F(U + e v) - F(U), F(U) evaluated once: one evaluation
               per product, error O(e) -- ~1e-6 of omega^2 at fd_step 1e-7, far inside the step's
               safety factor; what an adaptive run's re-estimate after each remesh uses)
     """
-    from scipy.sparse.linalg import eigsh
+    from scipy.sparse.linalg import LinearOperator, eigsh
 
     M = np.asarray(mass, dtype=float)
     shape = M.shape
@@ -152,9 +148,17 @@ def estimate_omega_max(force, mass, free, U=None, *, method: str = "lanczos", fd
             return s * (fp - fm) / (2.0 * e)
 
         if method == "lanczos":
-            lam, vec, conv = lanczos_top(Av, start, tol, min(n, _WARM_STEPS)) if v0 is not None else (0.0, None, False)
-            if not conv:
-                lam, vec, conv = _arpack_top(Av, n, start, tol, maxiter)
+            op = LinearOperator((n, n), matvec=Av, dtype=float)
+            ncv = min(n, 40)
+            try:
+                lam, vec = eigsh(op, k=1, which="LA", tol=tol, v0=start, ncv=ncv, maxiter=maxiter or 2000)
+                lam, vec, conv = float(lam[0]), vec[:, 0], True
+            except Exception as exc:  # ArpackNoConvergence: keep the best Ritz value, say so
+                ev = getattr(exc, "eigenvalues", None)
+                evec = getattr(exc, "eigenvectors", None)
+                if ev is None or len(ev) == 0:
+                    raise
+                lam, vec, conv = float(np.max(ev)), evec[:, int(np.argmax(ev))], False
         elif method == "power":
             x = start / np.linalg.norm(start)
             lam, conv = 0.0, False
@@ -180,67 +184,3 @@ def estimate_omega_max(force, mass, free, U=None, *, method: str = "lanczos", fd
     mode[idx] = s * vec
     return OmegaEstimate(omega_max=math.sqrt(lam), method=method, n_force_evals=count[0],
                          converged=conv, mode=mode)
-
-
-def _arpack_top(Av, n, start, tol, maxiter):
-    """(lambda, x, converged): ARPACK's implicitly restarted Lanczos (``eigsh``, 40 vectors) on the
-    operator ``Av``; without convergence the best Ritz pair found, converged False."""
-    from scipy.sparse.linalg import LinearOperator, eigsh
-
-    op = LinearOperator((n, n), matvec=Av, dtype=float)
-    try:
-        lam, vec = eigsh(op, k=1, which="LA", tol=tol, v0=start, ncv=min(n, 40), maxiter=maxiter or 2000)
-        return float(lam[0]), vec[:, 0], True
-    except Exception as exc:  # ArpackNoConvergence: keep the best Ritz value, say so
-        ev = getattr(exc, "eigenvalues", None)
-        evec = getattr(exc, "eigenvectors", None)
-        if ev is None or len(ev) == 0:
-            raise
-        return float(np.max(ev)), evec[:, int(np.argmax(ev))], False
-
-
-_WARM_STEPS = 100
-"""Lanczos steps of a warm-started estimate before ARPACK takes over (warm starts after a remesh
-converge in 10-60)."""
-
-
-_STALL = 1e-2
-"""A warm-started Lanczos also stops once its top Ritz value rises by less than _STALL * tol of
-itself in a step: in the dense cluster at the top of a sheet's spectrum the Ritz vector mixes
-near-equal modes and its residual falls slowly while the value has converged."""
-
-
-def lanczos_top(Av, start, tol: float, k_max: int):
-    """(theta, x, converged): the largest Ritz value of the symmetric operator ``Av`` and its Ritz
-    vector, by Lanczos from ``start`` with full reorthogonalisation, the top Ritz pair's residual
-    ||A x - theta x|| = beta_k |s_k| checked at every step and the iteration stopped once it is
-    below tol * theta, or once theta stalls (_STALL).
-
-    Why not ARPACK here: ``eigsh`` builds its whole ncv-vector basis (40) before its first
-    convergence test, so even a start vector close to the top mode costs ncv + 1 products; a warm
-    start (the previous mesh's or the previous check's mode) passes the test after 10-60 products.
-    The Ritz value is a lower bound of the top eigenvalue, and within residual^2 / gap of it once
-    converged, as ARPACK's is.  Memory: k_max vectors of the operator's size."""
-    from scipy.linalg import eigh_tridiagonal
-
-    n = start.size
-    Q = np.zeros((k_max, n))
-    q = np.asarray(start, dtype=float) / np.linalg.norm(start)
-    alpha, beta = [], []
-    theta, s = 0.0, np.ones(1)
-    for k in range(k_max):
-        Q[k] = q
-        w = Av(q)
-        alpha.append(float(q @ w))
-        w = w - Q[:k + 1].T @ (Q[:k + 1] @ w)          # full reorthogonalisation, twice is enough
-        w = w - Q[:k + 1].T @ (Q[:k + 1] @ w)
-        b = float(np.linalg.norm(w))
-        lam, vec = eigh_tridiagonal(np.array(alpha), np.array(beta), select="i", select_range=(k, k))
-        last, theta, s = theta, float(lam[0]), vec[:, 0]
-        if theta > 0.0 and (b * abs(s[-1]) <= tol * theta or (k >= 2 and theta - last <= _STALL * tol * theta)):
-            return theta, s @ Q[:k + 1], True
-        if b == 0.0:               # an invariant subspace: theta is exact on it
-            return theta, s @ Q[:k + 1], True
-        beta.append(b)
-        q = w / b
-    return theta, s @ Q[:k_max], False

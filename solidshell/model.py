@@ -27,16 +27,69 @@ _TYPE_CONSTANTS = ("alpha", "beta", "tie")
 """Entries of an element type's constants shared by all its elements (not per element)."""
 
 
+def _precompute(module, Xo_e, Xn_e, section, membrane) -> dict:
+    return module.precompute(Xo_e, Xn_e, section.C_m, section.C_b, section.C_t, float(section.E_z),
+                             float(section.warp_angle_rad), membrane=membrane)
+
+
+def _section_key(section) -> bytes:
+    """What of a section the folded constants depend on, as bytes."""
+    return b"".join(np.asarray(v, dtype=float).tobytes() for v in
+                    (section.C_m, section.C_b, section.C_t, section.E_z, section.warp_angle_rad))
+
+
+class ElementConstants:
+    """Folded element constants (``module.precompute``) kept by element, for the models of meshes
+    that share elements: the adaptive driver's successive meshes, where most elements survive a
+    remesh.  An element's constants depend only on its nodes' X_o and X_n, the section and the
+    membrane choice, and the precompute functions treat every element apart from the others (bit
+    for bit: tests/test_adapt_settle.py), so a model built with this cache equals one built
+    without it.  Elements are recognised by the bytes of their reference nodes; one instance serves
+    one section (a model of another section is refused)."""
+
+    def __init__(self):
+        self._section = None
+        self._tables = {}        # (module, membrane) -> ({element key: (chunk, row)}, [chunks])
+
+    def get(self, module, Xo_e, Xn_e, section, membrane) -> dict:
+        """precompute's dict for the elements with nodal (M, nn, 3) Xo_e, Xn_e: the cached rows,
+        and one precompute call for the elements not seen before."""
+        key = _section_key(section)
+        if self._section is None:
+            self._section = key
+        elif key != self._section:
+            raise ValueError("ElementConstants serves one section; make another for this one")
+        index, chunks = self._tables.setdefault((module.__name__, membrane), ({}, []))
+        keys = [a.tobytes() + b.tobytes() for a, b in zip(Xo_e, Xn_e)]   # per remesh, not per step
+        where = np.array([index.get(k, (-1, -1)) for k in keys], dtype=np.int64).reshape(-1, 2)
+        miss = np.flatnonzero(where[:, 0] < 0)
+        if miss.size:
+            chunks.append(_precompute(module, Xo_e[miss], Xn_e[miss], section, membrane))
+            where[miss] = np.column_stack([np.full(miss.size, len(chunks) - 1), np.arange(miss.size)])
+            index.update(zip((keys[i] for i in miss), map(tuple, where[miss].tolist())))
+        first = chunks[int(where[0, 0])]
+        out = {k: v for k, v in first.items() if k in _TYPE_CONSTANTS}
+        for k, v in first.items():
+            if k in _TYPE_CONSTANTS:
+                continue
+            a = np.empty((len(keys),) + v.shape[1:], dtype=v.dtype)
+            for ci in np.unique(where[:, 0]):
+                sel = where[:, 0] == ci
+                a[sel] = chunks[ci][k][where[sel, 1]]
+            out[k] = a
+        return out
+
+
 class _Block:
     """One element type of the mesh with its folded constants (see elements/core.py)."""
 
-    def __init__(self, module, conn, Xo, Xn, section, membrane):
+    def __init__(self, module, conn, Xo, Xn, section, membrane, constants=None):
         self.module = module
         self.conn = np.ascontiguousarray(conn, dtype=np.int64)
         self.nn = conn.shape[1]
         self.dofs = element_dofs(self.conn)
-        c = module.precompute(Xo[conn], Xn[conn], section.C_m, section.C_b, section.C_t,
-                              float(section.E_z), float(section.warp_angle_rad), membrane=membrane)
+        c = (constants.get if constants is not None else _precompute)(module, Xo[conn], Xn[conn], section,
+                                                                       membrane)
         # Eq. (24) measures |x_n| - 1 against |X_n| (not |X_n|^2/2 as the Green strain does)
         c["r_zq"] = np.sqrt(2.0 * c["r_z"])
         self.c = c
@@ -98,10 +151,12 @@ class Model:
         ``mesh.quads``' length), e.g. the adaptive mesh's coarse elements "ans" and its finest
         "full".  Each run of equal values becomes one element block, so the element order (quads in
         mesh order, then triangles) is kept.
+    constants : an :class:`ElementConstants` cache shared by the models of meshes with common
+        elements (the adaptive driver's), or None
     """
 
     def __init__(self, mesh: ShellMesh, material, thickness_strain: str = "green", mu: float = 0.5,
-                 membrane: str = "full"):
+                 membrane: str = "full", constants: ElementConstants | None = None):
         if thickness_strain not in _THICKNESS_STRAINS:
             raise InputError(f"thickness_strain must be one of {_THICKNESS_STRAINS}, got {thickness_strain!r}")
         runs = _membrane_runs(membrane, len(mesh.quads))
@@ -113,9 +168,9 @@ class Model:
         self.mu = float(mu)
         self.membrane = membrane if isinstance(membrane, str) else tuple(membrane)
         Xo, Xn = mesh.nodes, mesh.directors
-        self.blocks = [_Block(quad4, mesh.quads[a:b], Xo, Xn, material, m) for a, b, m in runs]
+        self.blocks = [_Block(quad4, mesh.quads[a:b], Xo, Xn, material, m, constants) for a, b, m in runs]
         if len(mesh.tris):
-            self.blocks.append(_Block(tri3, mesh.tris, Xo, Xn, material, "full"))
+            self.blocks.append(_Block(tri3, mesh.tris, Xo, Xn, material, "full", constants))
         self._pattern = None
         self._mass = None
 

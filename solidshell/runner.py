@@ -262,12 +262,13 @@ def check_initial_contact(scene: Scene, mesh, fixed, bodies=None, U0=None) -> No
                          f"they start apart or just touching{more}")
 
 
-def build_problem(scene: Scene, mesh, fixed=None, membrane=None):
+def build_problem(scene: Scene, mesh, fixed=None, membrane=None, constants=None):
     """The solidshell.problem.Problem of a scene on a mesh: the Model (section, thickness-strain
     model), supports, loads (self-weight, point, line, surface) and contact bodies -- everything a
     solver needs.  Unknown or empty node sets raise InputError.  The adaptive driver calls this for
     every new mesh.  ``membrane``: the quads' membrane strains (Model's argument: one choice or one
-    per quad) instead of the scene's ``model.membrane``."""
+    per quad) instead of the scene's ``model.membrane``; ``constants``: a model.ElementConstants
+    cache shared by the problems of one adaptive run."""
     from .model import Model
     from .problem import Problem
 
@@ -278,7 +279,7 @@ def build_problem(scene: Scene, mesh, fixed=None, membrane=None):
     if membrane is None:
         membrane = sc.model.get("membrane", "full")
     model = Model(mesh, sc.material_object(), thickness_strain=sc.model["thickness_strain"],
-                  mu=sc.model["mu"], membrane=membrane)
+                  mu=sc.model["mu"], membrane=membrane, constants=constants)
     return Problem(model, fixed, scene_loads(sc, model), contact=contact_bodies(sc), name=sc.name)
 
 
@@ -628,11 +629,15 @@ def _adaptive_run(sc: Scene, level0, settings: dict, adapt, kind: str, cb):
     s = dict(settings)
     restart = s.pop("restart", None)
 
+    from .model import ElementConstants
+
+    constants = ElementConstants()        # most elements survive a remesh: fold each one once
+
     def make_problem(mesh, coarse_quads=None):
         # coarse_quads: quads below the finest level, given "ans" membranes (adapt.coarse_membrane)
         membrane = None if coarse_quads is None else \
             np.where(coarse_quads, "ans", sc.model.get("membrane", "full")).tolist()
-        return build_problem(sc, mesh, membrane=membrane)
+        return build_problem(sc, mesh, membrane=membrane, constants=constants)
 
     run = AdaptiveRun(level0, make_problem, Integrator, parse_settings(s, kind == "relax"),
                       adapt, relax=kind == "relax", curves=boundary_curves(sc), progress=_phase(cb, 0.08, 0.9),

@@ -266,7 +266,9 @@ def precompute(Xo, Xn, C_m, C_b, C_t, E_z, warp_angle, membrane="full"):
     Cmb = np.stack([fold(T, C_m, Jw), fold(T, C_b, Jw)], axis=2)
     QS = np.einsum("mgab,gbt->mgat", Q, S_GP)                  # local shear from tying values
     Cs = _sum_gauss_quadratic(QS, C_t * Jw[:, :, None, None])
-    Cz = E_z * (Jw @ (N_GP[:, :, None] * N_GP[:, None, :]).reshape(len(N_GP), -1)).reshape(-1, 4, 4)
+    # per element, not a matrix product over the elements: BLAS sums differently for one row, and
+    # an element's constants must not depend on the others it is computed with (model.ElementConstants)
+    Cz = E_z * np.einsum("mg,gij->mij", Jw, N_GP[:, :, None] * N_GP[:, None, :])
     r_mb, r_s, r_z = raw_strains(Xo, Xn)
     alpha, beta, tie = ALPHA, BETA, TIE
     if membrane == "ans":

@@ -246,10 +246,11 @@ def store_nodes(F, b, k, fo, fn, h, n):
 
 # ---------------------------------------------------------------- the kernel
 @njit(forceinline=True, error_model="numpy")
-def _gather(b, k, X, Xn, U, conn, xs):
+def _gather(b, k, X, Xn, U, conn, xs, nn):
     """Stage 0: lane k's nodal x_o, x_n, U_o, U_n into the block scratch (row 12 i + c: node i,
-    component c of x_o | x_n | U_o | U_n), so that the later stages load contiguous lanes."""
-    for i in range(4):
+    component c of x_o | x_n | U_o | U_n), so that the later stages load contiguous lanes; ``nn``
+    the element's node count, a literal at every call (4 here, 3 in lanes_tri)."""
+    for i in range(nn):
         p = conn[b, i, k]
         for c in range(3):
             xs[b, (12 * i + c) * LANES + k] = X[p, c] + U[p, c]
@@ -362,7 +363,7 @@ def _block(b, X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we):
     there: that is what lets the lane loops vectorise over the gathered loads."""
     nl = conn.shape[2]
     for k in range(nl):
-        _gather(b, k, X, Xn, U, conn, xs)
+        _gather(b, k, X, Xn, U, conn, xs, 4)
     for k in range(nl):
         _stage_gp(b, k, _D0, 0, Cmb, xs, fe, we, True)
     for k in range(nl):

@@ -158,7 +158,7 @@ def _block(b, X, Xn, U, conn, C, Cs, Cz, rz, quasi, mu, xs, fe, we):
     loop per stage, so that each vectorises)."""
     nl = conn.shape[2]
     for k in range(nl):
-        _gather(b, k, X, Xn, U, conn, xs)
+        _gather(b, k, X, Xn, U, conn, xs, 4)
     for k in range(nl):
         _stage_membrane(b, k, C, xs, fe, we)
     for k in range(nl):

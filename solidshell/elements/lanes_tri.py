@@ -32,7 +32,7 @@ from numba import njit, prange
 
 from . import lanes, tri3
 from .core import _FM
-from .lanes import LANES, _dot, _lin2, _row3, _sign_quasi, _store, _thick, curvatures
+from .lanes import LANES, _dot, _gather, _lin2, _row3, _sign_quasi, _store, _thick, curvatures
 
 assert np.array_equal(tri3.DN, [[-1.0, -1.0], [1.0, 0.0], [0.0, 1.0]])
 assert np.array_equal(tri3.ALPHA, [[1.0, 0.0, -1.0], [-1.0, 1.0, 0.0], [0.0, -1.0, 1.0]])
@@ -97,19 +97,6 @@ def _tie(a, d, au, du):
     current tangent (its displacement part au) and d the current director (du)."""
     return (au[0] * (d[0] - du[0]) + a[0] * du[0]) + (au[1] * (d[1] - du[1]) + a[1] * du[1]) \
         + (au[2] * (d[2] - du[2]) + a[2] * du[2])
-
-
-@njit(forceinline=True, error_model="numpy")
-def _gather(b, k, X, Xn, U, conn, xs):
-    """Stage 0: lane k's nodal x_o, x_n, U_o, U_n into the block scratch (row 12 i + c: node i,
-    component c of x_o | x_n | U_o | U_n), so that the later stages load contiguous lanes."""
-    for i in range(NN):
-        p = conn[b, i, k]
-        for c in range(3):
-            xs[b, (12 * i + c) * LANES + k] = X[p, c] + U[p, c]
-            xs[b, (12 * i + 3 + c) * LANES + k] = Xn[p, c] + U[p, 3 + c]
-            xs[b, (12 * i + 6 + c) * LANES + k] = U[p, c]
-            xs[b, (12 * i + 9 + c) * LANES + k] = U[p, 3 + c]
 
 
 @njit(forceinline=True, error_model="numpy")
@@ -241,7 +228,7 @@ def _block(b, X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we):
     lanes._block's scheme), the branch on the thickness strain outside the lane loop."""
     nl = conn.shape[2]
     for k in range(nl):
-        _gather(b, k, X, Xn, U, conn, xs)
+        _gather(b, k, X, Xn, U, conn, xs, NN)
     for k in range(nl):
         _stage_mb(b, k, Cmb, xs, fe, we)
     if quasi:

@@ -176,7 +176,7 @@ def fake(monkeypatch):
     from solidshell import runner, solvers
 
     class Model:                     # stands in for solidshell.model.Model (no numba compile here)
-        def __init__(self, mesh, material, thickness_strain="green", mu=0.5, membrane="full"):
+        def __init__(self, mesh, material, thickness_strain="green", mu=0.5, membrane="full", constants=None):
             self.mesh, self.material, self.n_nodes = mesh, material, mesh.n_nodes
 
         def nodal_areas(self):       # equal shares: the wiring, not the lumping, is under test here

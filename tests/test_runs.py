@@ -55,7 +55,7 @@ class FakeModel:
     """Stands in for solidshell.model.Model: the wiring, not the mechanics, is under test."""
     interpenetrated = 0
 
-    def __init__(self, mesh, material, thickness_strain="green", mu=0.5, membrane="full"):
+    def __init__(self, mesh, material, thickness_strain="green", mu=0.5, membrane="full", constants=None):
         self.mesh, self.material, self.n_nodes = mesh, material, mesh.n_nodes
 
     def nodal_areas(self):

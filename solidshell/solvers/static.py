@@ -19,8 +19,12 @@ Methods (``method=``)
     ``"none"``), and a tangent shift K_t + sigma diag|K_t| whenever K_t is not positive definite
     (detected by its Cholesky factorisation failing: CHOLMOD, solvers/linear.py; or, with
     ``factorization="superlu"``, by the inertia of SuperLU's LDL^T, Sylvester's law); sigma grows
-    tenfold until the factorisation succeeds and shrinks tenfold on the next iteration.  Every step is therefore a descent step of Pi and the iteration
-    cannot settle on a saddle or a maximum (the paper's scheme can: see ``positive_definite``).
+    tenfold from 1e-8 until the factorisation succeeds and starts from a tenth of it on the next
+    iteration.  A full shifted step whose actual decrease of Pi is at least ``EXTEND_RHO`` (1.8)
+    times the predicted one -- Pi nearly linear along it, its length set by the shift -- is doubled
+    while Pi falls, within the trust radius (``info["extended_steps"]``).  Every step is therefore a
+    descent step of Pi and the iteration cannot settle on a saddle or a maximum (the paper's scheme
+    can: see ``positive_definite``).
     The full load is applied at once by default (``increment=1``); a failed step is cut back and
     the load then applied in adaptive sub-steps with a path-extrapolating predictor.
     Why it still takes tens to a hundred iterations on a drape: with translations as the only

@@ -19,8 +19,12 @@ Methods (``method=``)
     ``"none"``), and a tangent shift K_t + sigma diag|K_t| whenever K_t is not positive definite
     (detected by its Cholesky factorisation failing: CHOLMOD, solvers/linear.py; or, with
     ``factorization="superlu"``, by the inertia of SuperLU's LDL^T, Sylvester's law); sigma grows
-    tenfold until the factorisation succeeds and shrinks tenfold on the next iteration.  Every step is therefore a descent step of Pi and the iteration
-    cannot settle on a saddle or a maximum (the paper's scheme can: see ``positive_definite``).
+    tenfold from 1e-8 until the factorisation succeeds and starts from a tenth of it on the next
+    iteration.  A full shifted step whose actual decrease of Pi is at least ``EXTEND_RHO`` (1.8)
+    times the predicted one -- Pi nearly linear along it, its length set by the shift -- is doubled
+    while Pi falls, within the trust radius (``info["extended_steps"]``).  Every step is therefore a
+    descent step of Pi and the iteration cannot settle on a saddle or a maximum (the paper's scheme
+    can: see ``positive_definite``).
     The full load is applied at once by default (``increment=1``); a failed step is cut back and
     the load then applied in adaptive sub-steps with a path-extrapolating predictor.
     Why it still takes tens to a hundred iterations on a drape: with translations as the only
@@ -325,6 +329,14 @@ def _shifted_factor(chol, A, scale, sigma0, sigma_max=1e12):
             raise RuntimeError("no positive-definite shift of the tangent found")
 
 
+EXTEND_RHO = 1.8
+"""A full step of a *shifted* tangent whose actual decrease of Pi is at least this multiple of the
+predicted one is doubled while Pi falls, within the trust radius (``_newton_level``).  The model
+decrease of a step p = -(K + sigma S)^-1 g is g.p/2; rho -> 2 means Pi is nearly linear along p, whose
+length the shift, not the curvature, has set (circle-pedestal, square-on-disc: runs of 10-20 such
+steps of alpha 1 and rho 1.9-2.1 at an unchanging sigma 1e-3; docs/solvers.md, section 2)."""
+
+
 # ============================================================================ one load level
 @dataclass
 class _Opts:
@@ -562,6 +574,17 @@ def _newton_level(sys, D, lam, o, stats):
                 radius = max(radius, o.radius_min)
                 stats["radius"] = radius
                 if accepted:
+                    if (sigma > 0.0 and alpha >= 1.0 and rho >= EXTEND_RHO and acc is None
+                            and not inexact):
+                        # Pi nearly linear along the shifted step: double it while Pi falls
+                        # (energy evaluations only, no factorisation)
+                        while 2.0 * alpha * pmax <= radius:
+                            D2 = D + 2.0 * alpha * p
+                            Pi2, G2 = sys.potential_and_gradient(D2, lam)
+                            if not (np.isfinite(Pi2) and Pi2 < Pit):
+                                break
+                            alpha, Dt, Pit, Gt = 2.0 * alpha, D2, Pi2, G2
+                            stats["extended_steps"] = stats.get("extended_steps", 0) + 1
                     break
                 alpha = min(1.0, radius / pmax)
                 continue
@@ -1222,6 +1245,8 @@ def _solve_static(model, fixed, loads, load_factors, method, prescribed, *, tol,
     if method == "newton":
         info["shifted_iterations"] = int(stats["shifted_iterations"])
         info["max_tangent_shift"] = float(stats["max_shift"])
+        # doublings of shifted steps along which Pi was nearly linear (EXTEND_RHO)
+        info["extended_steps"] = int(stats.get("extended_steps", 0))
         # Newton steps found by preconditioned CG instead of a factorisation (pcg_iterations)
         info["cg_steps"] = int(stats.get("cg_steps", 0))
         info["cg_iterations"] = int(stats.get("cg_iterations", 0))

@@ -121,6 +121,23 @@ def fused_follows_previous_path(model, z_plane):
     assert a.state.max_contact == b.state.max_contact > 0
 
 
+def fused_force_matches_model(ff, model, U):
+    """FusedForces ``ff`` of ``model`` at U (N,6): force and energy equal Model.energy_and_force's to
+    1e-13 relative (the same element terms, summed in the lane kernels' and chunks' grouping), and
+    on two threads the same bits (blocks are the unit of work)."""
+    F1, E1 = ff.internal(U.ravel(), True)
+    E0, F0 = model.energy_and_force(U)
+    assert np.abs(F1 - F0.ravel()).max() <= 1e-13 * np.abs(F0).max()
+    assert abs(E1 - E0) <= 1e-13 * abs(E0)
+    old = numba.get_num_threads()
+    try:
+        numba.set_num_threads(min(2, numba.config.NUMBA_NUM_THREADS))
+        F2, E2 = ff.internal(U.ravel(), True)
+    finally:
+        numba.set_num_threads(old)
+    assert np.array_equal(F1, F2) and E1 == E2
+
+
 def test_fused_step_with_the_reference_kernel_is_the_previous_path_bitwise():
     """With core.energy_force for every block, the fused step performs the previous path's
     operations in the same order (scatter order, central_step's update and v.M.v sum): 30 steps

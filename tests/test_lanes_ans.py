@@ -157,7 +157,7 @@ def test_fused_step_with_assumed_membrane_follows_the_previous_path():
     of 1e-16 grown by 60 steps of a stable scheme)."""
     from solidshell.solvers.explicit.fused import (FusedForces, lanes_ans_scatter, lanes_scatter,
                                                    lanes_tri_scatter)
-    from test_lanes import fused_follows_previous_path
+    from test_lanes import fused_follows_previous_path, fused_force_matches_model
 
     base = distorted_warped_mesh()
     q = base.quads
@@ -169,18 +169,5 @@ def test_fused_step_with_assumed_membrane_follows_the_previous_path():
     assert [p[2]["kernel"] for p in ff.parts if p[0] == "lanes"] == \
         [lanes_ans_scatter, lanes_scatter, lanes_ans_scatter, lanes_tri_scatter]
     fused_follows_previous_path(model, z_plane=mesh.nodes[:, 2].min() + 0.01)   # the lowest nodes start in contact
-    # and the force itself at a deformed state, against the model's
-    U = random_motion(mesh, 8)
-    F1, E1 = ff.internal(U.ravel(), True)
-    E0, F0 = model.energy_and_force(U)
-    assert np.abs(F1 - F0.ravel()).max() <= 1e-13 * np.abs(F0).max()
-    assert abs(E1 - E0) <= 1e-13 * abs(E0)
-    # blocks are the unit of work: the same bits on 2 threads
-    import numba
-    old = numba.get_num_threads()
-    try:
-        numba.set_num_threads(min(2, numba.config.NUMBA_NUM_THREADS))
-        F2, E2 = ff.internal(U.ravel(), True)
-    finally:
-        numba.set_num_threads(old)
-    assert np.array_equal(F1, F2) and E1 == E2
+    # and the force itself at a deformed state, on one and two threads
+    fused_force_matches_model(ff, model, random_motion(mesh, 8))

@@ -146,6 +146,8 @@ def test_fused_forces_on_an_adapted_mesh_are_the_models(thickness):
     to round-off -- 1e-13 of the largest force and of the energy (the element forces agree to
     ~1e-15 and a node sums at most ~8 of them, in a different order at the triangles' nodes and at
     chunk boundaries; observed 2e-16); the same bits on 1 and 2 threads."""
+    from test_lanes import fused_force_matches_model
+
     mesh = adapted_mesh()
     assert len(mesh.tris) > 0
     nq = len(mesh.quads)
@@ -156,18 +158,7 @@ def test_fused_forces_on_an_adapted_mesh_are_the_models(thickness):
                                                   lanes_tri_scatter]
     assert not ff.needs_current
     ff.model = None                                   # element_pass must not reach for Model._current
-    U = 0.05 * np.random.default_rng(9).standard_normal((mesh.n_nodes, 6))
-    F1, E1 = ff.internal(U.ravel(), True)
-    E0, F0 = model.energy_and_force(U)
-    assert np.abs(F1 - F0.ravel()).max() <= 1e-13 * np.abs(F0).max()
-    assert abs(E1 - E0) <= 1e-13 * abs(E0)
-    old = numba.get_num_threads()
-    try:
-        numba.set_num_threads(min(2, numba.config.NUMBA_NUM_THREADS))
-        F2, E2 = ff.internal(U.ravel(), True)
-    finally:
-        numba.set_num_threads(old)
-    assert np.array_equal(F1, F2) and E1 == E2
+    fused_force_matches_model(ff, model, 0.05 * np.random.default_rng(9).standard_normal((mesh.n_nodes, 6)))
 
 
 def test_fused_step_with_triangles_follows_the_previous_path():

@@ -596,13 +596,13 @@ class Integrator:
             self.alpha = float(st.damper_alpha)   # the estimate the run had reached
         if reestimate_step:
             # warm-started from the state's top mode when it has one (e.g. carried over a remesh),
-            # to the re-checks' tolerance (a plain Lanczos that stops when the top pair converges);
-            # forward differences from the state's force, half the evaluations of the central
-            # ones: this estimate was 30-43 % of the remeshing before (docs/adaptivity.md)
+            # then to the re-checks' tolerance; forward differences from the state's force, half
+            # the evaluations of the central ones: this estimate was 30-43 % of the remeshing
+            # (docs/adaptivity.md)
+            warm = bool(np.any(st.mode))
             lim = stepcontrol.estimate(self.model, self.M, self.free_mask, st.D, self.bodies, self.n_fric,
-                                       self.s, self.alpha, self.force_fn,
-                                       v0=st.mode if np.any(st.mode) else None, difference="forward",
-                                       tol=stepcontrol.WARM_TOL if np.any(st.mode) else None)
+                                       self.s, self.alpha, self.force_fn, v0=st.mode if warm else None,
+                                       difference="forward", tol=stepcontrol.WARM_TOL if warm else None)
         else:
             lim = stepcontrol.limit(st.omega_el, st.method, self.M, self.bodies, self.n_fric, self.s, self.alpha)
         self._bind(lim)

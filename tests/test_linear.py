@@ -1,11 +1,18 @@
-"""The static solvers' factorisations (solidshell/solvers/linear.py): CHOLMOD Cholesky with a reused
-symbolic analysis, and SuperLU's LDL^T-type inertia."""
+"""The static solvers' factorisations (solidshell/solvers/linear.py): the Cholesky of CHOLMOD and of
+MKL PARDISO (solvers/pardiso.py; its tests skip, with the reason, where MKL is not installed) with
+a reused symbolic analysis, and SuperLU's LDL^T-type inertia."""
 
 import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from solidshell.solvers.linear import Cholesky, ldl_inertia
+from solidshell.errors import InputError
+from solidshell.solvers import linear, pardiso
+from solidshell.solvers.linear import Cholesky, ldl_inertia, positive_definite_factor
+
+KINDS = [pytest.param("cholmod"),
+         pytest.param("pardiso", marks=pytest.mark.skipif(not pardiso.available(),
+                                                          reason=str(pardiso.unavailable_reason())))]
 
 
 def laplacian(n, shift=0.0):
@@ -15,10 +22,11 @@ def laplacian(n, shift=0.0):
     return sp.diags([off, main, off], [-1, 0, 1], format="csc")
 
 
-def test_cholesky_solves_positive_definite_systems_and_reuses_the_analysis():
+@pytest.mark.parametrize("kind", KINDS)
+def test_cholesky_solves_positive_definite_systems_and_reuses_the_analysis(kind):
     A = laplacian(200)
     b = np.random.default_rng(0).standard_normal(200)
-    ch = Cholesky()
+    ch = positive_definite_factor(kind)
     assert ch.factor(A)
     # cond(A) ~ 4 (n+1)^2 / pi^2 ~ 1.6e4: a backward-stable solve leaves a residual ~1e-16 * cond
     assert np.linalg.norm(A @ ch.solve(b) - b) <= 1e-11 * np.linalg.norm(b)
@@ -36,9 +44,10 @@ def test_cholesky_solves_positive_definite_systems_and_reuses_the_analysis():
     assert ch.n_symbolic == 2
 
 
-def test_cholesky_reports_indefinite_and_singular_matrices():
+@pytest.mark.parametrize("kind", KINDS)
+def test_cholesky_reports_indefinite_and_singular_matrices(kind):
     n = 50
-    ch = Cholesky()
+    ch = positive_definite_factor(kind)
     # smallest eigenvalue of the Laplacian is 2 - 2 cos(pi/51) = 3.8e-3: a shift of -0.01 makes
     # one eigenvalue negative, which the factorisation must refuse (no solve afterwards)
     assert not ch.factor(laplacian(n, shift=-0.01))
@@ -50,6 +59,50 @@ def test_cholesky_reports_indefinite_and_singular_matrices():
     N = laplacian(n).tolil()
     N[0, 0] = N[n - 1, n - 1] = 1.0
     assert not ch.factor(N.tocsc())
+
+
+@pytest.mark.skipif(not pardiso.available(), reason=str(pardiso.unavailable_reason()))
+def test_pardiso_and_cholmod_agree_on_a_drape_tangent_and_repeat_bit_for_bit():
+    """The square-pedestal 12x4x4 tangent at a sagged state, indefinite (the sag compresses the
+    membrane), and shifted by 0.1 of its diagonal as the energy Newton's first Levenberg steps
+    factorise it: both factorisations agree on definiteness, their solutions agree to cond * 1e-16,
+    and PARDISO, sequential, gives the same bits on a repeated factorisation."""
+    from solidshell.runner import build_problem, build_scene_mesh
+    from solidshell.scenes import load
+    from solidshell.solvers.static import _System
+
+    sc = load("square-pedestal")
+    mesh = build_scene_mesh(sc, "12x4x4")[0]
+    pb = build_problem(sc, mesh)
+    sys_ = _System(pb.model, pb.fixed, pb.loads, pb.prescribed, pb.contact, None, "pardiso")
+    U = np.zeros((mesh.n_nodes, 6))
+    U[:, 2] = -0.05 * np.hypot(mesh.nodes[:, 0], mesh.nodes[:, 1])       # a sag, 0.7 cm at the corners
+    _, A = sys_.free_tangent(U.ravel())
+    P, C = positive_definite_factor("pardiso"), Cholesky()
+    assert not P.factor(A) and not C.factor(A)
+    shift = 0.1 * np.abs(A.diagonal())
+    b = np.random.default_rng(3).standard_normal(A.shape[0])
+    assert P.factor(A, shift) and C.factor(A, shift)
+    x = P.solve(b)
+    dense = A.toarray() + np.diag(shift)
+    cond = np.linalg.cond(dense)
+    # both backward stable: their difference is bounded by ~cond * eps relative to |x|
+    assert np.abs(x - C.solve(b)).max() <= 100 * cond * 2.2e-16 * np.abs(x).max()
+    assert np.linalg.norm(dense @ x - b) <= 1e-10 * np.linalg.norm(b)
+    assert P.factor(A, shift) and np.array_equal(P.solve(b), x)
+
+
+def test_factorization_names_resolve_and_a_missing_mkl_is_one_input_error_line(monkeypatch):
+    assert linear.resolve_factorization("cholmod") == "cholmod"
+    assert linear.resolve_factorization("auto") == ("pardiso" if pardiso.available() else "cholmod")
+    with pytest.raises(InputError, match="factorization must be one of"):
+        linear.resolve_factorization("mumps")
+    monkeypatch.setattr(pardiso, "_LIB", None)
+    monkeypatch.setattr(pardiso, "_REASON", "Intel MKL (libmkl_rt) not found: install it")
+    assert linear.resolve_factorization("auto") == "cholmod"
+    with pytest.raises(InputError) as e:
+        linear.resolve_factorization("pardiso")
+    assert "\n" not in str(e.value) and "MKL" in str(e.value)
 
 
 def test_ldl_inertia_counts_negative_eigenvalues():
@@ -74,12 +127,13 @@ def test_lower_csc_product_equals_the_full_symmetric_product():
     assert np.abs(L.matvec()(x) - A @ x).max() <= 1e-13 * abs(A).max() * np.abs(x).sum()
 
 
-def test_pcg_with_a_nearby_factor_converges_and_stops_on_negative_curvature():
+@pytest.mark.parametrize("kind", KINDS)
+def test_pcg_with_a_nearby_factor_converges_and_stops_on_negative_curvature(kind):
     from solidshell.solvers.linear import pcg
 
     A = laplacian(200)
     b = np.random.default_rng(0).standard_normal(200)
-    ch = Cholesky()
+    ch = positive_definite_factor(kind)
     assert ch.factor(A)
     # the exact factor: one iteration, to round-off (cond ~1.6e4 times 1e-16)
     x, k, ok, xAx = pcg(lambda v: A @ v, b, ch.solve, 1e-10, 5)

@@ -93,7 +93,8 @@ import numpy as np
 from ..errors import InputError
 from ..problem import SolveResult, no_progress
 from .blas import kernel_threads, single_threaded_blas
-from .linear import FACTORIZATIONS, Cholesky, LowerCSC, SuperLUDefinite, as_csc, ldl_inertia, pcg
+from .linear import (CHOLESKY_KINDS, Cholesky, LowerCSC, as_csc, ldl_inertia, pcg,
+                     positive_definite_factor, resolve_factorization)
 
 __all__ = ["StaticResult", "solve_static", "run", "METHODS"]
 
@@ -126,7 +127,7 @@ class _System:
     """Model + constraints + loads + contact, with counters.  Works on full flat vectors D (6N)."""
 
     def __init__(self, model, fixed, loads, prescribed, contact, contact_stiffness,
-                 factorization="cholmod"):
+                 factorization="cholmod"):   # a resolved kind (linear.resolve_factorization)
         n = model.n_nodes
         self.model = model
         self.n = n
@@ -157,7 +158,7 @@ class _System:
         # positive-definite factorisations: CHOLMOD (its symbolic analysis shared by every tangent
         # of this solve) or, for comparison, SuperLU's LDL^T
         self.factorization = factorization
-        self.chol = Cholesky() if factorization == "cholmod" else SuperLUDefinite()
+        self.chol = positive_definite_factor(factorization)
         self._has_ef = hasattr(model, "energy_and_force")
         # step sizes are measured in length: a director dof (unit-free, Eq. 1) counts as the motion
         # h/2 |dU_n| of the shell's faces, so that every step control is the same in any unit
@@ -436,7 +437,7 @@ def _newton_level(sys, D, lam, o, stats):
     since = 0
     refresh = True
     it = 0
-    try_cg = o.pcg_iterations > 0 and isinstance(sys.chol, Cholesky) and f.size >= PCG_MIN_DOFS
+    try_cg = o.pcg_iterations > 0 and sys.factorization in CHOLESKY_KINDS and f.size >= PCG_MIN_DOFS
     cg_next = False        # the last factor is unshifted and the last CG step (if any) was quick
     while True:
         g = G[f]
@@ -654,7 +655,7 @@ def _paper_level(sys, D, lam, o, stats):
         stats["iterations"] += 1
         try:
             # Cholesky where K_t is positive definite (most iterations), SuperLU LDL^T elsewhere
-            if sys.factorization == "cholmod" and sys.chol.factor(A):
+            if sys.factorization in CHOLESKY_KINDS and sys.chol.factor(A):
                 dD = sys.chol.solve(r)
             else:
                 dD = ldl_inertia(A)[0].solve(r)
@@ -920,7 +921,7 @@ def _stability(sys, D, eig_max_dofs, known=None):
     ``known``: the free tangent at D whose positive-definite Cholesky factor ``sys.chol`` holds
     (the last test of ``_seek_minimum``): then neither the tangent nor its factor is formed again
     (a tangent and two factorisations saved at the end of every solve)."""
-    chol = sys.chol if isinstance(sys.chol, Cholesky) else Cholesky()   # reuse its analysis
+    chol = sys.chol if sys.factorization in CHOLESKY_KINDS else Cholesky()   # reuse its analysis
     if known is not None and chol is sys.chol:
         A, pd = known, True
     else:
@@ -1054,7 +1055,7 @@ def solve_static(model, fixed, loads, load_factors=None, method="newton", prescr
                  max_cutbacks=8, curvilinear=False, line_search="trust", trust_radius=0.02,
                  arc_length_initial=0.1, max_arc_step=None, max_arc_steps=500,
                  check_stability=True, eig_max_dofs=60000, max_saddle_escapes=5, saddle_step=0.05,
-                 contact=None, contact_stiffness=None, factorization="cholmod", pcg_iterations=0,
+                 contact=None, contact_stiffness=None, factorization="auto", pcg_iterations=0,
                  progress=None) -> StaticResult:
     """Static equilibrium of ``model`` under dead ``loads`` and ``prescribed`` fixed dofs.
 
@@ -1093,12 +1094,15 @@ def solve_static(model, fixed, loads, load_factors=None, method="newton", prescr
         (``saddle_step``: the largest escape step as a fraction of L_f).  A run that cannot reach a
         minimum returns converged=False.  info: saddles_left, saddle_eigenvalues, warnings.
     contact, contact_stiffness : rigid bodies (solidshell.contact) and the penalty [force/length]
-    factorization : "cholmod" (default: CHOLMOD supernodal Cholesky of the positive-definite
-        tangents, SuperLU where the paper's scheme meets an indefinite one) or "superlu" (SuperLU's
-        LDL^T throughout, as before CHOLMOD was added; 3-5 times slower factorisations)
+    factorization : "auto" (default: "pardiso" where Intel MKL is installed, else "cholmod"),
+        "cholmod" (CHOLMOD supernodal Cholesky of the positive-definite tangents, SuperLU where
+        the paper's scheme meets an indefinite one), "pardiso" (the same on MKL PARDISO's
+        Cholesky, solvers/pardiso.py: about twice as fast; InputError without MKL) or "superlu"
+        (SuperLU's LDL^T throughout, as before CHOLMOD was added; 3-5 times slower
+        factorisations).  info["factorization"] names the one used
     pcg_iterations : newton: conjugate-gradient iterations on a new tangent, preconditioned by the
         last factorisation, tried before factorising it (an inexact Newton step; default 0: every
-        iteration factorises; cholmod only, >= PCG_MIN_DOFS free dofs; see ``_newton_level``).  The
+        iteration factorises; cholmod and pardiso only, >= PCG_MIN_DOFS free dofs; see ``_newton_level``).  The
         mesh sequencing sets 6 on the fine mesh, started from the prolonged coarse equilibrium
     progress : callback(fraction, text): called at the start and at every iteration
 
@@ -1149,8 +1153,7 @@ def _solve_static(model, fixed, loads, load_factors, method, prescribed, *, tol,
     factors = [1.0] if load_factors is None else [float(x) for x in np.atleast_1d(load_factors)]
     if not factors or not all(np.isfinite(factors)):
         raise InputError("load_factors must be a non-empty list of finite numbers")
-    if factorization not in FACTORIZATIONS:
-        raise InputError(f"factorization must be one of {FACTORIZATIONS}, got {factorization!r}")
+    factorization = resolve_factorization(factorization)
     for name, v in (("tol", tol), ("energy_tol", energy_tol), ("disp_tol", disp_tol)):
         if not (math.isfinite(float(v)) and float(v) > 0.0):
             raise InputError(f"{name} must be a positive number, got {v!r}")
@@ -1231,6 +1234,7 @@ def _solve_static(model, fixed, loads, load_factors, method, prescribed, *, tol,
         "iterations": int(stats["iterations"]),
         "linear_solves": int(sys.n_solves),
         "factorizations": int(sys.n_factor),
+        "factorization": factorization,
         "tangent_assemblies": int(sys.n_tangent),
         "energy_evaluations": int(sys.n_energy),
         "load_steps": int(stats["load_steps"]),

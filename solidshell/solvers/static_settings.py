@@ -14,6 +14,7 @@ from typing import Literal, Optional, Union
 from pydantic import Field, field_validator, model_validator
 
 from ..settings import Finite, SettingsModel, StateArray
+from .linear import FACTORIZATIONS
 
 __all__ = ["StaticSettings"]
 
@@ -50,7 +51,7 @@ class StaticSettings(SettingsModel):
     max_saddle_escapes: int = Field(5, ge=0, description="saddles left before giving up")
     saddle_step: Finite = Field(0.05, gt=0.0, description="largest escape step, fraction of L_f")
     contact_stiffness: Optional[Finite] = Field(None, gt=0.0)
-    factorization: Literal["cholmod", "superlu"] = "cholmod"
+    factorization: Literal[FACTORIZATIONS] = "auto"
     pcg_iterations: int = Field(
         0, ge=0, description="CG iterations preconditioned by the last factor before a new "
         "factorisation (0: exact Newton steps; unset: 6 on a sequenced fine mesh, else 0)")

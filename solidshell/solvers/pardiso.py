@@ -1,0 +1,219 @@
+"""Intel MKL PARDISO's sparse Cholesky, with :class:`solidshell.solvers.linear.Cholesky`'s interface.
+
+It needs the ``mkl`` wheel, a dependency of solidshell on Linux x86-64 (pyproject.toml; elsewhere the
+static solvers use CHOLMOD, and ``factorization="pardiso"`` says in one line that MKL is missing).
+This module loads its ``libmkl_rt`` through ctypes (a thin binding of the one routine ``pardiso``; ``pypardiso`` wraps the same
+routine but re-hashes the matrix on every solve and has no way to reuse the analysis for new
+values).  Why it is here: on the static drapes it factorises the free-dof tangent about twice as
+fast as CHOLMOD through cvxopt, with the same fill (docs/solvers.md, section 5), and the
+factorisations are most of a static solve.  (cvxopt's bundled OpenBLAS 0.3.15 does not know this
+machine's CPU and falls back to its generic "Prescott" kernels; MKL dispatches to AVX-512 ones.)
+
+Matrix type 2 (real symmetric positive definite): the factorisation is a Cholesky LL^T without
+pivot perturbation, so a matrix that is not positive definite fails (MKL error -4, "zero pivot"),
+which is the answer the energy Newton asks for (linear.Cholesky).  The input is the lower triangle
+in CSC (linear.LowerCSC), read as the upper triangle in CSR, the form PARDISO takes, zero-based
+(iparm[34] = 1): no copy of the pattern.  The analysis (minimum-degree ordering, symbolic
+factorisation) is done once per pattern; ``factor`` runs the numeric phase only.
+
+Threads: MKL runs sequentially (its "sequential" threading layer).  Two threads factorised 1.4x
+faster on a quiet machine (26.6 against 37.4 ms at 18 432 dofs), but MKL's OpenMP threads then
+compete with numba's for the two cores: under load the factorisation became slower than CHOLMOD's,
+and the solves 6x slower (docs/solvers.md, section 5).  Sequential, the results are also the same
+bits whatever the thread count.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import glob
+import os
+import sys
+from ctypes.util import find_library
+
+import numpy as np
+
+__all__ = ["Pardiso", "available", "unavailable_reason"]
+
+_LIB = None
+_REASON = None
+_SEQUENTIAL = 1           # MKL_THREADING_SEQUENTIAL (mkl_service.h)
+_MTYPE_SPD = 2
+_INT = ctypes.c_int32
+_IP = ctypes.POINTER(ctypes.c_int32)
+_DP = ctypes.POINTER(ctypes.c_double)
+
+
+def _candidates():
+    own = os.environ.get("SOLIDSHELL_MKL_RT")
+    if own:
+        yield own
+    for base in (sys.prefix, getattr(sys, "base_prefix", sys.prefix)):
+        yield from sorted(glob.glob(os.path.join(base, "lib", "libmkl_rt.so*")), key=len)
+    name = find_library("mkl_rt")
+    if name:
+        yield name
+
+
+def _load():
+    """The mkl_rt library with PARDISO's argument types declared, or None (reason in _REASON)."""
+    global _LIB, _REASON
+    if _LIB is not None or _REASON is not None:
+        return _LIB
+    for path in _candidates():
+        try:
+            lib = ctypes.CDLL(path)
+            lib.pardiso
+        except (OSError, AttributeError):
+            continue
+        lib.MKL_Set_Threading_Layer.argtypes = [ctypes.c_int]
+        lib.MKL_Set_Threading_Layer(_SEQUENTIAL)
+        lib.pardiso.argtypes = [ctypes.POINTER(ctypes.c_int64), _IP, _IP, _IP, _IP, _IP, _DP, _IP, _IP,
+                                _IP, _IP, _IP, _IP, _DP, _DP, _IP]
+        lib.pardiso.restype = None
+        lib.pardiso_getdiag.argtypes = [ctypes.POINTER(ctypes.c_int64), _DP, _DP, _IP, _IP]
+        lib.pardiso_getdiag.restype = None
+        _LIB = lib
+        return lib
+    _REASON = ("Intel MKL (libmkl_rt) not found: `pip install mkl` (Linux/Windows x86-64), or set "
+               "SOLIDSHELL_MKL_RT to the library's path")
+    return None
+
+
+def available() -> bool:
+    """True when MKL PARDISO can be loaded."""
+    return _load() is not None
+
+
+def unavailable_reason() -> str | None:
+    """One line saying why PARDISO cannot be used (None when it can)."""
+    _load()
+    return _REASON if _LIB is None else None
+
+
+class Pardiso:
+    """PARDISO Cholesky of symmetric matrices sharing a sparsity pattern: ``factor(A, shift)`` factors
+    A + diag(shift) (A a linear.LowerCSC) and returns True, or False when that matrix is not
+    positive definite; ``solve(b)`` solves with the last successful factor."""
+
+    def __init__(self):
+        lib = _load()
+        if lib is None:
+            raise RuntimeError(_REASON)
+        self._lib = lib
+        self._pt = np.zeros(64, dtype=np.int64)      # PARDISO's opaque handle
+        self._iparm = np.zeros(64, dtype=np.int32)
+        ip = self._iparm
+        ip[0] = 1          # the settings below, not the defaults
+        ip[1] = 0          # minimum-degree ordering: on the drapes' tangents 12 % less fill than
+                           # METIS and a 15 % faster factorisation (docs/solvers.md, section 5)
+        ip[7] = 0          # no iterative refinement (a plain solve, as CHOLMOD's)
+        ip[17] = -1        # report the factor's non-zeros
+        ip[34] = 1         # zero-based indices
+        ip[55] = 1         # keep the factor's diagonal (pardiso_getdiag: the singular-pivot test)
+        self._key = None
+        self._indptr = None
+        self._indices = None
+        self._v = None
+        self._n = 0
+        self._ok = False
+        self.n_symbolic = 0
+
+    # ------------------------------------------------------------------ the one routine
+    def _call(self, phase, a, b=None, x=None, nrhs=1):
+        err = _INT(0)
+        self._lib.pardiso(self._pt.ctypes.data_as(ctypes.POINTER(ctypes.c_int64)),
+                          ctypes.byref(_INT(1)), ctypes.byref(_INT(1)), ctypes.byref(_INT(_MTYPE_SPD)),
+                          ctypes.byref(_INT(phase)), ctypes.byref(_INT(self._n)),
+                          a.ctypes.data_as(_DP), self._indptr.ctypes.data_as(_IP),
+                          self._indices.ctypes.data_as(_IP), None, ctypes.byref(_INT(nrhs)),
+                          self._iparm.ctypes.data_as(_IP), ctypes.byref(_INT(0)),
+                          None if b is None else b.ctypes.data_as(_DP),
+                          None if x is None else x.ctypes.data_as(_DP), ctypes.byref(err))
+        return err.value
+
+    def _release(self):
+        if self._key is not None and self._n:
+            self._call(-1, self._v)
+        self._key = None
+        self._ok = False
+
+    def __del__(self):
+        try:
+            self._release()
+        except Exception:  # noqa: BLE001 - interpreter shutdown
+            pass
+
+    # ------------------------------------------------------------------ Cholesky's interface
+    def _same_pattern(self, L):
+        if self._key is None:
+            return False
+        if L.key is not None:
+            return L.key is self._key
+        return (L.indptr.size == self._indptr.size + 0 and np.array_equal(L.indptr, self._indptr)
+                and np.array_equal(L.indices, self._indices))
+
+    def _analyse(self, L):
+        self._release()
+        self._n = L.shape[0]
+        self._indptr = np.ascontiguousarray(L.indptr, dtype=np.int32)
+        self._indices = np.ascontiguousarray(L.indices, dtype=np.int32)
+        self._v = np.array(L.data, dtype=float)
+        err = self._call(11, self._v)
+        if err != 0:
+            raise RuntimeError(f"PARDISO analysis failed (MKL error {err})")
+        self._key = L.key if L.key is not None else object()
+        self.n_symbolic += 1
+
+    def factor(self, A, shift=None) -> bool:
+        """Factor A + diag(shift); False (and no factor kept) when it is not positive definite
+        (PARDISO's Cholesky meets a non-positive pivot), not finite, or numerically singular (a
+        pivot below linear.SINGULAR_PIVOT of the largest: CHOLMOD's test, on L_ii^2)."""
+        from .linear import SINGULAR_PIVOT, LowerCSC
+
+        L = A if isinstance(A, LowerCSC) else LowerCSC.from_symmetric(A)
+        if not self._same_pattern(L):
+            self._analyse(L)
+        v = self._v
+        v[:] = L.data
+        if shift is not None:
+            v[L.diag_pos] += shift
+        self._ok = False
+        if not np.isfinite(v).all():
+            return False
+        err = self._call(22, v)
+        if err == -4:          # zero or negative pivot: not positive definite
+            return False
+        if err != 0:
+            raise RuntimeError(f"PARDISO factorisation failed (MKL error {err})")
+        piv = self._pivots()
+        self._ok = bool(piv.size and piv.min() > 0.0 and piv.min() > SINGULAR_PIVOT * piv.max())
+        return self._ok
+
+    def _pivots(self):
+        """The factor's pivots L_ii^2 (pardiso_getdiag), in the matrix's order."""
+        df = np.empty(self._n)
+        da = np.empty(self._n)
+        err = _INT(0)
+        self._lib.pardiso_getdiag(self._pt.ctypes.data_as(ctypes.POINTER(ctypes.c_int64)),
+                                  df.ctypes.data_as(_DP), da.ctypes.data_as(_DP),
+                                  ctypes.byref(_INT(1)), ctypes.byref(err))
+        if err.value != 0:
+            raise RuntimeError(f"PARDISO diagonal not available (MKL error {err.value})")
+        return df
+
+    @property
+    def factor_nonzeros(self) -> int:
+        return int(self._iparm[17])
+
+    def solve(self, b):
+        """x with (A + diag(shift)) x = b for the last successful ``factor``."""
+        if not self._ok:
+            raise RuntimeError("no positive-definite factorisation to solve with")
+        b = np.ascontiguousarray(b, dtype=float)
+        x = np.empty_like(b)
+        err = self._call(33, self._v, b, x)
+        if err != 0:
+            raise RuntimeError(f"PARDISO solve failed (MKL error {err})")
+        return x
+

@@ -68,6 +68,9 @@ def _load():
             continue
         lib.MKL_Set_Threading_Layer.argtypes = [ctypes.c_int]
         lib.MKL_Set_Threading_Layer(_SEQUENTIAL)
+        # MKL's own memory pool keeps every freed buffer: without it the static square-pedestal
+        # run peaks 2.6 MB lower, at no measured cost (PARDISO allocates a few buffers per call)
+        lib.mkl_disable_fast_mm()
         lib.pardiso.argtypes = [ctypes.POINTER(ctypes.c_int64), _IP, _IP, _IP, _IP, _IP, _DP, _IP, _IP,
                                 _IP, _IP, _IP, _IP, _DP, _DP, _IP]
         lib.pardiso.restype = None

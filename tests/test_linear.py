@@ -105,6 +105,43 @@ def test_factorization_names_resolve_and_a_missing_mkl_is_one_input_error_line(m
     assert "\n" not in str(e.value) and "MKL" in str(e.value)
 
 
+@pytest.mark.skipif(not pardiso.available(), reason=str(pardiso.unavailable_reason()))
+@pytest.mark.parametrize("shift", [0.3, -0.05, -0.9, -2.5])
+def test_pardiso_ldl_inertia_equals_the_eigenvalue_count_and_solves(shift):
+    # a 2-D grid Laplacian (5-point, 12x12) + a random symmetric perturbation, shifted: the number
+    # of negative eigenvalues (dense eigvalsh, exact up to eigenvalues within ~1e-13 of 0, none
+    # here: asserted) is what PARDISO's LDL^T must report, as SuperLU's does
+    from solidshell.solvers.pardiso import PardisoLDL
+
+    m = 12
+    T = laplacian(m)
+    A = (sp.kron(sp.eye(m), T) + sp.kron(T, sp.eye(m))).tocsc()
+    R = sp.random(m * m, m * m, density=0.02, random_state=4, format="csc")
+    A = (A + 0.1 * (R + R.T) + shift * sp.eye(m * m)).tocsc()
+    ev = np.linalg.eigvalsh(A.toarray())
+    assert np.abs(ev).min() > 1e-6
+    lu, neg = PardisoLDL().ldl(A)
+    assert neg == int(np.sum(ev < 0)) == ldl_inertia(A)[1]
+    b = np.random.default_rng(5).standard_normal(m * m)
+    # cond(A) = max|ev| / min|ev|: a backward-stable solve's residual is ~1e-16 * cond
+    cond = np.abs(ev).max() / np.abs(ev).min()
+    assert np.linalg.norm(A @ lu.solve(b) - b) <= 100 * 2.2e-16 * cond * np.linalg.norm(b)
+
+
+@pytest.mark.skipif(not pardiso.available(), reason=str(pardiso.unavailable_reason()))
+def test_pardiso_ldl_leaves_a_singular_matrix_to_superlu():
+    # the Neumann Laplacian is singular: PARDISO perturbs a pivot and returns None (its inertia and
+    # solve are not exact), and the static solver's ldl then asks SuperLU, which raises
+    from solidshell.solvers.pardiso import PardisoLDL
+
+    n = 50
+    N = laplacian(n).tolil()
+    N[0, 0] = N[n - 1, n - 1] = 1.0
+    assert PardisoLDL().ldl(N.tocsc()) is None
+    with pytest.raises(RuntimeError):
+        ldl_inertia(N.tocsc())
+
+
 def test_ldl_inertia_counts_negative_eigenvalues():
     # Sylvester: the number of negative pivots of a symmetric LDL^T equals the number of negative
     # eigenvalues; Laplacian - 0.05 I has exactly the eigenvalues 2 - 2 cos(k pi / 51) < 0.05,

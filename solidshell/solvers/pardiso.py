@@ -33,12 +33,13 @@ from ctypes.util import find_library
 
 import numpy as np
 
-__all__ = ["Pardiso", "available", "unavailable_reason"]
+__all__ = ["Pardiso", "PardisoLDL", "available", "unavailable_reason"]
 
 _LIB = None
 _REASON = None
 _SEQUENTIAL = 1           # MKL_THREADING_SEQUENTIAL (mkl_service.h)
 _MTYPE_SPD = 2
+_MTYPE_SYM_INDEFINITE = -2
 _INT = ctypes.c_int32
 _IP = ctypes.POINTER(ctypes.c_int32)
 _DP = ctypes.POINTER(ctypes.c_double)
@@ -99,6 +100,8 @@ class Pardiso:
     A + diag(shift) (A a linear.LowerCSC) and returns True, or False when that matrix is not
     positive definite; ``solve(b)`` solves with the last successful factor."""
 
+    _mtype = _MTYPE_SPD
+
     def __init__(self):
         lib = _load()
         if lib is None:
@@ -127,7 +130,7 @@ class Pardiso:
     def _call(self, phase, a, b=None, x=None):
         err = _INT(0)
         self._lib.pardiso(self._pt.ctypes.data_as(ctypes.POINTER(ctypes.c_int64)),
-                          ctypes.byref(_INT(1)), ctypes.byref(_INT(1)), ctypes.byref(_INT(_MTYPE_SPD)),
+                          ctypes.byref(_INT(1)), ctypes.byref(_INT(1)), ctypes.byref(_INT(self._mtype)),
                           ctypes.byref(_INT(phase)), ctypes.byref(_INT(self._n)),
                           a.ctypes.data_as(_DP), self._indptr.ctypes.data_as(_IP),
                           self._indices.ctypes.data_as(_IP), None, ctypes.byref(_INT(1)),
@@ -223,4 +226,45 @@ class Pardiso:
         if err != 0:
             raise RuntimeError(f"PARDISO solve failed (MKL error {err})")
         return x
+
+
+class PardisoLDL(Pardiso):
+    """PARDISO's LDL^T of symmetric indefinite matrices (matrix type -2, Bunch-Kaufman 1x1 and 2x2
+    pivots within supernodes) with its inertia, for the paper's scheme and the arc-length method
+    (linear.ldl_inertia's job, ~2-3x faster than SuperLU there).  ``ldl(A)`` returns
+    (self, number of negative eigenvalues), or None when PARDISO had to perturb a pivot (a pivot
+    below 1e-8 of the matrix's scale: then neither the inertia nor the solve is exact, and the
+    caller falls back to SuperLU, whose stricter singularity test decides)."""
+
+    _mtype = _MTYPE_SYM_INDEFINITE
+
+    def __init__(self):
+        super().__init__()
+        ip = self._iparm
+        ip[9] = 8          # perturb pivots below 1e-8 (and report them: iparm[13])
+        ip[10] = 1         # symmetric scaling and
+        ip[12] = 1         # weighted matching: the 2x2 pivots chosen before the ordering
+        ip[20] = 1         # Bunch-Kaufman pivoting
+        ip[55] = 0         # no pardiso_getdiag here: 2x2 pivots make D's diagonal no test
+
+    def factor(self, A, shift=None):
+        raise TypeError("PardisoLDL factorises with ldl(A)")
+
+    def ldl(self, A):
+        """(self, n_negative) after factorising A, or None (perturbed pivots or non-finite A)."""
+        from .linear import LowerCSC
+
+        L = A if isinstance(A, LowerCSC) else LowerCSC.from_symmetric(A)
+        if not self._same_pattern(L):
+            self._analyse(L)
+        self._v[:] = L.data
+        self._ok = False
+        if not np.isfinite(self._v).all():
+            return None
+        err = self._call(22, self._v)
+        ip = self._iparm
+        if err != 0 or ip[13] != 0 or ip[21] + ip[22] != self._n:
+            return None
+        self._ok = True
+        return self, int(ip[22])
 

@@ -17,8 +17,8 @@ Methods (``method=``)
     "trust"``: the Newton step is cut to a max-norm radius that starts at 0.02 L_f and grows/shrinks
     with the ratio of actual to predicted decrease of Pi; ``"armijo"``: backtracking line search;
     ``"none"``), and a tangent shift K_t + sigma diag|K_t| whenever K_t is not positive definite
-    (detected by its Cholesky factorisation failing: CHOLMOD, solvers/linear.py; or, with
-    ``factorization="superlu"``, by the inertia of SuperLU's LDL^T, Sylvester's law); sigma grows
+    (detected by its Cholesky factorisation failing: MKL PARDISO or CHOLMOD, solvers/linear.py; or,
+    with ``factorization="superlu"``, by the inertia of SuperLU's LDL^T, Sylvester's law); sigma grows
     tenfold from 1e-8 until the factorisation succeeds and starts from a tenth of it on the next
     iteration.  A full shifted step whose actual decrease of Pi is at least ``EXTEND_RHO`` (1.8)
     times the predicted one -- Pi nearly linear along it, its length set by the shift -- is doubled
@@ -159,6 +159,7 @@ class _System:
         # of this solve) or, for comparison, SuperLU's LDL^T
         self.factorization = factorization
         self.chol = positive_definite_factor(factorization)
+        self._ldl = None
         self._has_ef = hasattr(model, "energy_and_force")
         # step sizes are measured in length: a director dof (unit-free, Eq. 1) counts as the motion
         # h/2 |dU_n| of the shell's faces, so that every step control is the same in any unit
@@ -283,6 +284,21 @@ class _System:
                 m = pos >= 0
                 np.add.at(data, pos[m], nn[m])
         return F, LowerCSC(lw.indptr, lw.indices, data, lw.diag_pos, lw)
+
+    def ldl(self, A):
+        """(solver, number of negative eigenvalues or None) of the symmetric free tangent ``A``:
+        PARDISO's LDL^T (pardiso.PardisoLDL, its analysis kept for the pattern) where the
+        factorisation is "pardiso" and no pivot had to be perturbed, else SuperLU's
+        (linear.ldl_inertia; RuntimeError when singular).  The solver holds until the next call."""
+        if self.factorization == "pardiso":
+            if self._ldl is None:
+                from .pardiso import PardisoLDL
+
+                self._ldl = PardisoLDL()
+            out = self._ldl.ldl(A)
+            if out is not None:
+                return out
+        return ldl_inertia(as_csc(A))
 
     def reference_norm(self, F, lam):
         """max(|lam P|, |reactions|, |F_int on the free dofs|, tiny): the scale of the relative
@@ -658,7 +674,7 @@ def _paper_level(sys, D, lam, o, stats):
             if sys.factorization in CHOLESKY_KINDS and sys.chol.factor(A):
                 dD = sys.chol.solve(r)
             else:
-                dD = ldl_inertia(A)[0].solve(r)
+                dD = sys.ldl(A)[0].solve(r)
         except RuntimeError:
             return D, False, (f"singular tangent K_t at iteration {it} (relative residual {rel:.2e}); "
                               "the paper's scheme cannot proceed"), rel
@@ -802,7 +818,7 @@ def _arc_length(sys, D, lam_target, o, stats, progress, path, dlam0, max_steps, 
         raise InputError("arc-length supports dead loads only (prescribed values must be zero)")
     lam = stats["load_factor"]
     F, A = sys.free_tangent(D)
-    lu, _ = ldl_inertia(as_csc(A))
+    lu, _ = sys.ldl(A)
     sys.n_solves += 1
     sys.n_factor += 1
     dt = lu.solve(Pf)
@@ -815,7 +831,7 @@ def _arc_length(sys, D, lam_target, o, stats, progress, path, dlam0, max_steps, 
     for step in range(max_steps):
         F, A = sys.free_tangent(D)
         try:
-            lu, neg = ldl_inertia(as_csc(A))
+            lu, neg = sys.ldl(A)
         except RuntimeError:
             return D, False, f"singular tangent at load factor {lam:.4g} (bifurcation point?)", rel
         if neg is not None:
@@ -842,7 +858,7 @@ def _arc_length(sys, D, lam_target, o, stats, progress, path, dlam0, max_steps, 
                 break
             stats["iterations"] += 1
             try:
-                lu, _ = ldl_inertia(as_csc(A))
+                lu, _ = sys.ldl(A)
             except RuntimeError:
                 break
             sys.n_solves += 2
@@ -931,7 +947,7 @@ def _stability(sys, D, eig_max_dofs, known=None):
     s = 1e-10 * float(np.abs(A.diagonal()).mean())
     if not pd:
         try:
-            _, neg = ldl_inertia(A)
+            _, neg = sys.ldl(A)
             pd = None if neg is None else bool(neg == 0)
         except RuntimeError:
             pd = False

@@ -206,6 +206,27 @@ def test_patterns_cover_every_mask_and_tile_the_square():
     assert max(r for _, r in quality.values()) <= 2.0 + 1e-9
 
 
+def test_memoised_transition_variants_are_each_elements_own_choice():
+    """BackgroundMesh.transition_variants chooses every element of a level at the first use of a
+    mask there (one vectorised call); each answer must be what choose_variant gives that element
+    alone, exactly (integer variants), on a jittered grid where the variants differ by element."""
+    from solidshell.adapt.transition import choose_variant
+
+    bg = BackgroundMesh.from_level0(grid(3, 2, jitter=0.3, seed=5), 2)
+    rng = np.random.default_rng(4)
+    picked = set()
+    for l in range(bg.levels):
+        e = rng.integers(0, bg.n_elements(l), 40)
+        mask = rng.integers(1, 16, 40)
+        got = bg.transition_variants(l, e, mask)
+        for ei, m, g in zip(e, mask, got):
+            ch = bg.conn[l + 1][4 * ei + np.arange(4)]
+            loc = np.concatenate([bg.conn[l][ei], ch[:, 1], ch[:1, 2]])
+            assert g == choose_variant(int(m), bg.Xo[loc][None])[0]
+            picked.add(int(g))
+    assert len(picked) > 1       # elements do get different variants
+
+
 # ----------------------------------------------------------------------------- property-based
 @st.composite
 def level0_meshes(draw):

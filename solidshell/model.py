@@ -400,8 +400,7 @@ class Model:
         xo, xn, _ = self._current(U)
         out = []
         for b in self.blocks:
-            mb, _, _ = b.module.raw_strains(xo[b.conn], xn[b.conn])
-            kb = mb[..., 3:] - b.c["r_mb"][..., 3:]
+            kb = b.module.bending_raw_strains(xo[b.conn], xn[b.conn]) - b.c["r_mb"][..., 3:]
             eb = np.einsum("mgab,mgb->mga", b.c["T"], kb)
             out.append(np.sqrt(np.mean(np.sum(eb * eb, -1), axis=1)))
         return np.concatenate(out)

@@ -252,6 +252,7 @@ class Model:
             self.blocks.append(_Block(tri3, mesh.tris, Xo, Xn, material, "full", constants))
         self._pattern = None
         self._mass = None
+        self._areas = None
 
     def around(self, nodes) -> "Model":
         """This model with only the elements that touch ``nodes`` (indices): the same mesh, node
@@ -264,6 +265,7 @@ class Model:
         sub.blocks = [b.take(np.flatnonzero(touch[b.conn].any(axis=1))) for b in self.blocks]
         sub.blocks = [b for b in sub.blocks if len(b.conn)]
         sub._pattern = None
+        sub._areas = None       # nodal_areas() of the sub-model: its own blocks' (the memo is the whole model's)
         return sub
 
     n_nodes = property(lambda self: self.mesh.n_nodes)
@@ -374,12 +376,16 @@ class Model:
 
     # ------------------------------------------------------------- mass
     def nodal_areas(self) -> np.ndarray:
-        """(N,) mid-surface area share of each node by the trapezoidal rule [length^2] (Section 4)."""
-        A = np.zeros(self.n_nodes)
-        Xo, Xn = self.mesh.nodes, self.mesh.directors
-        for b in self.blocks:
-            np.add.at(A, b.conn.ravel(), b.module.nodal_areas(Xo[b.conn], Xn[b.conn]).ravel())
-        return A
+        """(N,) mid-surface area share of each node by the trapezoidal rule [length^2] (Section 4).
+        Computed once per model (the gravity loads and the lumped mass both ask; every remesh of an
+        adaptive run builds a new model)."""
+        if self._areas is None:
+            A = np.zeros(self.n_nodes)
+            Xo, Xn = self.mesh.nodes, self.mesh.directors
+            for b in self.blocks:
+                np.add.at(A, b.conn.ravel(), b.module.nodal_areas(Xo[b.conn], Xn[b.conn]).ravel())
+            self._areas = A
+        return self._areas.copy()
 
     def lumped_mass(self) -> np.ndarray:
         """(N,6) diagonal mass by the trapezoidal rule in-plane and through the thickness (Section 4):

@@ -141,6 +141,8 @@ def estimate_omega_max(force, mass, free, U=None, *, method: str = "lanczos", fd
         if difference == "forward":
             f0 = np.array(force(base.reshape(shape)), dtype=float).ravel()[sel]
             count[0] += 1
+        w = base.copy()          # the perturbed state, one buffer: only its ``sel`` entries change
+        base_sel = base[sel]
 
         def Av(x):
             x = np.asarray(x, dtype=float).ravel()
@@ -149,13 +151,13 @@ def estimate_omega_max(force, mass, free, U=None, *, method: str = "lanczos", fd
             if vmax == 0.0:
                 return np.zeros_like(x)
             e = fd_step / vmax
-            w = base.copy()
-            w[sel] += e * v
+            ev = e * v
+            w[sel] = base_sel + ev
             fp = np.array(force(w.reshape(shape)), dtype=float).ravel()[sel]   # a copy: force may reuse its buffer
             if f0 is not None:
                 count[0] += 1
                 return s * (fp - f0) / e
-            w[sel] = base[sel] - e * v
+            w[sel] = base_sel - ev
             fm = np.asarray(force(w.reshape(shape)), dtype=float).ravel()[sel]
             count[0] += 2
             return s * (fp - fm) / (2.0 * e)

@@ -107,6 +107,11 @@ def _neighbours(side_edge, cnt):
     return nb.reshape(m, 4)
 
 
+_VARIANT_CHUNK = 1 << 14
+"""Elements per choose_variant call when a level's variants are chosen (transition_variants):
+~40 MB of temporaries at most."""
+
+
 class BackgroundMesh:
     """All levels of the 1-to-4 subdivision of a level-0 quad mesh (Section 5.1).
 
@@ -269,10 +274,12 @@ class BackgroundMesh:
             if len(TABLE[int(m)][1]) == 1:
                 tab[:, m] = 0
                 continue
-            e = np.arange(self.n_elements(l))
-            ch = self.conn[l + 1][(4 * e[:, None] + np.arange(4)).ravel()].reshape(-1, 4, 4)
-            loc = np.concatenate([self.conn[l][e], ch[:, :, 1], ch[:, :1, 2]], axis=1)
-            tab[:, m] = choose_variant(int(m), self.Xo[loc])
+            n = self.n_elements(l)
+            for a in range(0, n, _VARIANT_CHUNK):     # bounded temporaries on a deep background
+                e = np.arange(a, min(a + _VARIANT_CHUNK, n))
+                ch = self.conn[l + 1][(4 * e[:, None] + np.arange(4)).ravel()].reshape(-1, 4, 4)
+                loc = np.concatenate([self.conn[l][e], ch[:, :, 1], ch[:, :1, 2]], axis=1)
+                tab[e, m] = choose_variant(int(m), self.Xo[loc])
         return tab[index, mask]
 
     def element_nodes(self, level: int, index) -> np.ndarray:

@@ -49,7 +49,7 @@ class ElementConstants:
 
     def __init__(self):
         self._section = None
-        self._tables = {}        # (module, membrane) -> ({element key: (chunk, row)}, [chunks])
+        self._tables = {}        # (module, membrane) -> _ConstantsTable
 
     def get(self, module, Xo_e, Xn_e, section, membrane) -> dict:
         """precompute's dict for the elements with nodal (M, nn, 3) Xo_e, Xn_e: the cached rows,
@@ -59,25 +59,104 @@ class ElementConstants:
             self._section = key
         elif key != self._section:
             raise ValueError("ElementConstants serves one section; make another for this one")
-        index, chunks = self._tables.setdefault((module.__name__, membrane), ({}, []))
-        keys = [a.tobytes() + b.tobytes() for a, b in zip(Xo_e, Xn_e)]   # per remesh, not per step
-        where = np.array([index.get(k, (-1, -1)) for k in keys], dtype=np.int64).reshape(-1, 2)
-        miss = np.flatnonzero(where[:, 0] < 0)
+        if not len(Xo_e):
+            return _precompute(module, Xo_e, Xn_e, section, membrane)
+        table = self._tables.setdefault((module.__name__, membrane), _ConstantsTable())
+        rows = _element_rows(Xo_e, Xn_e)
+        slot = table.find(rows)
+        miss = np.flatnonzero(slot < 0)
         if miss.size:
-            chunks.append(_precompute(module, Xo_e[miss], Xn_e[miss], section, membrane))
-            where[miss] = np.column_stack([np.full(miss.size, len(chunks) - 1), np.arange(miss.size)])
-            index.update(zip((keys[i] for i in miss), map(tuple, where[miss].tolist())))
-        first = chunks[int(where[0, 0])]
-        out = {k: v for k, v in first.items() if k in _TYPE_CONSTANTS}
-        for k, v in first.items():
-            if k in _TYPE_CONSTANTS:
-                continue
-            a = np.empty((len(keys),) + v.shape[1:], dtype=v.dtype)
-            for ci in np.unique(where[:, 0]):
-                sel = where[:, 0] == ci
-                a[sel] = chunks[ci][k][where[sel, 1]]
-            out[k] = a
+            slot[miss] = table.add(rows[miss], _precompute(module, Xo_e[miss], Xn_e[miss], section, membrane))
+        return table.gather(slot)
+
+
+def _element_rows(Xo_e, Xn_e) -> np.ndarray:
+    """(M, 6 nn) uint64: each element's reference node coordinates X_o, X_n as raw 64-bit words, its
+    key in ElementConstants (equal rows <=> equal bytes, as the per-element bytes keys were)."""
+    M = len(Xo_e)
+    R = np.concatenate([np.asarray(Xo_e, dtype=float).reshape(M, -1), np.asarray(Xn_e, dtype=float).reshape(M, -1)],
+                       axis=1)
+    return np.ascontiguousarray(R).view(np.uint64)
+
+
+_FNV_PRIME = np.uint64(0x100000001B3)
+
+
+def _row_hash(rows: np.ndarray) -> np.ndarray:
+    """(M,) uint64 FNV-1a-style hash over the 64-bit words of each row (vectorised over rows).  A
+    collision costs only a recomputation: a hit is confirmed by comparing the rows themselves."""
+    h = np.full(len(rows), np.uint64(0xCBF29CE484222325))
+    with np.errstate(over="ignore"):
+        for j in range(rows.shape[1]):
+            h = (h ^ rows[:, j]) * _FNV_PRIME
+            h ^= h >> np.uint64(29)
+    return h
+
+
+class _ConstantsTable:
+    """The constants of one (element type, membrane) seen so far: one row per element in growing
+    stores, found by a sorted array of row hashes (np.searchsorted; no Python loop over elements,
+    which the per-element dictionary of bytes keys was: 0.45 s of the paper path's remeshing)."""
+
+    def __init__(self):
+        self.n = 0
+        self.rows = None             # (cap, 6 nn) uint64 keys of the stored elements
+        self.store = {}              # per-element constant -> (cap, ...) array
+        self.shared = None           # the type constants (_TYPE_CONSTANTS) of the first precompute
+        self.hashes = np.zeros(0, dtype=np.uint64)   # sorted hashes of the indexed rows
+        self.slots = np.zeros(0, dtype=np.int64)     # their rows in the stores
+
+    def find(self, rows) -> np.ndarray:
+        """(M,) store row of each element (row of ``rows``), -1 where not stored."""
+        out = np.full(len(rows), -1, dtype=np.int64)
+        if not self.hashes.size:
+            return out
+        h = _row_hash(rows)
+        pos = np.minimum(np.searchsorted(self.hashes, h), self.hashes.size - 1)
+        cand = np.flatnonzero(self.hashes[pos] == h)
+        slot = self.slots[pos[cand]]
+        same = np.all(self.rows[slot] == rows[cand], axis=1)
+        out[cand[same]] = slot[same]
         return out
+
+    def add(self, rows, consts: dict) -> np.ndarray:
+        """Store new elements' rows and precomputed constants; their store rows.  A row whose hash
+        is already indexed (a collision, or a duplicate within ``rows``) is stored but not indexed:
+        it is recomputed when asked for again, never confused with another."""
+        k = len(rows)
+        if self.shared is None:
+            self.shared = {c: v for c, v in consts.items() if c in _TYPE_CONSTANTS}
+        per = {c: v for c, v in consts.items() if c not in _TYPE_CONSTANTS}
+        if self.n + k > (0 if self.rows is None else len(self.rows)):
+            cap = max(2 * (self.n + k), 64)
+            self.rows = _grown(self.rows, cap, rows)
+            self.store = {c: _grown(self.store.get(c), cap, v) for c, v in per.items()}
+        new = np.arange(self.n, self.n + k)
+        self.rows[new] = rows
+        for c, v in per.items():
+            self.store[c][new] = v
+        self.n += k
+        h = _row_hash(rows)
+        _, first = np.unique(h, return_index=True)
+        fresh = first[~np.isin(h[first], self.hashes)]
+        hashes = np.concatenate([self.hashes, h[fresh]])
+        order = np.argsort(hashes, kind="stable")
+        self.hashes, self.slots = hashes[order], np.concatenate([self.slots, new[fresh]])[order]
+        return new
+
+    def gather(self, slot) -> dict:
+        """precompute's dict for the stored elements ``slot`` (in that order)."""
+        out = dict(self.shared)
+        out.update({c: v[slot] for c, v in self.store.items()})
+        return out
+
+
+def _grown(a, cap, like) -> np.ndarray:
+    """``a``'s rows in a new (cap, ...) array shaped and typed like ``like``'s rows."""
+    out = np.empty((cap,) + like.shape[1:], dtype=like.dtype)
+    if a is not None:
+        out[:len(a)] = a
+    return out
 
 
 class _Block:
@@ -173,6 +252,7 @@ class Model:
             self.blocks.append(_Block(tri3, mesh.tris, Xo, Xn, material, "full", constants))
         self._pattern = None
         self._mass = None
+        self._areas = None
 
     def around(self, nodes) -> "Model":
         """This model with only the elements that touch ``nodes`` (indices): the same mesh, node
@@ -185,6 +265,7 @@ class Model:
         sub.blocks = [b.take(np.flatnonzero(touch[b.conn].any(axis=1))) for b in self.blocks]
         sub.blocks = [b for b in sub.blocks if len(b.conn)]
         sub._pattern = None
+        sub._areas = None       # nodal_areas() of the sub-model: its own blocks' (the memo is the whole model's)
         return sub
 
     n_nodes = property(lambda self: self.mesh.n_nodes)
@@ -295,12 +376,16 @@ class Model:
 
     # ------------------------------------------------------------- mass
     def nodal_areas(self) -> np.ndarray:
-        """(N,) mid-surface area share of each node by the trapezoidal rule [length^2] (Section 4)."""
-        A = np.zeros(self.n_nodes)
-        Xo, Xn = self.mesh.nodes, self.mesh.directors
-        for b in self.blocks:
-            np.add.at(A, b.conn.ravel(), b.module.nodal_areas(Xo[b.conn], Xn[b.conn]).ravel())
-        return A
+        """(N,) mid-surface area share of each node by the trapezoidal rule [length^2] (Section 4).
+        Computed once per model (the gravity loads and the lumped mass both ask; every remesh of an
+        adaptive run builds a new model)."""
+        if self._areas is None:
+            A = np.zeros(self.n_nodes)
+            Xo, Xn = self.mesh.nodes, self.mesh.directors
+            for b in self.blocks:
+                np.add.at(A, b.conn.ravel(), b.module.nodal_areas(Xo[b.conn], Xn[b.conn]).ravel())
+            self._areas = A
+        return self._areas.copy()
 
     def lumped_mass(self) -> np.ndarray:
         """(N,6) diagonal mass by the trapezoidal rule in-plane and through the thickness (Section 4):
@@ -321,8 +406,7 @@ class Model:
         xo, xn, _ = self._current(U)
         out = []
         for b in self.blocks:
-            mb, _, _ = b.module.raw_strains(xo[b.conn], xn[b.conn])
-            kb = mb[..., 3:] - b.c["r_mb"][..., 3:]
+            kb = b.module.bending_raw_strains(xo[b.conn], xn[b.conn]) - b.c["r_mb"][..., 3:]
             eb = np.einsum("mgab,mgb->mga", b.c["T"], kb)
             out.append(np.sqrt(np.mean(np.sum(eb * eb, -1), axis=1)))
         return np.concatenate(out)

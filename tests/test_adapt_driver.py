@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 from solidshell import io as sio
-from solidshell.adapt.driver import _remap_anchors
+from solidshell.adapt.driver import _remap_anchors, _rows_in
 from solidshell.errors import InputError
 from solidshell.mesh import ShellMesh
 from solidshell.runner import _adaptive_run, adapt_settings, build_scene_mesh, run_scene
@@ -441,6 +441,20 @@ def test_remap_anchors_keeps_survivors_and_gives_new_nodes_nan():
     assert np.all(np.isnan(b[:, 3:]))                           # 7, 9 are new: no stick anchor yet
     empty = _remap_anchors(np.zeros((0, len(old), 3)), old, new, Nb)
     assert empty.shape == (0, len(new), 3)
+
+
+@pytest.mark.parametrize("base", [50, 10**6])
+def test_rows_in_is_row_membership(base):
+    """_changed_nodes' element match (sorted node rows of the new mesh found among the old mesh's):
+    exact membership, by 1-d keys (base 50) and by the row-unique fallback when base^4 overflows
+    int64 (10^6), against a brute-force comparison."""
+    rng = np.random.default_rng(base)
+    table = np.sort(rng.integers(0, base, (300, 4)), axis=1)
+    rows = np.vstack([table[rng.integers(0, 300, 100)], np.sort(rng.integers(0, base, (100, 4)), axis=1)])
+    want = (rows[:, None, :] == table[None]).all(-1).any(1)
+    assert np.array_equal(_rows_in(rows, table), want)
+    assert want[:100].all() and not want.all()
+    assert _rows_in(rows[:0], table).shape == (0,) and not _rows_in(rows, table[:0]).any()
 
 
 # ----------------------------------------------------------------------------- 5. bad input

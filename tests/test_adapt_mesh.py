@@ -206,6 +206,33 @@ def test_patterns_cover_every_mask_and_tile_the_square():
     assert max(r for _, r in quality.values()) <= 2.0 + 1e-9
 
 
+@pytest.mark.parametrize("chunk", [None, 7])
+def test_memoised_transition_variants_are_each_elements_own_choice(chunk, monkeypatch):
+    """BackgroundMesh.transition_variants chooses every element of a level at the first use of a
+    mask there (vectorised calls of _VARIANT_CHUNK elements; 7 puts chunk boundaries inside every
+    level); each answer must be what choose_variant gives that element alone, exactly (integer
+    variants), on a jittered grid where the variants differ by element."""
+    import solidshell.adapt.background as background
+    from solidshell.adapt.transition import choose_variant
+
+    if chunk:
+        monkeypatch.setattr(background, "_VARIANT_CHUNK", chunk)
+
+    bg = BackgroundMesh.from_level0(grid(3, 2, jitter=0.3, seed=5), 2)
+    rng = np.random.default_rng(4)
+    picked = set()
+    for l in range(bg.levels):
+        e = rng.integers(0, bg.n_elements(l), 40)
+        mask = rng.integers(1, 16, 40)
+        got = bg.transition_variants(l, e, mask)
+        for ei, m, g in zip(e, mask, got):
+            ch = bg.conn[l + 1][4 * ei + np.arange(4)]
+            loc = np.concatenate([bg.conn[l][ei], ch[:, 1], ch[:1, 2]])
+            assert g == choose_variant(int(m), bg.Xo[loc][None])[0]
+            picked.add(int(g))
+    assert len(picked) > 1       # elements do get different variants
+
+
 # ----------------------------------------------------------------------------- property-based
 @st.composite
 def level0_meshes(draw):

@@ -170,27 +170,40 @@ def test_settling_a_region_moves_only_its_directors_and_equals_the_held_minimisa
     assert _pi(model, loads, S) < _pi(model, loads, U)
 
 
-def test_element_constants_cache_gives_the_same_model_bit_for_bit():
+@pytest.mark.parametrize("weak_hash", [False, True])
+def test_element_constants_cache_gives_the_same_model_bit_for_bit(weak_hash, monkeypatch):
     """The adaptive runs share one model.ElementConstants over their meshes: each element's folded
     constants are computed once and gathered afterwards.  Models of a sequence of adapted meshes
-    (transition triangles, "ans" coarse quads, "full" finest ones) built with the cache equal the
-    models built from scratch bit for bit -- the precompute functions treat every element apart,
-    which a restart of an adaptive run (a fresh cache) relies on -- and a model of another section
-    is refused."""
+    (transition triangles, "ans" coarse quads, "full" finest ones; splits, then merges that bring
+    back elements stored several meshes earlier) built with the cache equal the models built from
+    scratch bit for bit -- the precompute functions treat every element apart, which a restart of
+    an adaptive run (a fresh cache) relies on -- and a model of another section is refused.  With
+    ``weak_hash`` the row hash is cut to 2 bits, so nearly every lookup meets a colliding element:
+    the rows themselves decide a hit, and the result stays bit for bit."""
+    import solidshell.model as model_mod
     from solidshell.adapt import AdaptiveMesh, BackgroundMesh
     from solidshell.meshing import build_mesh
     from solidshell.model import ElementConstants
 
+    if weak_hash:
+        strong = model_mod._row_hash
+        monkeypatch.setattr(model_mod, "_row_hash", lambda rows: strong(rows) & np.uint64(3))
     bg = BackgroundMesh.from_level0(build_mesh("square", "3x3", size=6.0), 2)
     forest = AdaptiveMesh(bg)
     cache = ElementConstants()
     wool = Fabric.wool()
     rng = np.random.default_rng(2)
-    for _ in range(4):
-        leaves = forest.leaves()
-        pick = leaves[(leaves[:, 0] < bg.levels) & (rng.random(len(leaves)) < 0.4)]
-        if len(pick):
-            forest.split(pick)
+    for it in range(7):
+        if it < 4:
+            leaves = forest.leaves()
+            pick = leaves[(leaves[:, 0] < bg.levels) & (rng.random(len(leaves)) < 0.4)]
+            if len(pick):
+                forest.split(pick)
+        else:
+            for l in range(bg.levels):
+                m = forest.mergeable(l)
+                m = m[rng.random(m.size) < 0.5]
+                forest.merge(np.column_stack([np.full(m.size, l), m]))
         act = forest.active_mesh()
         nq = len(act.mesh.quads)
         membrane = np.where(act.elem_leaf[:nq, 0] < bg.levels, "ans", "full").tolist()
@@ -200,6 +213,7 @@ def test_element_constants_cache_gives_the_same_model_bit_for_bit():
         for ba, bb in zip(a.blocks, b.blocks):
             assert ba.c.keys() == bb.c.keys()
             assert all(np.array_equal(ba.c[k], bb.c[k]) for k in bb.c)
-    assert len(act.mesh.tris) > 0
+        if it == 3:
+            assert len(act.mesh.tris) > 0
     with pytest.raises(ValueError, match="one section"):
         Model(act.mesh, Fabric.wool(warp_angle=30.0), constants=cache)

@@ -249,3 +249,18 @@ def test_membrane_per_quadrilateral():
         Model(mesh, WOOL30, membrane=["ans"])
     with pytest.raises(InputError, match="'sri'"):
         Model(mesh, WOOL30, membrane=["ans", "sri"])
+
+
+@pytest.mark.parametrize("kind", ["quad4", "tri3"])
+def test_bending_raw_strains_are_raw_strains_bending_part_bit_for_bit(kind):
+    """Model.bending_strain (the adaptivity criterion, Eq. 25) forms only the bending columns of the
+    raw strains; they must be raw_strains' columns 3-5 exactly (same operations), so the criterion
+    did not change when it stopped forming the membrane, shear and thickness parts."""
+    from solidshell.elements import quad4, tri3
+
+    mod = {"quad4": quad4, "tri3": tri3}[kind]
+    nn = 4 if kind == "quad4" else 3
+    rng = np.random.default_rng(7)
+    xo, xn = rng.normal(size=(2, 30, nn, 3))
+    mb, _, _ = mod.raw_strains(xo, xn)
+    assert np.array_equal(mod.bending_raw_strains(xo, xn), mb[..., 3:])

@@ -110,6 +110,34 @@ def test_forward_difference_estimate_agrees_with_half_the_force_evaluations(stri
         estimate_omega_max(f, M, ~strip.fixed, difference="backward")
 
 
+def test_matrix_free_product_kernels_are_the_numpy_expressions_bit_for_bit():
+    """The Lanczos product's vector work runs in small compiled loops (timestep._scale_max, _place,
+    _forward_product, _central_product) instead of numpy expressions; without fastmath each entry
+    gets the same IEEE operations in the same order, so the results must be equal to the last bit
+    (which keeps omega and the mode of every estimate as they were), and a NaN still propagates
+    through the maximum as np.max's does."""
+    from solidshell.solvers import timestep as ts
+
+    rng = np.random.default_rng(11)
+    n, N = 500, 720
+    idx = np.sort(rng.choice(N, n, replace=False)).astype(np.int64)
+    s, x, f0, fp = rng.random(n) + 0.1, rng.normal(size=n), rng.normal(size=n), rng.normal(size=n)
+    base, F = rng.normal(size=N), rng.normal(size=N)
+    v = np.empty(n)
+    vmax = ts._scale_max(s, x, v)
+    assert np.array_equal(v, s * x) and vmax == np.max(np.abs(s * x))
+    e = 1e-7 / vmax
+    for sign in (1.0, -1.0):
+        w, want = base.copy(), base.copy()
+        ts._place(w, idx, base, e, v, sign)
+        want[idx] = base[idx] + e * v if sign > 0 else base[idx] - e * v
+        assert np.array_equal(w, want)
+    assert np.array_equal(ts._forward_product(s, F, idx, f0, e), s * (F[idx] - f0) / e)
+    assert np.array_equal(ts._central_product(s, fp, F, idx, e), s * (fp - F[idx]) / (2.0 * e))
+    x[7] = np.nan
+    assert np.isnan(ts._scale_max(s, x, v))
+
+
 def test_warm_started_estimate_at_the_recheck_tolerance(strip, strip_modes):
     """The re-estimate after a mesh change starts from the previous mesh's top mode at the mid-run
     re-checks' tolerance (stepcontrol.WARM_TOL = 1e-4 on omega^2): from the exact top mode, or that

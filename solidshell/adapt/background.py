@@ -107,6 +107,11 @@ def _neighbours(side_edge, cnt):
     return nb.reshape(m, 4)
 
 
+_VARIANT_CHUNK = 1 << 14
+"""Elements per choose_variant call when a level's variants are chosen (transition_variants):
+~40 MB of temporaries at most."""
+
+
 class BackgroundMesh:
     """All levels of the 1-to-4 subdivision of a level-0 quad mesh (Section 5.1).
 
@@ -250,8 +255,11 @@ class BackgroundMesh:
 
     def transition_variants(self, level: int, index: np.ndarray, mask: np.ndarray) -> np.ndarray:
         """(K,) variant of the transition pattern for refined-edge ``mask`` (K,) that each element
-        (level, index) (K,) takes (transition.choose_variant on its X_o).  Memoised per element and
-        mask, since the geometry never changes: each is computed once, on first use."""
+        (level, index) (K,) takes (transition.choose_variant on its X_o).  Memoised per level and
+        mask, since the geometry never changes: the first time a mask is asked for on a level, the
+        variant of every element of that level is chosen in one vectorised call (choose_variant
+        treats each element apart from the others, so this is the per-element choice; 195 small
+        calls took 0.8 s of the paper path's remeshing, docs/adaptivity.md)."""
         from .transition import TABLE, choose_variant
 
         l = int(level)
@@ -260,20 +268,19 @@ class BackgroundMesh:
             cache[l] = np.full((self.n_elements(l), 16), -1, dtype=np.int8)
         tab = cache[l]
         index, mask = np.asarray(index, dtype=np.int64), np.asarray(mask, dtype=np.int64)
-        out = tab[index, mask]
-        todo = np.flatnonzero(out < 0)
-        if todo.size:
-            for m in np.unique(mask[todo]):
-                sel = todo[mask[todo] == m]
-                e = index[sel]
-                if len(TABLE[int(m)][1]) == 1:
-                    tab[e, m] = 0
-                    continue
+        for m in np.unique(mask):
+            if tab[0, m] >= 0:
+                continue
+            if len(TABLE[int(m)][1]) == 1:
+                tab[:, m] = 0
+                continue
+            n = self.n_elements(l)
+            for a in range(0, n, _VARIANT_CHUNK):     # bounded temporaries on a deep background
+                e = np.arange(a, min(a + _VARIANT_CHUNK, n))
                 ch = self.conn[l + 1][(4 * e[:, None] + np.arange(4)).ravel()].reshape(-1, 4, 4)
                 loc = np.concatenate([self.conn[l][e], ch[:, :, 1], ch[:, :1, 2]], axis=1)
                 tab[e, m] = choose_variant(int(m), self.Xo[loc])
-            out = tab[index, mask]
-        return out
+        return tab[index, mask]
 
     def element_nodes(self, level: int, index) -> np.ndarray:
         """Background node indices (…,4) of element(s) (level, index)."""

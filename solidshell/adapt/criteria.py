@@ -81,10 +81,25 @@ def leaf_bending_strain(eps_b_elem, elem_leaf):
     el = np.asarray(elem_leaf, dtype=np.int64)
     if el.shape != (len(eb), 2):
         raise ValueError(f"elem_leaf has shape {el.shape}, expected ({len(eb)}, 2)")
-    leaves, inv = np.unique(el, axis=0, return_inverse=True)
+    leaves, inv = _unique_items(el)
     out = np.full(len(leaves), -np.inf)
-    np.maximum.at(out, inv.ravel(), eb)
+    np.maximum.at(out, inv, eb)
     return leaves, out
+
+
+_INDEX_BITS = 40
+"""Bits of an element index in the 1-d key of a (level, index) pair (4^20 elements per level)."""
+
+
+def _unique_items(items) -> tuple[np.ndarray, np.ndarray]:
+    """np.unique(items, axis=0, return_inverse=True) for (K,2) (level, index) pairs (rows sorted
+    by level then index), by the 1-d key level * 2^40 + index: np.unique over rows sorts a
+    structured view, ~10x slower (0.4 s of the paper path's remeshing)."""
+    it = np.asarray(items, dtype=np.int64).reshape(-1, 2)
+    if it.size and (it.min() < 0 or it[:, 1].max() >= 1 << _INDEX_BITS):
+        raise ValueError("element (level, index) pairs out of range")
+    keys, inv = np.unique((it[:, 0] << _INDEX_BITS) | it[:, 1], return_inverse=True)
+    return np.column_stack([keys >> _INDEX_BITS, keys & ((1 << _INDEX_BITS) - 1)]), inv.ravel()
 
 
 @dataclass(frozen=True)
@@ -128,8 +143,7 @@ def mark(eps_b_leaf, leaves, L, const: float = DEFAULT_CONST, eps: float = DEFAU
         sel = parents[:, 0] == l
         Lp[sel] = L[l][parents[sel, 1]]
     ok = (eb[child] * Lp <= c - e) & ~split[child]
-    uniq, inv = np.unique(parents, axis=0, return_inverse=True)
-    inv = inv.ravel()
+    uniq, inv = _unique_items(parents)
     n_children = np.bincount(inv, minlength=len(uniq))
     n_ok = np.bincount(inv, weights=ok, minlength=len(uniq))
     return Marks(split, uniq[(n_children == 4) & (n_ok == 4)])

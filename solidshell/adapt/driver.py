@@ -449,9 +449,7 @@ def _changed_nodes(old: ActiveMesh, new: ActiveMesh) -> np.ndarray:
             continue
         rows_b = np.sort(new.nodes[b], axis=1)
         rows_a = np.sort(old.nodes[a], axis=1).reshape(-1, b.shape[1])
-        _, inv = np.unique(np.vstack([rows_a, rows_b]), axis=0, return_inverse=True)
-        inv = inv.ravel()
-        fresh = ~np.isin(inv[len(rows_a):], inv[:len(rows_a)])
+        fresh = ~_rows_in(rows_b, rows_a)
         changed[b[fresh].ravel()] = True
     for _ in range(_SETTLE_RINGS):
         ring = changed.copy()
@@ -460,6 +458,22 @@ def _changed_nodes(old: ActiveMesh, new: ActiveMesh) -> np.ndarray:
                 ring[b[changed[b].any(axis=1)].ravel()] = True
         changed = ring
     return np.flatnonzero(changed)
+
+
+def _rows_in(rows, table) -> np.ndarray:
+    """(K,) bool: each row of ``rows`` (K,k) is a row of ``table`` (J,k) (non-negative ints).  Rows
+    as 1-d keys in base max + 1 when those fit in int64 (np.unique over rows sorts a structured
+    view, ~10x slower), else by that unique."""
+    if not len(rows) or not len(table):
+        return np.zeros(len(rows), dtype=bool)
+    base = int(max(rows.max(), table.max())) + 1
+    k = rows.shape[1]
+    if base ** k < 2 ** 63:
+        w = base ** np.arange(k - 1, -1, -1, dtype=np.int64)
+        return np.isin(rows.astype(np.int64) @ w, table.astype(np.int64) @ w)
+    _, inv = np.unique(np.vstack([table, rows]), axis=0, return_inverse=True)
+    inv = inv.ravel()
+    return np.isin(inv[len(table):], inv[:len(table)])
 
 
 def _same_leaves(a: dict, b: dict) -> bool:

@@ -160,19 +160,39 @@ _DN_ROWS = np.ascontiguousarray(DN_GP.transpose(0, 2, 1).reshape(-1, DN_GP.shape
 """DN_GP as rows (point g, direction k) x node i: the tangents of all points by one product."""
 
 
-def raw_strains(xo, xn):
-    """Raw natural strains of elements with nodal (M,4,3) positions/directors: (M,4,6), (M,4), (M,4).
-    The same products the kernel forms (core.py); used here for the reference state."""
+def _tangents(xo, xn):
+    """(M,4,2,3) natural tangents of the positions and of the directors at the Gauss points."""
     M = len(xo)
     a = (_DN_ROWS @ xo).reshape(M, len(DN_GP), 2, 3)      # batched products: einsum took 10x as long
     b = (_DN_ROWS @ xn).reshape(M, len(DN_GP), 2, 3)
-    dot = lambda u, v: np.sum(u * v, -1)
-    mb = np.stack([0.5 * dot(a[:, :, 0], a[:, :, 0]), 0.5 * dot(a[:, :, 1], a[:, :, 1]),
-                   dot(a[:, :, 0], a[:, :, 1]), dot(a[:, :, 0], b[:, :, 0]), dot(a[:, :, 1], b[:, :, 1]),
-                   dot(a[:, :, 0], b[:, :, 1]) + dot(a[:, :, 1], b[:, :, 0])], -1)
-    s = dot(ALPHA @ xo, BETA @ xn)
-    z = 0.5 * dot(xn, xn)
+    return a, b
+
+
+def _bending_raw(a, b):
+    """(M,4,3) raw natural bending strains (columns 3-5 of raw_strains' mb) from the tangents."""
+    return np.stack([_dot(a[:, :, 0], b[:, :, 0]), _dot(a[:, :, 1], b[:, :, 1]),
+                     _dot(a[:, :, 0], b[:, :, 1]) + _dot(a[:, :, 1], b[:, :, 0])], -1)
+
+
+def _dot(u, v):
+    return np.sum(u * v, -1)
+
+
+def raw_strains(xo, xn):
+    """Raw natural strains of elements with nodal (M,4,3) positions/directors: (M,4,6), (M,4), (M,4).
+    The same products the kernel forms (core.py); used here for the reference state."""
+    a, b = _tangents(xo, xn)
+    mb = np.concatenate([np.stack([0.5 * _dot(a[:, :, 0], a[:, :, 0]), 0.5 * _dot(a[:, :, 1], a[:, :, 1]),
+                                   _dot(a[:, :, 0], a[:, :, 1])], -1), _bending_raw(a, b)], -1)
+    s = _dot(ALPHA @ xo, BETA @ xn)
+    z = 0.5 * _dot(xn, xn)
     return mb, s, z
+
+
+def bending_raw_strains(xo, xn):
+    """(M,4,3) the bending part of raw_strains' mb alone (the adaptivity criterion's per-pass
+    curvature, Eq. 25), the same floating-point operations."""
+    return _bending_raw(*_tangents(xo, xn))
 
 
 def _assumed_membrane(Xo, Cm_gp, Jw):

@@ -28,18 +28,33 @@ TIE = np.array([[0.0, 3.0, 1.0]] * 3)                  # shear: (x_o, x_n) produ
 _PAIRS = ((0, 1), (1, 2), (2, 0))
 
 
+def _dot(u, v):
+    return np.sum(u * v, -1)
+
+
+def _bending_raw(a1, a2, b1, b2):
+    """(M,3) raw natural bending strains (columns 3-5 of raw_strains' mb) from the edge vectors."""
+    return np.stack([_dot(a1, b1), _dot(a2, b2), _dot(a1, b2) + _dot(a2, b1)], -1)
+
+
 def raw_strains(xo, xn):
     """Raw natural strains for (M,3,3) nodal positions/directors: (M,1,6), (M,3), (M,3)."""
     a1 = xo[:, 1] - xo[:, 0]
     a2 = xo[:, 2] - xo[:, 0]
     b1 = xn[:, 1] - xn[:, 0]
     b2 = xn[:, 2] - xn[:, 0]
-    dot = lambda u, v: np.sum(u * v, -1)
-    mb = np.stack([0.5 * dot(a1, a1), 0.5 * dot(a2, a2), dot(a1, a2), dot(a1, b1), dot(a2, b2),
-                   dot(a1, b2) + dot(a2, b1)], -1)[:, None, :]
-    s = dot(np.einsum("ti,mic->mtc", ALPHA, xo), np.einsum("ti,mic->mtc", BETA, xn))
-    z = 0.5 * dot(xn, xn)
+    mb = np.concatenate([np.stack([0.5 * _dot(a1, a1), 0.5 * _dot(a2, a2), _dot(a1, a2)], -1),
+                         _bending_raw(a1, a2, b1, b2)], -1)[:, None, :]
+    s = _dot(np.einsum("ti,mic->mtc", ALPHA, xo), np.einsum("ti,mic->mtc", BETA, xn))
+    z = 0.5 * _dot(xn, xn)
     return mb, s, z
+
+
+def bending_raw_strains(xo, xn):
+    """(M,1,3) the bending part of raw_strains' mb alone (the adaptivity criterion's per-pass
+    curvature, Eq. 25), the same floating-point operations."""
+    return _bending_raw(xo[:, 1] - xo[:, 0], xo[:, 2] - xo[:, 0], xn[:, 1] - xn[:, 0],
+                        xn[:, 2] - xn[:, 0])[:, None, :]
 
 
 def precompute(Xo, Xn, C_m, C_b, C_t, E_z, warp_angle, membrane="full"):

@@ -1,26 +1,24 @@
-"""Intel MKL PARDISO's sparse Cholesky, with :class:`solidshell.solvers.linear.Cholesky`'s interface.
+"""Intel MKL PARDISO's sparse Cholesky, with :class:`solidshell.solvers.linear.Cholesky`'s interface,
+and its LDL^T with inertia (:class:`PardisoLDL`).
 
-It needs the ``mkl`` wheel, a dependency of solidshell on Linux x86-64 (pyproject.toml; elsewhere the
-static solvers use CHOLMOD, and ``factorization="pardiso"`` says in one line that MKL is missing).
-This module loads its ``libmkl_rt`` through ctypes (a thin binding of the one routine ``pardiso``; ``pypardiso`` wraps the same
-routine but re-hashes the matrix on every solve and has no way to reuse the analysis for new
-values).  Why it is here: on the static drapes it factorises the free-dof tangent about twice as
-fast as CHOLMOD through cvxopt, with the same fill (docs/solvers.md, section 5), and the
-factorisations are most of a static solve.  (cvxopt's bundled OpenBLAS 0.3.15 does not know this
-machine's CPU and falls back to its generic "Prescott" kernels; MKL dispatches to AVX-512 ones.)
+It needs the ``mkl`` wheel, a dependency of solidshell on Linux x86-64 (pyproject.toml; elsewhere
+the static solvers use CHOLMOD, and ``factorization="pardiso"`` says in one line that MKL is
+missing).  This module is a thin ctypes binding of the one routine ``pardiso`` in ``libmkl_rt``
+(``pypardiso`` wraps the same routine but hashes the matrix on every solve and cannot keep the
+analysis for new values).  Why: it factorises the drapes' free-dof tangents in about half
+CHOLMOD's time at the same fill, and factorisations are most of a static solve (measurements:
+docs/solvers.md, section 5).
 
-Matrix type 2 (real symmetric positive definite): the factorisation is a Cholesky LL^T without
-pivot perturbation, so a matrix that is not positive definite fails (MKL error -4, "zero pivot"),
-which is the answer the energy Newton asks for (linear.Cholesky).  The input is the lower triangle
-in CSC (linear.LowerCSC), read as the upper triangle in CSR, the form PARDISO takes, zero-based
+Matrix type 2 (real symmetric positive definite): a Cholesky LL^T without pivot perturbation, so a
+matrix that is not positive definite fails (MKL error -4, "zero pivot"), which is the answer the
+energy Newton asks for (linear.Cholesky).  The input is the lower triangle in CSC
+(linear.LowerCSC) read as the upper triangle in CSR, the form PARDISO takes, zero-based
 (iparm[34] = 1): no copy of the pattern.  The analysis (minimum-degree ordering, symbolic
 factorisation) is done once per pattern; ``factor`` runs the numeric phase only.
 
-Threads: MKL runs sequentially (its "sequential" threading layer).  Two threads factorised 1.4x
-faster on a quiet machine (26.6 against 37.4 ms at 18 432 dofs), but MKL's OpenMP threads then
-compete with numba's for the two cores: under load the factorisation became slower than CHOLMOD's,
-and the solves 6x slower (docs/solvers.md, section 5).  Sequential, the results are also the same
-bits whatever the thread count.
+MKL runs sequentially (its "sequential" threading layer): its OpenMP threads would compete with
+numba's for the cores (docs/solvers.md, section 5), and sequential results are the same bits
+whatever the thread count.
 """
 
 from __future__ import annotations

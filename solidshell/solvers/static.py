@@ -1118,8 +1118,9 @@ def solve_static(model, fixed, loads, load_factors=None, method="newton", prescr
         factorisations).  info["factorization"] names the one used
     pcg_iterations : newton: conjugate-gradient iterations on a new tangent, preconditioned by the
         last factorisation, tried before factorising it (an inexact Newton step; default 0: every
-        iteration factorises; cholmod and pardiso only, >= PCG_MIN_DOFS free dofs; see ``_newton_level``).  The
-        mesh sequencing sets 6 on the fine mesh, started from the prolonged coarse equilibrium
+        iteration factorises; cholmod and pardiso only, >= PCG_MIN_DOFS free dofs; see
+        ``_newton_level``).  The mesh sequencing sets 6 on the fine mesh, started from the
+        prolonged coarse equilibrium
     progress : callback(fraction, text): called at the start and at every iteration
 
     info["status"]: "converged", "not_converged", "saddle" (converged to a saddle that could not be

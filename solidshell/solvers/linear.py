@@ -27,7 +27,7 @@ import numpy as np
 import cvxopt
 import cvxopt.cholmod as _cholmod
 
-__all__ = ["Cholesky", "LowerCSC", "SuperLUDefinite", "as_csc", "ldl_inertia", "pcg", "SINGULAR_PIVOT",
+__all__ = ["Cholesky", "LowerCSC", "PatternFactor", "SuperLUDefinite", "as_csc", "ldl_inertia", "pcg", "SINGULAR_PIVOT",
            "FACTORIZATIONS", "CHOLESKY_KINDS", "resolve_factorization",
            "positive_definite_factor"]
 
@@ -172,7 +172,40 @@ def as_csc(A):
     return sp.csc_matrix(A)
 
 
-class Cholesky:
+class PatternFactor:
+    """What the factorisation classes share: one symbolic analysis per sparsity pattern (the
+    subclass's ``_analyse(L)``, which sets ``_key``, ``_indptr``, ``_indices`` and the value buffer
+    ``_v``) and the values of A + diag(shift) written into ``_v`` for each numeric factorisation."""
+
+    _key = None
+    _indptr = None
+    _indices = None
+    _ok = False
+
+    def _same_pattern(self, L):
+        if self._indptr is None:
+            return False
+        if L.key is not None:
+            return L.key is self._key
+        return (L.indptr.size == self._indptr.size and np.array_equal(L.indptr, self._indptr)
+                and np.array_equal(L.indices, self._indices))
+
+    def _values(self, A, shift=None):
+        """The buffer ``_v`` holding A + diag(shift) (A a LowerCSC or a symmetric scipy matrix; a
+        new pattern analysed first), or None when those values are not all finite.  Any earlier
+        factor is dropped (``_ok`` False) until the subclass's factorisation succeeds."""
+        L = A if isinstance(A, LowerCSC) else LowerCSC.from_symmetric(A)
+        if not self._same_pattern(L):
+            self._analyse(L)
+        v = self._v
+        v[:] = L.data
+        if shift is not None:
+            v[L.diag_pos] += shift
+        self._ok = False
+        return v if np.isfinite(v).all() else None
+
+
+class Cholesky(PatternFactor):
     """Supernodal Cholesky of symmetric matrices sharing a sparsity pattern (CHOLMOD).
 
     ``factor(A, shift)`` factors A + diag(shift) and returns True, or False when that matrix is not
@@ -187,21 +220,9 @@ class Cholesky:
     """
 
     def __init__(self):
-        self._key = None
-        self._indptr = None
-        self._indices = None
         self._F = None
         self._M = None
-        self._ok = False
         self.n_symbolic = 0
-
-    def _same_pattern(self, L):
-        if self._F is None:
-            return False
-        if L.key is not None:
-            return L.key is self._key
-        return (L.indptr.size == self._indptr.size and np.array_equal(L.indptr, self._indptr)
-                and np.array_equal(L.indices, self._indices))
 
     def _analyse(self, L):
         n = L.shape[0]
@@ -227,15 +248,7 @@ class Cholesky:
 
         Returns False (and keeps no factor) when it is not positive definite, or when its smallest
         pivot is below ``SINGULAR_PIVOT`` of the largest (singular for practical purposes)."""
-        L = A if isinstance(A, LowerCSC) else LowerCSC.from_symmetric(A)
-        if not self._same_pattern(L):
-            self._analyse(L)
-        v = self._v
-        v[:] = L.data
-        if shift is not None:
-            v[L.diag_pos] += shift
-        self._ok = False
-        if not np.isfinite(v).all():
+        if self._values(A, shift) is None:
             return False
         self._M.V = self._vbuf
         try:

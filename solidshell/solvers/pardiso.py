@@ -31,6 +31,8 @@ from ctypes.util import find_library
 
 import numpy as np
 
+from .linear import SINGULAR_PIVOT, LowerCSC, PatternFactor
+
 __all__ = ["Pardiso", "PardisoLDL", "available", "unavailable_reason"]
 
 _LIB = None
@@ -93,7 +95,7 @@ def unavailable_reason() -> str | None:
     return _REASON if _LIB is None else None
 
 
-class Pardiso:
+class Pardiso(PatternFactor):
     """PARDISO Cholesky of symmetric matrices sharing a sparsity pattern: ``factor(A, shift)`` factors
     A + diag(shift) (A a linear.LowerCSC) and returns True, or False when that matrix is not
     positive definite; ``solve(b)`` solves with the last successful factor."""
@@ -116,12 +118,8 @@ class Pardiso:
         ip[17] = -1        # report the factor's non-zeros
         ip[34] = 1         # zero-based indices
         ip[55] = 1         # keep the factor's diagonal (pardiso_getdiag: the singular-pivot test)
-        self._key = None
-        self._indptr = None
-        self._indices = None
         self._v = None
         self._n = 0
-        self._ok = False
         self.n_symbolic = 0
 
     # ------------------------------------------------------------------ the one routine
@@ -138,9 +136,9 @@ class Pardiso:
         return err.value
 
     def _release(self):
-        if self._key is not None and self._n:
+        if self._indptr is not None and self._n:
             self._call(-1, self._v)
-        self._key = None
+        self._key = self._indptr = self._indices = None
         self._ok = False
 
     def __del__(self):
@@ -150,14 +148,6 @@ class Pardiso:
             pass
 
     # ------------------------------------------------------------------ Cholesky's interface
-    def _same_pattern(self, L):
-        if self._key is None:
-            return False
-        if L.key is not None:
-            return L.key is self._key
-        return (L.indptr.size == self._indptr.size and np.array_equal(L.indptr, self._indptr)
-                and np.array_equal(L.indices, self._indices))
-
     def _analyse(self, L):
         self._release()
         self._n = L.shape[0]
@@ -174,17 +164,8 @@ class Pardiso:
         """Factor A + diag(shift); False (and no factor kept) when it is not positive definite
         (PARDISO's Cholesky meets a non-positive pivot), not finite, or numerically singular (a
         pivot below linear.SINGULAR_PIVOT of the largest: CHOLMOD's test, on L_ii^2)."""
-        from .linear import SINGULAR_PIVOT, LowerCSC
-
-        L = A if isinstance(A, LowerCSC) else LowerCSC.from_symmetric(A)
-        if not self._same_pattern(L):
-            self._analyse(L)
-        v = self._v
-        v[:] = L.data
-        if shift is not None:
-            v[L.diag_pos] += shift
-        self._ok = False
-        if not np.isfinite(v).all():
+        v = self._values(A, shift)
+        if v is None:
             return False
         err = self._call(22, v)
         if err == -4:          # zero or negative pivot: not positive definite
@@ -250,16 +231,10 @@ class PardisoLDL(Pardiso):
 
     def ldl(self, A):
         """(self, n_negative) after factorising A, or None (perturbed pivots or non-finite A)."""
-        from .linear import LowerCSC
-
-        L = A if isinstance(A, LowerCSC) else LowerCSC.from_symmetric(A)
-        if not self._same_pattern(L):
-            self._analyse(L)
-        self._v[:] = L.data
-        self._ok = False
-        if not np.isfinite(self._v).all():
+        v = self._values(A)
+        if v is None:
             return None
-        err = self._call(22, self._v)
+        err = self._call(22, v)
         ip = self._iparm
         if err != 0 or ip[13] != 0 or ip[21] + ip[22] != self._n:
             return None

@@ -8,8 +8,8 @@ Two factorisations, for two jobs:
     The tangents of one solve share a sparsity pattern, so the symbolic analysis (fill-reducing
     ordering, supernodes) is done once and reused; only the lower triangle is handed over.
     Several times faster than SuperLU (below) on the drapes (timings: docs/solvers.md, section 5).
-    ``pardiso.Pardiso`` is the same interface on Intel MKL PARDISO (optional, x86-64): about twice
-    as fast again; ``factorization="auto"`` (the default) takes it when MKL is installed
+    ``pardiso.Pardiso`` is the same interface on Intel MKL PARDISO (MKL: a dependency on Linux
+    x86-64): about twice as fast again; ``factorization="auto"`` (the default) takes it when MKL is installed
     (``resolve_factorization``).
 
 ``ldl_inertia``  SuperLU with diagonal pivoting in symmetric mode: an LDL^T-type factorisation of
@@ -27,8 +27,8 @@ import numpy as np
 import cvxopt
 import cvxopt.cholmod as _cholmod
 
-__all__ = ["Cholesky", "LowerCSC", "PatternFactor", "SuperLUDefinite", "as_csc", "ldl_inertia", "pcg", "SINGULAR_PIVOT",
-           "FACTORIZATIONS", "CHOLESKY_KINDS", "resolve_factorization",
+__all__ = ["Cholesky", "LowerCSC", "PatternFactor", "SuperLUDefinite", "as_csc", "ldl_inertia", "pcg",
+           "SINGULAR_PIVOT", "FACTORIZATIONS", "CHOLESKY_KINDS", "resolve_factorization",
            "positive_definite_factor"]
 
 FACTORIZATIONS = ("auto", "cholmod", "pardiso", "superlu")

@@ -155,8 +155,8 @@ class _System:
         self.n_tangent = 0
         self.n_solves = 0
         self.n_factor = 0
-        # positive-definite factorisations: CHOLMOD (its symbolic analysis shared by every tangent
-        # of this solve) or, for comparison, SuperLU's LDL^T
+        # positive-definite factorisations: PARDISO or CHOLMOD (the symbolic analysis shared by
+        # every tangent of this solve) or, for comparison, SuperLU's LDL^T
         self.factorization = factorization
         self.chol = positive_definite_factor(factorization)
         self._ldl = None

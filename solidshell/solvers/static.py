@@ -473,6 +473,10 @@ def _newton_level(sys, D, lam, o, stats):
         inexact = False
         new_tangent = False
         if try_cg and cg_next and lu is not None and sigma == 0.0 and rel >= PCG_BELOW:
+            # the last tangent is not needed any more: dropped before the new one is assembled,
+            # so that two are never alive at once next to the factor (3.9 MB of the static
+            # solver's memory peak on square-pedestal 48x16x4, docs/solvers.md section 5)
+            A = None
             _, A = sys.free_tangent(D)
             new_tangent = True
             x, k, inexact, pKp = pcg(A.matvec(), g, lu.solve, min(PCG_FORCING, math.sqrt(rel)),
@@ -487,6 +491,7 @@ def _newton_level(sys, D, lam, o, stats):
             stats["cg_steps"] = stats.get("cg_steps", 0) + 1
         elif refresh or lu is None or since >= o.reuse:
             if not new_tangent:
+                A = None
                 _, A = sys.free_tangent(D)
             scale = np.abs(A.diagonal())
             scale[scale == 0.0] = max(float(scale.max(initial=0.0)), 1.0)

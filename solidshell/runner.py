@@ -448,6 +448,11 @@ def _run(sc, kind, mesh_arg, out_dir, cb, settings, timings, t_start, overrides=
         folder = RunFolder(out_dir, run_id, force=force,
                            keep=[s.get(k) for k in ("checkpoint", "restart")] if s else ())
         folder.check()
+        if sc.output["pictures"] or sc.output["snapshots"]:
+            # whether VTK can render is asked in a child process (~2 s): it runs while we mesh
+            from .render import vtk_backend
+
+            vtk_backend.start_probe()
     adapt = adapt_settings(sc, kind)
     cb(0.0, "meshing")
     t = time.perf_counter()

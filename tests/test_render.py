@@ -123,3 +123,29 @@ def test_fig04_quick_renders_over_the_elastica(tmp_path):
     assert len(errs) == 4
     for (scene, mesh), e in errs.items():
         assert e < (0.025 if mesh == "10x1" else 0.01), (scene, mesh, e)
+
+
+def test_a_started_probe_gives_available_its_answer(monkeypatch):
+    # start_probe launches the same child-process probe early; available() then waits for that
+    # child instead of launching another, and gives the answer a fresh probe gives
+    fresh = vtk_backend.available()
+    monkeypatch.setattr(vtk_backend, "_STATE", {})
+    launched = []
+    real = vtk_backend._launch
+    monkeypatch.setattr(vtk_backend, "_launch", lambda win: launched.append(win) or real(win))
+    vtk_backend.start_probe()
+    assert len(launched) == 1 and "pending" in vtk_backend._STATE
+    assert vtk_backend.available() == fresh
+    # a working first window class needs no second launch; a failing one is followed by the next
+    assert len(launched) == (1 if fresh[0] else len(vtk_backend._windows()))
+    assert "pending" not in vtk_backend._STATE
+    vtk_backend.start_probe()            # the answer is known: nothing more is launched
+    assert len(launched) == (1 if fresh[0] else len(vtk_backend._windows()))
+
+
+def test_no_probe_when_matplotlib_is_asked_for(monkeypatch):
+    monkeypatch.setattr(vtk_backend, "_STATE", {})
+    monkeypatch.setenv("SOLIDSHELL_RENDERER", "matplotlib")
+    monkeypatch.setattr(vtk_backend, "_launch", lambda win: pytest.fail("probe launched"))
+    vtk_backend.start_probe()
+    assert vtk_backend._STATE == {}

@@ -1,10 +1,12 @@
 """VTK renderer through PyVista, off-screen: z-buffered, lit, anti-aliased pictures.
 
-PyVista is a dependency, but VTK may still be unable to render (no GL library).  Whether VTK can render on this
-machine is asked once per process in a child process (:func:`available`): a VTK build that finds
-no OpenGL (no X server, no EGL or OSMesa library) can crash its process outright instead of
-raising, so the probe must not run in ours.  With no X display the EGL window is chosen (then
-OSMesa), which renders headless where the system has libEGL.
+PyVista is a dependency, but VTK may still be unable to render (no GL library).  Whether VTK can
+render on this machine is asked once per process in a child process (:func:`available`): a VTK
+build that finds no OpenGL (no X server, no EGL or OSMesa library) can crash its process outright
+instead of raising, so the probe must not run in ours.  A run that will draw pictures starts the
+probe before it meshes (:func:`start_probe`), so that its ~2 s are not waited for at the end.
+With no X display the EGL window is chosen (then OSMesa), which renders headless where the system
+has libEGL.
 """
 
 from __future__ import annotations
@@ -42,36 +44,68 @@ def _windows():
     return ["vtkEGLRenderWindow", "vtkOSOpenGLRenderWindow"]
 
 
+def _launch(win):
+    """The probe in a child process, with VTK's window class ``win`` (None: VTK's default)."""
+    env = dict(os.environ)
+    if win:
+        env["VTK_DEFAULT_OPENGL_WINDOW"] = win
+    return subprocess.Popen([sys.executable, "-c", _PROBE], env=env, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+
+
+def _pyvista_missing() -> bool:
+    try:
+        import importlib.util
+
+        return importlib.util.find_spec("pyvista") is None
+    except (ImportError, ValueError):
+        return True
+
+
+def start_probe() -> None:
+    """Start :func:`available`'s probe now, in the background: its child process (VTK's import
+    and a first off-screen render, ~2 s) then overlaps the caller's work -- a run's meshing and
+    set-up -- and available() waits for its answer.  Nothing when the answer is known, a probe
+    is already running, PyVista is missing or SOLIDSHELL_RENDERER asks for matplotlib."""
+    if "ok" in _STATE or "pending" in _STATE or _pyvista_missing():
+        return
+    if os.environ.get("SOLIDSHELL_RENDERER", "auto").strip().lower() in ("matplotlib", "mpl"):
+        return
+    win = _windows()[0]
+    try:
+        _STATE["pending"] = (win, _launch(win))
+    except OSError:
+        pass
+
+
 def available(timeout: float = 180.0) -> tuple[bool, str]:
     """(True, "") when PyVista imports and renders off-screen here, else (False, why)."""
     if "ok" in _STATE:
         return _STATE["ok"], _STATE["why"]
-    try:
-        import importlib.util
-
-        missing = importlib.util.find_spec("pyvista") is None
-    except (ImportError, ValueError):
-        missing = True
-    if missing:
+    if _pyvista_missing():
         _STATE.update(ok=False, why="PyVista is not installed (pip install pyvista)")
         return False, _STATE["why"]
     why = "VTK found no OpenGL to render with"
+    pending = _STATE.pop("pending", None)
     for win in _windows():
-        env = dict(os.environ)
-        if win:
-            env["VTK_DEFAULT_OPENGL_WINDOW"] = win
         try:
-            r = subprocess.run([sys.executable, "-c", _PROBE], env=env, capture_output=True, text=True,
-                               timeout=timeout)
-        except (OSError, subprocess.TimeoutExpired) as e:
+            proc = pending[1] if pending is not None and pending[0] == win else _launch(win)
+            pending = None
+            out, err = proc.communicate(timeout=timeout)
+        except OSError as e:
             why = f"VTK probe failed ({type(e).__name__})"
             continue
-        if r.returncode == 0 and "solidshell-vtk-ok" in r.stdout:
+        except subprocess.TimeoutExpired as e:
+            proc.kill()
+            proc.communicate()
+            why = f"VTK probe failed ({type(e).__name__})"
+            continue
+        if proc.returncode == 0 and "solidshell-vtk-ok" in out:
             if win:
                 os.environ["VTK_DEFAULT_OPENGL_WINDOW"] = win
             _STATE.update(ok=True, why="")
             return True, ""
-        tail = (r.stderr.strip().splitlines() or [f"exit status {r.returncode}"])[-1]
+        tail = (err.strip().splitlines() or [f"exit status {proc.returncode}"])[-1]
         why = f"VTK cannot render off-screen ({' '.join(tail.split())[:120]})"
     _STATE.update(ok=False, why=why)
     return False, why

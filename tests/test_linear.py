@@ -95,6 +95,10 @@ def test_pardiso_and_cholmod_agree_on_a_drape_tangent_and_repeat_bit_for_bit():
 def test_factorization_names_resolve_and_a_missing_mkl_is_one_input_error_line(monkeypatch):
     assert linear.resolve_factorization("cholmod") == "cholmod"
     assert linear.resolve_factorization("auto") == ("pardiso" if pardiso.available() else "cholmod")
+    big, small = linear.PARDISO_MIN_DOFS, linear.PARDISO_MIN_DOFS - 1
+    assert linear.resolve_factorization("auto", big) == linear.resolve_factorization("auto")
+    assert linear.resolve_factorization("auto", small) == "cholmod"      # MKL not loaded for it
+    assert linear.resolve_factorization("cholmod", big) == "cholmod"
     with pytest.raises(InputError, match="factorization must be one of"):
         linear.resolve_factorization("mumps")
     monkeypatch.setattr(pardiso, "_LIB", None)

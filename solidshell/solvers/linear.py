@@ -9,8 +9,8 @@ Two factorisations, for two jobs:
     ordering, supernodes) is done once and reused; only the lower triangle is handed over.
     Several times faster than SuperLU (below) on the drapes (timings: docs/solvers.md, section 5).
     ``pardiso.Pardiso`` is the same interface on Intel MKL PARDISO (MKL: a dependency on Linux
-    x86-64): about twice as fast again; ``factorization="auto"`` (the default) takes it when MKL is installed
-    (``resolve_factorization``).
+    x86-64): about twice as fast again; ``factorization="auto"`` (the default) takes it when MKL
+    is installed and the system is not tiny (``resolve_factorization``).
 
 ``ldl_inertia``  SuperLU with diagonal pivoting in symmetric mode: an LDL^T-type factorisation of
     any symmetric non-singular matrix, with its inertia (the number of negative pivots equals the
@@ -28,28 +28,36 @@ import cvxopt
 import cvxopt.cholmod as _cholmod
 
 __all__ = ["Cholesky", "LowerCSC", "PatternFactor", "SuperLUDefinite", "as_csc", "ldl_inertia", "pcg",
-           "SINGULAR_PIVOT", "FACTORIZATIONS", "CHOLESKY_KINDS", "resolve_factorization",
-           "positive_definite_factor"]
+           "SINGULAR_PIVOT", "FACTORIZATIONS", "CHOLESKY_KINDS", "PARDISO_MIN_DOFS",
+           "resolve_factorization", "positive_definite_factor"]
 
 FACTORIZATIONS = ("auto", "cholmod", "pardiso", "superlu")
-"""The static solvers' ``factorization`` setting: "auto" is "pardiso" where MKL is installed, else
-"cholmod"."""
+"""The static solvers' ``factorization`` setting: "auto" is "pardiso" where MKL is installed (on
+systems of at least PARDISO_MIN_DOFS free dofs), else "cholmod"."""
 
 CHOLESKY_KINDS = ("cholmod", "pardiso")
 """Factorisations that are a Cholesky of a positive-definite matrix (failure = not definite)."""
 
 
-def resolve_factorization(kind: str) -> str:
-    """The factorisation ``kind`` names ("auto" resolved: "pardiso" where MKL is installed, else
-    "cholmod"); InputError for an unknown kind or for "pardiso" without MKL (with the one-line
-    reason)."""
+PARDISO_MIN_DOFS = 1000
+""""auto" takes PARDISO from this many free dofs.  Below, a factorisation takes well under a
+millisecond either way, and loading MKL (~50 ms and 13.6 MB for its library and first call) would
+not be repaid: the 20-element strip's start-up (issue 13) stays as it was.  Square-pedestal 12x4x4
+(1 152 free dofs, 85 factorisations of 1.2 against 2.0 ms) already repays it."""
+
+
+def resolve_factorization(kind: str, n_free: int | None = None) -> str:
+    """The factorisation ``kind`` names for ``n_free`` free dofs (None: a large system): "auto" is
+    "pardiso" where MKL is installed and n_free >= PARDISO_MIN_DOFS, else "cholmod".  InputError
+    for an unknown kind or for "pardiso" without MKL (with the one-line reason)."""
     from ..errors import InputError
     from . import pardiso
 
     if kind not in FACTORIZATIONS:
         raise InputError(f"factorization must be one of {FACTORIZATIONS}, got {kind!r}")
     if kind == "auto":
-        return "pardiso" if pardiso.available() else "cholmod"
+        small = n_free is not None and n_free < PARDISO_MIN_DOFS
+        return "pardiso" if not small and pardiso.available() else "cholmod"
     if kind == "pardiso" and not pardiso.available():
         raise InputError(f"factorization 'pardiso': {pardiso.unavailable_reason()}")
     return kind

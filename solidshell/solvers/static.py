@@ -1115,7 +1115,8 @@ def solve_static(model, fixed, loads, load_factors=None, method="newton", prescr
         (``saddle_step``: the largest escape step as a fraction of L_f).  A run that cannot reach a
         minimum returns converged=False.  info: saddles_left, saddle_eigenvalues, warnings.
     contact, contact_stiffness : rigid bodies (solidshell.contact) and the penalty [force/length]
-    factorization : "auto" (default: "pardiso" where Intel MKL is installed, else "cholmod"),
+    factorization : "auto" (default: "pardiso" where Intel MKL is installed and the system has at
+        least linear.PARDISO_MIN_DOFS free dofs, else "cholmod"),
         "cholmod" (CHOLMOD supernodal Cholesky of the positive-definite tangents, SuperLU where
         the paper's scheme meets an indefinite one), "pardiso" (the same on MKL PARDISO's
         Cholesky, solvers/pardiso.py: about twice as fast; InputError without MKL) or "superlu"
@@ -1175,7 +1176,7 @@ def _solve_static(model, fixed, loads, load_factors, method, prescribed, *, tol,
     factors = [1.0] if load_factors is None else [float(x) for x in np.atleast_1d(load_factors)]
     if not factors or not all(np.isfinite(factors)):
         raise InputError("load_factors must be a non-empty list of finite numbers")
-    factorization = resolve_factorization(factorization)
+    factorization = resolve_factorization(factorization, int(np.count_nonzero(~fixed)))
     for name, v in (("tol", tol), ("energy_tol", energy_tol), ("disp_tol", disp_tol)):
         if not (math.isfinite(float(v)) and float(v) > 0.0):
             raise InputError(f"{name} must be a positive number, got {v!r}")

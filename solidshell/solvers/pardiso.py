@@ -115,7 +115,6 @@ class Pardiso(PatternFactor):
                            # METIS, a 15 % faster factorisation and no 0.4 s METIS start-up
                            # (docs/solvers.md, section 5)
         ip[7] = 0          # no iterative refinement (a plain solve, as CHOLMOD's)
-        ip[17] = -1        # report the factor's non-zeros
         ip[34] = 1         # zero-based indices
         ip[55] = 1         # keep the factor's diagonal (pardiso_getdiag: the singular-pivot test)
         self._v = None
@@ -157,7 +156,7 @@ class Pardiso(PatternFactor):
         err = self._call(11, self._v)
         if err != 0:
             raise RuntimeError(f"PARDISO analysis failed (MKL error {err})")
-        self._key = L.key if L.key is not None else object()
+        self._key = L.key
         self.n_symbolic += 1
 
     def factor(self, A, shift=None) -> bool:
@@ -187,10 +186,6 @@ class Pardiso(PatternFactor):
         if err.value != 0:
             raise RuntimeError(f"PARDISO diagonal not available (MKL error {err.value})")
         return df
-
-    @property
-    def factor_nonzeros(self) -> int:
-        return int(self._iparm[17])
 
     def solve(self, b):
         """x with (A + diag(shift)) x = b for the last successful ``factor``."""

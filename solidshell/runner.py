@@ -46,6 +46,8 @@ class RunOutput:
     run_id: str = ""                        # uuid4 hex, also in summary.json and every file
     series: list | None = None              # adaptive runs: [(t, ShellMesh, U)], each frame on its own mesh
     projected_boundary: np.ndarray | None = None   # the analysed drape's outline (analysis.projected_boundary)
+    problem: Any = None                     # the Problem the solver ran (adaptive: on the final mesh, with its
+                                            # per-quad membranes); None for a mesh-only run
 
     @property
     def converged(self):
@@ -348,8 +350,13 @@ def _pedestal_area(scene: Scene) -> float | None:
     return p["size"] ** 2 if p["shape"] == "square" else np.pi * p["diameter"] ** 2 / 4.0
 
 
-def _analyse(scene: Scene, mesh, U, model=None) -> dict:
-    """Drape measures for scenes with a pedestal or a sphere; interpenetrated nodes for all."""
+def analyse(scene: Scene, mesh, U, model=None) -> dict:
+    """Drape measures (analysis.drape_summary: drape coefficient, folds, outline) of the state U
+    (N,6) on ``mesh`` for scenes with a pedestal or a sphere; the strip's tip position; with
+    ``model``, the interpenetrated nodes (Section 4.3) for all.  The measures a run's summary
+    holds, for a state computed elsewhere (verification/lsp_states.py).  ``scene``: a Scene or
+    anything scenes.load takes."""
+    scene = load(scene)
     out = {}
     if model is not None and hasattr(model, "interpenetrated_nodes"):
         out["interpenetrated_nodes"] = int(np.count_nonzero(model.interpenetrated_nodes(U)))
@@ -506,6 +513,7 @@ def _run(sc, kind, mesh_arg, out_dir, cb, settings, timings, t_start, overrides=
     U = np.zeros((mesh.n_nodes, 6))
     result = None
     model = None
+    problem = None
     series = None                                  # adaptive: [(t, mesh, U)] on each frame's own mesh
     if kind != "none":
         try:
@@ -536,7 +544,8 @@ def _run(sc, kind, mesh_arg, out_dir, cb, settings, timings, t_start, overrides=
                 result, mesh = adaptive_out.result, adaptive_out.mesh
                 series = adaptive_out.series
                 fixed = support_mask(sc, mesh)
-                model = adaptive_run.integ.model
+                problem = adaptive_run.integ.problem
+                model = problem.model
                 summary["counts"] = sio.mesh_counts(mesh, fixed)
                 summary["area"] = float(mesh.area())
             timings["solve"] = time.perf_counter() - t
@@ -565,7 +574,7 @@ def _run(sc, kind, mesh_arg, out_dir, cb, settings, timings, t_start, overrides=
         summary["frames"] = len(result.frames or [])
         if finite:
             try:
-                a = _analyse(sc, mesh, U, model)
+                a = analyse(sc, mesh, U, model)
             except Exception as e:      # analysis must never lose a solved state
                 summary["analysis_error"] = f"{type(e).__name__}: {e}"
             else:
@@ -596,7 +605,8 @@ def _run(sc, kind, mesh_arg, out_dir, cb, settings, timings, t_start, overrides=
     summary = sio.to_jsonable(summary)
     return RunOutput(summary=summary, U=U, mesh=mesh, out_dir=folder.path if folder else None, scene=sc,
                      result=result, files=[Path(f) for f in files], run_id=run_id, series=series,
-                     projected_boundary=None if boundary is None else np.asarray(boundary, float))
+                     projected_boundary=None if boundary is None else np.asarray(boundary, float),
+                     problem=problem)
 
 
 def adapt_settings(scene: Scene, kind: str):

@@ -102,6 +102,8 @@ def test_adaptive_run_splits_writes_series_and_books_energy(which, request):
     assert len(s["remesh_energy_jumps"]) == s["remesh_count"] == len(s["remeshes"])
     assert 0.0 <= s["remesh_share"] < 1.0 and s["remesh_time_s"] >= 0.0
     assert out.mesh.n_nodes == s["final_active_nodes"] == s["counts"]["nodes"]
+    # RunOutput.problem: the problem of the final mesh, the one the last steps ran on
+    assert out.problem.model.mesh is out.mesh and out.problem.model.n_nodes == out.mesh.n_nodes
     times, counts, ids = _series(out)
     assert len(times) >= 2 and times == sorted(times)
     assert counts[0] == LEVEL0_NODES and counts[-1] > LEVEL0_NODES

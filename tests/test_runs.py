@@ -503,3 +503,18 @@ def test_restart_after_kill_explicit_bitwise(tmp_path):
 
 def test_restart_after_kill_relax_bitwise(tmp_path):
     _kill_and_restart(tmp_path, "relax", ['damping="kinetic"'])
+
+
+def test_run_output_problem_is_the_one_solved():
+    """RunOutput.problem is the Problem the solver ran: the static state it returns balances that
+    problem's loads.  The solver stops at a relative residual <= tol = 1e-8 (solvers/static.py);
+    the bound 1e-6 leaves room for the round-off of re-evaluating the force in another call."""
+    from solidshell.runner import run_scene
+
+    out = run_scene("strip-warp", mesh="4x1", out_dir=None, progress=False,
+                    overrides={"output.pictures": [], "output.snapshots": []})
+    pb = out.problem
+    assert pb.model.n_nodes == out.mesh.n_nodes
+    free = ~np.asarray(pb.fixed, bool).reshape(-1)
+    r = (pb.model.internal_force(out.U) - pb.loads).reshape(-1)[free]
+    assert np.linalg.norm(r) <= 1e-6 * np.linalg.norm(np.asarray(pb.loads).reshape(-1)[free])

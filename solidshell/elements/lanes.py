@@ -246,17 +246,17 @@ def store_nodes(F, b, k, fo, fn, h, n):
 
 # ---------------------------------------------------------------- the kernel
 @njit(forceinline=True, error_model="numpy")
-def _gather(b, k, X, Xn, U, conn, xs, nn):
-    """Stage 0: lane k's nodal x_o, x_n, U_o, U_n into the block scratch (row 12 i + c: node i,
+def _gather(b, s, k, X, Xn, U, conn, xs, nn):
+    """Stage 0: lane k's nodal x_o, x_n, U_o, U_n into the scratch row s (entry 12 i + c: node i,
     component c of x_o | x_n | U_o | U_n), so that the later stages load contiguous lanes; ``nn``
     the element's node count, a literal at every call (4 here, 3 in lanes_tri)."""
     for i in range(nn):
         p = conn[b, i, k]
         for c in range(3):
-            xs[b, (12 * i + c) * LANES + k] = X[p, c] + U[p, c]
-            xs[b, (12 * i + 3 + c) * LANES + k] = Xn[p, c] + U[p, 3 + c]
-            xs[b, (12 * i + 6 + c) * LANES + k] = U[p, c]
-            xs[b, (12 * i + 9 + c) * LANES + k] = U[p, 3 + c]
+            xs[s, (12 * i + c) * LANES + k] = X[p, c] + U[p, c]
+            xs[s, (12 * i + 3 + c) * LANES + k] = Xn[p, c] + U[p, 3 + c]
+            xs[s, (12 * i + 6 + c) * LANES + k] = U[p, c]
+            xs[s, (12 * i + 9 + c) * LANES + k] = U[p, 3 + c]
 
 
 @njit(forceinline=True, error_model="numpy")
@@ -283,9 +283,9 @@ def _forces_of(fe, b, k):
 
 
 @njit(forceinline=True, fastmath=_FM, error_model="numpy")
-def _stage_gp(b, k, D, r, Cmb, xs, fe, we, first):
+def _stage_gp(b, s, k, D, r, Cmb, xs, fe, we, first):
     """Gauss point with derivatives D, rigidities Cmb[b, r:r+18]: adds its forces and energy."""
-    x, n, u, v = _nodes(xs, b, k)
+    x, n, u, v = _nodes(xs, s, k)
     if first:
         z3 = (0.0, 0.0, 0.0)
         fo = (z3, z3, z3, z3)
@@ -300,9 +300,9 @@ def _stage_gp(b, k, D, r, Cmb, xs, fe, we, first):
 
 
 @njit(forceinline=True, fastmath=_FM, error_model="numpy")
-def _stage_rest(b, k, Cs, Cz, rz, quasi, mu, xs, fe, we):
+def _stage_rest(b, s, k, Cs, Cz, rz, quasi, mu, xs, fe, we):
     """ANS transverse shear (Eq. 4) and thickness (Eq. 5 / Eq. 24): adds their forces and energy."""
-    x, n, u, v = _nodes(xs, b, k)
+    x, n, u, v = _nodes(xs, s, k)
     fo, fn = _forces_of(fe, b, k)
     energy = we[b, k]
     # ---- ANS transverse shear (Eq. 4): tying values, their forces (core._element_force)
@@ -344,35 +344,38 @@ def _stage_rest(b, k, Cs, Cz, rz, quasi, mu, xs, fe, we):
 
 
 @njit(forceinline=True, fastmath=_FM, error_model="numpy")
-def stages_rest(b, nl, Cs, Cz, rz, quasi, mu, xs, fe, we):
+def stages_rest(b, s, nl, Cs, Cz, rz, quasi, mu, xs, fe, we):
     """The last stage (shear and thickness, _stage_rest) of the nl lanes of block b, the branch on
     the thickness strain outside the lane loop: each loop body is straight-line code."""
     if quasi:
         for k in range(nl):
-            _stage_rest(b, k, Cs, Cz, rz, True, mu, xs, fe, we)
+            _stage_rest(b, s, k, Cs, Cz, rz, True, mu, xs, fe, we)
     else:
         for k in range(nl):
-            _stage_rest(b, k, Cs, Cz, rz, False, mu, xs, fe, we)
+            _stage_rest(b, s, k, Cs, Cz, rz, False, mu, xs, fe, we)
 
 
 @njit(cache=True, forceinline=True, fastmath=_FM, error_model="numpy")
-def _block(b, X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we):
+def _block(b, s, X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we):
     """All lanes of block b, stage by stage (gather, four Gauss points, shear and thickness): each
     stage's lane loop is short enough for LLVM's vectoriser (one loop over the whole element was
     left scalar).  Inlined by LLVM into the parallel loop, whose arrays are marked non-aliasing
-    there: that is what lets the lane loops vectorise over the gathered loads."""
+    there: that is what lets the lane loops vectorise over the gathered loads.  Row s of xs is the
+    block's scratch: a caller that runs blocks one after another on a thread passes the same row
+    for all of them, so the scratch stays in L1 (a row per block streamed ~770 B per element
+    through memory every step, and the pass ran 1.5x slower: docs/benchmarks.md)."""
     nl = conn.shape[2]
     for k in range(nl):
-        _gather(b, k, X, Xn, U, conn, xs, 4)
+        _gather(b, s, k, X, Xn, U, conn, xs, 4)
     for k in range(nl):
-        _stage_gp(b, k, _D0, 0, Cmb, xs, fe, we, True)
+        _stage_gp(b, s, k, _D0, 0, Cmb, xs, fe, we, True)
     for k in range(nl):
-        _stage_gp(b, k, _D1, 18, Cmb, xs, fe, we, False)
+        _stage_gp(b, s, k, _D1, 18, Cmb, xs, fe, we, False)
     for k in range(nl):
-        _stage_gp(b, k, _D2, 36, Cmb, xs, fe, we, False)
+        _stage_gp(b, s, k, _D2, 36, Cmb, xs, fe, we, False)
     for k in range(nl):
-        _stage_gp(b, k, _D3, 54, Cmb, xs, fe, we, False)
-    stages_rest(b, nl, Cs, Cz, rz, quasi, mu, xs, fe, we)
+        _stage_gp(b, s, k, _D3, 54, Cmb, xs, fe, we, False)
+    stages_rest(b, s, nl, Cs, Cz, rz, quasi, mu, xs, fe, we)
 
 
 @njit(cache=True, parallel=True, fastmath=_FM, error_model="numpy")
@@ -381,4 +384,4 @@ def quad_forces(X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we):
     energies we (B, LANES) of all quads (``pack`` layout) at displacements U (N, 6) of the nodes X,
     directors Xn (N, 3); xs (B, 48 LANES) is scratch."""
     for b in prange(conn.shape[0]):
-        _block(b, X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we)
+        _block(b, b, X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we)

@@ -97,9 +97,9 @@ def _bending_point(d, x, n, u, v, C, b, r, k, fo, fn):
 
 
 @njit(forceinline=True, fastmath=_FM, error_model="numpy")
-def _stage_bend(b, k, D, r, C, xs, fe, we):
+def _stage_bend(b, s, k, D, r, C, xs, fe, we):
     """Gauss point with derivatives D, rigidities C[b, r:r+9]: adds its forces and energy."""
-    x, n, u, v = _nodes(xs, b, k)
+    x, n, u, v = _nodes(xs, s, k)
     fo, fn = _forces_of(fe, b, k)
     fo, fn, wg = _bending_point(D, x, n, u, v, C, b, r, k, fo, fn)
     store_nodes(fe, b, k, fo, fn, _Z4, n)
@@ -107,10 +107,10 @@ def _stage_bend(b, k, D, r, C, xs, fe, we):
 
 
 @njit(forceinline=True, fastmath=_FM, error_model="numpy")
-def _stage_membrane(b, k, C, xs, fe, we):
+def _stage_membrane(b, s, k, C, xs, fe, we):
     """The assumed membrane (quad4.py) on the six products y: energy y.K y / 2 and its forces; the
     first stage, so it starts the lane's forces and energy."""
-    x, n, u, v = _nodes(xs, b, k)
+    x, n, u, v = _nodes(xs, s, k)
     A1 = _comb(_C1, x)
     A2 = _comb(_C2, x)
     H = _comb(_H, x)
@@ -153,23 +153,23 @@ def _stage_membrane(b, k, C, xs, fe, we):
 
 
 @njit(cache=True, forceinline=True, fastmath=_FM, error_model="numpy")
-def _block(b, X, Xn, U, conn, C, Cs, Cz, rz, quasi, mu, xs, fe, we):
+def _block(b, s, X, Xn, U, conn, C, Cs, Cz, rz, quasi, mu, xs, fe, we):
     """All lanes of block b, stage by stage (lanes._block's scheme: one short straight-line lane
     loop per stage, so that each vectorises)."""
     nl = conn.shape[2]
     for k in range(nl):
-        _gather(b, k, X, Xn, U, conn, xs, 4)
+        _gather(b, s, k, X, Xn, U, conn, xs, 4)
     for k in range(nl):
-        _stage_membrane(b, k, C, xs, fe, we)
+        _stage_membrane(b, s, k, C, xs, fe, we)
     for k in range(nl):
-        _stage_bend(b, k, _D0, 0, C, xs, fe, we)
+        _stage_bend(b, s, k, _D0, 0, C, xs, fe, we)
     for k in range(nl):
-        _stage_bend(b, k, _D1, 9, C, xs, fe, we)
+        _stage_bend(b, s, k, _D1, 9, C, xs, fe, we)
     for k in range(nl):
-        _stage_bend(b, k, _D2, 18, C, xs, fe, we)
+        _stage_bend(b, s, k, _D2, 18, C, xs, fe, we)
     for k in range(nl):
-        _stage_bend(b, k, _D3, 27, C, xs, fe, we)
-    stages_rest(b, nl, Cs, Cz, rz, quasi, mu, xs, fe, we)
+        _stage_bend(b, s, k, _D3, 27, C, xs, fe, we)
+    stages_rest(b, s, nl, Cs, Cz, rz, quasi, mu, xs, fe, we)
 
 
 @njit(cache=True, parallel=True, fastmath=_FM, error_model="numpy")
@@ -178,4 +178,4 @@ def quad_forces(X, Xn, U, conn, C, Cs, Cz, rz, quasi, mu, xs, fe, we):
     element forces fe (B, 24 LANES), energies we (B, LANES) at displacements U (N, 6) of the nodes
     X, directors Xn (N, 3); xs (B, 48 LANES) is scratch."""
     for b in prange(conn.shape[0]):
-        _block(b, X, Xn, U, conn, C, Cs, Cz, rz, quasi, mu, xs, fe, we)
+        _block(b, b, X, Xn, U, conn, C, Cs, Cz, rz, quasi, mu, xs, fe, we)

@@ -123,10 +123,10 @@ def _nodes(xs, b, k):
 
 # ---------------------------------------------------------------- stages
 @njit(forceinline=True, fastmath=_FM, error_model="numpy")
-def _stage_mb(b, k, C, xs, fe, we):
+def _stage_mb(b, s, k, C, xs, fe, we):
     """Membrane and bending at the element's one point (Eq. 11; core._element_force with dN =
     tri3.DN): starts lane k's forces and energy."""
-    x, n, u, v = _nodes(xs, b, k)
+    x, n, u, v = _nodes(xs, s, k)
     # dN/ds = (-1, 1, 0), dN/dt = (-1, 0, 1): the tangents are edge vectors
     a1 = _sub(x[1], x[0])
     a2 = _sub(x[2], x[0])
@@ -162,10 +162,10 @@ def _stage_mb(b, k, C, xs, fe, we):
 
 
 @njit(forceinline=True, fastmath=_FM, error_model="numpy")
-def _stage_rest(b, k, Cs, Cz, rz, quasi, mu, xs, fe, we):
+def _stage_rest(b, s, k, Cs, Cz, rz, quasi, mu, xs, fe, we):
     """Transverse shear (Eqs. 12-14, folded into Cs) and thickness (Eq. 15 with Eq. 5 / Eq. 24):
     adds their forces and energy to lane k's."""
-    x, n, u, v = _nodes(xs, b, k)
+    x, n, u, v = _nodes(xs, s, k)
     # tying points (tri3.ALPHA, tri3.BETA): edge 3-1 (x_1 - x_3), 1-2 (x_2 - x_1), 2-3 (x_3 - x_2),
     # directors the edges' mid-point averages
     ta0 = _sub(x[0], x[2])
@@ -223,20 +223,20 @@ def _stage_rest(b, k, Cs, Cz, rz, quasi, mu, xs, fe, we):
 
 
 @njit(cache=True, forceinline=True, fastmath=_FM, error_model="numpy")
-def _block(b, X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we):
+def _block(b, s, X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we):
     """All lanes of block b, stage by stage (gather, membrane and bending, shear and thickness;
     lanes._block's scheme), the branch on the thickness strain outside the lane loop."""
     nl = conn.shape[2]
     for k in range(nl):
-        _gather(b, k, X, Xn, U, conn, xs, NN)
+        _gather(b, s, k, X, Xn, U, conn, xs, NN)
     for k in range(nl):
-        _stage_mb(b, k, Cmb, xs, fe, we)
+        _stage_mb(b, s, k, Cmb, xs, fe, we)
     if quasi:
         for k in range(nl):
-            _stage_rest(b, k, Cs, Cz, rz, True, mu, xs, fe, we)
+            _stage_rest(b, s, k, Cs, Cz, rz, True, mu, xs, fe, we)
     else:
         for k in range(nl):
-            _stage_rest(b, k, Cs, Cz, rz, False, mu, xs, fe, we)
+            _stage_rest(b, s, k, Cs, Cz, rz, False, mu, xs, fe, we)
 
 
 @njit(cache=True, parallel=True, fastmath=_FM, error_model="numpy")
@@ -245,4 +245,4 @@ def tri_forces(X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we):
     energies we (B, LANES) of all triangles (``pack`` layout) at displacements U (N, 6) of the
     nodes X, directors Xn (N, 3); xs (B, 36 LANES) is scratch."""
     for b in prange(conn.shape[0]):
-        _block(b, X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we)
+        _block(b, b, X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we)

@@ -56,10 +56,11 @@ def _scatter_block(b, dest, fe, F, nn):
 @njit(cache=True, parallel=True, fastmath=_FM, error_model="numpy")
 def lanes_scatter(X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we, bounds, dest, F):
     """lanes.quad_forces and the scatter of each block right after it, chunk by chunk (CHUNKS):
-    F (zero on entry) gets the owned dofs, its tail the slots (chunk_plan)."""
+    F (zero on entry) gets the owned dofs, its tail the slots (chunk_plan); xs (CHUNKS, 48 LANES)
+    is the chunks' scratch, one row reused block after block (lanes._block)."""
     for ch in prange(bounds.size - 1):
         for b in range(bounds[ch], bounds[ch + 1]):
-            lanes._block(b, X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we)
+            lanes._block(b, ch, X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we)
             _scatter_block(b, dest, fe, F, 4)
 
 
@@ -68,7 +69,7 @@ def lanes_ans_scatter(X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we, bo
     """lanes_scatter for assumed-membrane quads (lanes_ans._block, the same layout and contract)."""
     for ch in prange(bounds.size - 1):
         for b in range(bounds[ch], bounds[ch + 1]):
-            lanes_ans._block(b, X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we)
+            lanes_ans._block(b, ch, X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we)
             _scatter_block(b, dest, fe, F, 4)
 
 
@@ -77,7 +78,7 @@ def lanes_tri_scatter(X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we, bo
     """lanes_scatter for triangles (lanes_tri._block: the same layout, 3 nodes, fe (B, 18 LANES))."""
     for ch in prange(bounds.size - 1):
         for b in range(bounds[ch], bounds[ch + 1]):
-            lanes_tri._block(b, X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we)
+            lanes_tri._block(b, ch, X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we)
             _scatter_block(b, dest, fe, F, 3)
 
 
@@ -219,7 +220,9 @@ class FusedForces:
             if kind == "lanes":
                 self.views.append((self.fe[o:o + size].reshape(pk["B"], 6 * pk["nn"] * lanes.LANES),
                                    np.zeros((pk["B"], lanes.LANES))))
-                pk["xs"] = np.zeros((pk["B"], 12 * pk["nn"] * lanes.LANES))   # the lane kernel's scratch
+                # the lane kernel's scratch: one block's nodal values per chunk, reused block after
+                # block while in L1 (one per block was ~770 B/element of memory traffic per step)
+                pk["xs"] = np.zeros((pk["bounds"].size - 1, 12 * pk["nn"] * lanes.LANES))
             else:
                 M, nn = b.conn.shape
                 self.views.append((self.fe[o:o + size].reshape(M, nn, 6), np.zeros(M)))

@@ -275,10 +275,10 @@ def _nodes(xs, b, k):
 
 
 @njit(forceinline=True, error_model="numpy")
-def _forces_of(fe, b, k):
+def _forces_of(fe, s, k):
     """The U_o and U_n forces of the four nodes of lane k accumulated so far."""
-    fo = (_row3(fe, b, 0, k), _row3(fe, b, 6, k), _row3(fe, b, 12, k), _row3(fe, b, 18, k))
-    fn = (_row3(fe, b, 3, k), _row3(fe, b, 9, k), _row3(fe, b, 15, k), _row3(fe, b, 21, k))
+    fo = (_row3(fe, s, 0, k), _row3(fe, s, 6, k), _row3(fe, s, 12, k), _row3(fe, s, 18, k))
+    fn = (_row3(fe, s, 3, k), _row3(fe, s, 9, k), _row3(fe, s, 15, k), _row3(fe, s, 21, k))
     return fo, fn
 
 
@@ -292,10 +292,10 @@ def _stage_gp(b, s, k, D, r, Cmb, xs, fe, we, first):
         fn = (z3, z3, z3, z3)
         w = 0.0
     else:
-        fo, fn = _forces_of(fe, b, k)
+        fo, fn = _forces_of(fe, s, k)
         w = we[b, k]
     fo, fn, wg = _gauss_point(D, x, n, u, v, Cmb, b, r, k, fo, fn)
-    store_nodes(fe, b, k, fo, fn, _Z4, n)
+    store_nodes(fe, s, k, fo, fn, _Z4, n)
     we[b, k] = w + wg
 
 
@@ -303,7 +303,7 @@ def _stage_gp(b, s, k, D, r, Cmb, xs, fe, we, first):
 def _stage_rest(b, s, k, Cs, Cz, rz, quasi, mu, xs, fe, we):
     """ANS transverse shear (Eq. 4) and thickness (Eq. 5 / Eq. 24): adds their forces and energy."""
     x, n, u, v = _nodes(xs, s, k)
-    fo, fn = _forces_of(fe, b, k)
+    fo, fn = _forces_of(fe, s, k)
     energy = we[b, k]
     # ---- ANS transverse shear (Eq. 4): tying values, their forces (core._element_force)
     ta0, td0, g0 = _tying(_A0, _B0, x, n, u, v)
@@ -339,7 +339,7 @@ def _stage_rest(b, s, k, Cs, Cz, rz, quasi, mu, xs, fe, we):
     h2 = Cz[b, 8, k] * z0 + Cz[b, 9, k] * z1 + Cz[b, 10, k] * z2 + Cz[b, 11, k] * z3_
     h3 = Cz[b, 12, k] * z0 + Cz[b, 13, k] * z1 + Cz[b, 14, k] * z2 + Cz[b, 15, k] * z3_
     energy += 0.5 * (h0 * z0 + h1 * z1 + h2 * z2 + h3 * z3_)
-    store_nodes(fe, b, k, fo, fn, (h0 * c0, h1 * c1, h2 * c2, h3 * c3), n)
+    store_nodes(fe, s, k, fo, fn, (h0 * c0, h1 * c1, h2 * c2, h3 * c3), n)
     we[b, k] = energy
 
 
@@ -360,10 +360,11 @@ def _block(b, s, X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we):
     """All lanes of block b, stage by stage (gather, four Gauss points, shear and thickness): each
     stage's lane loop is short enough for LLVM's vectoriser (one loop over the whole element was
     left scalar).  Inlined by LLVM into the parallel loop, whose arrays are marked non-aliasing
-    there: that is what lets the lane loops vectorise over the gathered loads.  Row s of xs is the
-    block's scratch: a caller that runs blocks one after another on a thread passes the same row
-    for all of them, so the scratch stays in L1 (a row per block streamed ~770 B per element
-    through memory every step, and the pass ran 1.5x slower: docs/benchmarks.md)."""
+    there: that is what lets the lane loops vectorise over the gathered loads.  Row s of xs and of
+    fe is the block's scratch and forces (energies go to we[b] in any case): a caller that runs
+    blocks one after another on a thread and scatters each block's forces before the next passes
+    the same row for all of them, so both stay in L1 (a row per block streamed ~1150 B per
+    element through memory every step: the pass at 10^4 quads on 1 thread ran 1.3-1.5x slower)."""
     nl = conn.shape[2]
     for k in range(nl):
         _gather(b, s, k, X, Xn, U, conn, xs, 4)

@@ -100,9 +100,9 @@ def _bending_point(d, x, n, u, v, C, b, r, k, fo, fn):
 def _stage_bend(b, s, k, D, r, C, xs, fe, we):
     """Gauss point with derivatives D, rigidities C[b, r:r+9]: adds its forces and energy."""
     x, n, u, v = _nodes(xs, s, k)
-    fo, fn = _forces_of(fe, b, k)
+    fo, fn = _forces_of(fe, s, k)
     fo, fn, wg = _bending_point(D, x, n, u, v, C, b, r, k, fo, fn)
-    store_nodes(fe, b, k, fo, fn, _Z4, n)
+    store_nodes(fe, s, k, fo, fn, _Z4, n)
     we[b, k] = we[b, k] + wg
 
 
@@ -148,7 +148,7 @@ def _stage_membrane(b, s, k, C, xs, fe, we):
     z3 = (0.0, 0.0, 0.0)
     fo = _acc2((z3, z3, z3, z3), _C1, p1, _C2, p2)
     fo = _acc1(fo, 1.0, _H, ph)
-    store_nodes(fe, b, k, fo, (z3, z3, z3, z3), _Z4, n)
+    store_nodes(fe, s, k, fo, (z3, z3, z3, z3), _Z4, n)
     we[b, k] = w
 
 

@@ -226,16 +226,15 @@ def _stage_rest(b, s, k, Cs, Cz, rz, quasi, mu, xs, fe, we):
 def _block(b, s, X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we):
     """All lanes of block b, stage by stage (gather, membrane and bending, shear and thickness;
     lanes._block's scheme), the branch on the thickness strain outside the lane loop."""
-    nl = conn.shape[2]
-    for k in range(nl):
+    for k in range(LANES):
         _gather(b, s, k, X, Xn, U, conn, xs, NN)
-    for k in range(nl):
+    for k in range(LANES):
         _stage_mb(b, s, k, Cmb, xs, fe, we)
     if quasi:
-        for k in range(nl):
+        for k in range(LANES):
             _stage_rest(b, s, k, Cs, Cz, rz, True, mu, xs, fe, we)
     else:
-        for k in range(nl):
+        for k in range(LANES):
             _stage_rest(b, s, k, Cs, Cz, rz, False, mu, xs, fe, we)
 
 

@@ -66,7 +66,7 @@ def part_timers(ff, D6):
             label = pk["kernel"].__name__
             fn = (lambda pk=pk, fe=fe, we=we: pk["kernel"](
                 ff.X, ff.Xn, D6, pk["conn"], pk["Cmb"], pk["Cs"], pk["Cz"], pk["r_z"], ff.quasi, ff.mu, pk["xs"],
-                fe, we, pk["bounds"], pk["dest"], ff.F_all))
+                pk["fe"], we, pk["bounds"], pk["dest"], ff.F_all, False))
         else:
             label = f"core({b.module.__name__.rsplit('.', 1)[1]})"
             fn = lambda b=b, fe=fe, we=we: core.energy_force(*b.args(xo, xn, Uc, ff.quasi, ff.mu), fe, we,

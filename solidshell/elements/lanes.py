@@ -39,12 +39,13 @@ _B = tuple(tuple(float(v) for v in quad4.BETA[t]) for t in range(4))
 _A0, _A1, _A2, _A3 = _A
 _B0, _B1, _B2, _B3 = _B
 
-FLOPS_PER_ELEMENT = 2690
+FLOPS_PER_ELEMENT = 2354
 """Floating-point operations of one element (Green thickness strain), counted from this source as
-executed (the zero tying weights are multiplied too: without no-NaN fast-math they are not folded):
-4 Gauss points x 458 (8 tangent combinations 168, strains 92, stresses 30, energy 12, generalised
-forces 60, nodal forces 96), 4 shear ties x 98 + 28 + 9 + 8 nodal force updates x 36, thickness
-44 + 28 + 9 + 28, current coordinates 24."""
+executed: 4 Gauss points x 458 (8 tangent combinations 168, strains 92, stresses 30, energy 12,
+generalised forces 60, nodal forces 96), 4 shear ties x 50 (the tying tables have two nonzero
+weights a row, and zero weights cost nothing: _w) + 28 + 9 + 8 nodal force updates x 18,
+thickness 44 + 28 + 9 + 28, current coordinates 24 (2690 before the zero weights were skipped,
+336 fewer)."""
 
 N_CMB = 4 * 2 * 9      # Cmb rows per element: (gp, membrane|bending, 3x3)
 N_CS = 16              # Cs rows (4x4 shear tying)
@@ -78,11 +79,19 @@ def unpack_forces(fe, M):
 
 # ---------------------------------------------------------------- 3-vectors as tuples
 @njit(forceinline=True, fastmath=_FM, error_model="numpy")
+def _w(w, x):
+    """w x, or no term at all where the table weight w is a structural zero: w is a compile-time
+    constant at every call, so the branch folds away, and the 0.0 left in a sum folds with no-signed-
+    zeros (without no-NaN fast-math LLVM keeps 0 * x: it is NaN for x = inf)."""
+    return w * x if w != 0.0 else 0.0
+
+
+@njit(forceinline=True, fastmath=_FM, error_model="numpy")
 def _comb(d, x):
-    """sum_i d_i x_i over the four nodes (3-tuple)."""
-    return (d[0] * x[0][0] + d[1] * x[1][0] + d[2] * x[2][0] + d[3] * x[3][0],
-            d[0] * x[0][1] + d[1] * x[1][1] + d[2] * x[2][1] + d[3] * x[3][1],
-            d[0] * x[0][2] + d[1] * x[1][2] + d[2] * x[2][2] + d[3] * x[3][2])
+    """sum_i d_i x_i over the four nodes (3-tuple); zero weights d_i add no operation (_w)."""
+    return (_w(d[0], x[0][0]) + _w(d[1], x[1][0]) + _w(d[2], x[2][0]) + _w(d[3], x[3][0]),
+            _w(d[0], x[0][1]) + _w(d[1], x[1][1]) + _w(d[2], x[2][1]) + _w(d[3], x[3][1]),
+            _w(d[0], x[0][2]) + _w(d[1], x[1][2]) + _w(d[2], x[2][2]) + _w(d[3], x[3][2]))
 
 
 @njit(forceinline=True, fastmath=_FM, error_model="numpy")
@@ -110,12 +119,18 @@ def _acc2(f, d1, p, d2, q):
 
 
 @njit(forceinline=True, fastmath=_FM, error_model="numpy")
+def _sw(s, w, p):
+    """s w p (in that order), or no term where the table weight w is a structural zero (_w)."""
+    return s * w * p if w != 0.0 else 0.0
+
+
+@njit(forceinline=True, fastmath=_FM, error_model="numpy")
 def _acc1(f, s, w, p):
-    """f_i + s w_i p for the four nodes."""
-    return ((f[0][0] + s * w[0] * p[0], f[0][1] + s * w[0] * p[1], f[0][2] + s * w[0] * p[2]),
-            (f[1][0] + s * w[1] * p[0], f[1][1] + s * w[1] * p[1], f[1][2] + s * w[1] * p[2]),
-            (f[2][0] + s * w[2] * p[0], f[2][1] + s * w[2] * p[1], f[2][2] + s * w[2] * p[2]),
-            (f[3][0] + s * w[3] * p[0], f[3][1] + s * w[3] * p[1], f[3][2] + s * w[3] * p[2]))
+    """f_i + s w_i p for the four nodes; a node with a zero weight w_i keeps f_i (_sw)."""
+    return ((f[0][0] + _sw(s, w[0], p[0]), f[0][1] + _sw(s, w[0], p[1]), f[0][2] + _sw(s, w[0], p[2])),
+            (f[1][0] + _sw(s, w[1], p[0]), f[1][1] + _sw(s, w[1], p[1]), f[1][2] + _sw(s, w[1], p[2])),
+            (f[2][0] + _sw(s, w[2], p[0]), f[2][1] + _sw(s, w[2], p[1]), f[2][2] + _sw(s, w[2], p[2])),
+            (f[3][0] + _sw(s, w[3], p[0]), f[3][1] + _sw(s, w[3], p[1]), f[3][2] + _sw(s, w[3], p[2])))
 
 
 @njit(forceinline=True, error_model="numpy")
@@ -231,10 +246,6 @@ def _store(F, b, r, k, fo, fn, h, n):
     F[b, (r + 5) * LANES + k] = fn[2] + h * n[2]
 
 
-_Z4 = (0.0, 0.0, 0.0, 0.0)
-"""No thickness stress at the four nodes (the stages before the last)."""
-
-
 @njit(forceinline=True, fastmath=_FM, error_model="numpy")
 def store_nodes(F, b, k, fo, fn, h, n):
     """The four nodes' rows of lane k (_store): forces fo, fn, thickness stresses h (4-tuple)."""
@@ -242,6 +253,28 @@ def store_nodes(F, b, k, fo, fn, h, n):
     _store(F, b, 6, k, fo[1], fn[1], h[1], n[1])
     _store(F, b, 12, k, fo[2], fn[2], h[2], n[2])
     _store(F, b, 18, k, fo[3], fn[3], h[3], n[3])
+
+
+@njit(forceinline=True, error_model="numpy")
+def _store_f(F, b, r, k, fo, fn):
+    """_store without a thickness stress: 0 h x_n would be multiplied and added (0 * x is not
+    folded without no-NaN fast-math)."""
+    F[b, r * LANES + k] = fo[0]
+    F[b, (r + 1) * LANES + k] = fo[1]
+    F[b, (r + 2) * LANES + k] = fo[2]
+    F[b, (r + 3) * LANES + k] = fn[0]
+    F[b, (r + 4) * LANES + k] = fn[1]
+    F[b, (r + 5) * LANES + k] = fn[2]
+
+
+@njit(forceinline=True, error_model="numpy")
+def store_forces(F, b, k, fo, fn):
+    """The four nodes' rows of lane k with forces fo, fn and no thickness stress (the Gauss point
+    stages)."""
+    _store_f(F, b, 0, k, fo[0], fn[0])
+    _store_f(F, b, 6, k, fo[1], fn[1])
+    _store_f(F, b, 12, k, fo[2], fn[2])
+    _store_f(F, b, 18, k, fo[3], fn[3])
 
 
 # ---------------------------------------------------------------- the kernel
@@ -275,10 +308,10 @@ def _nodes(xs, b, k):
 
 
 @njit(forceinline=True, error_model="numpy")
-def _forces_of(fe, b, k):
+def _forces_of(fe, s, k):
     """The U_o and U_n forces of the four nodes of lane k accumulated so far."""
-    fo = (_row3(fe, b, 0, k), _row3(fe, b, 6, k), _row3(fe, b, 12, k), _row3(fe, b, 18, k))
-    fn = (_row3(fe, b, 3, k), _row3(fe, b, 9, k), _row3(fe, b, 15, k), _row3(fe, b, 21, k))
+    fo = (_row3(fe, s, 0, k), _row3(fe, s, 6, k), _row3(fe, s, 12, k), _row3(fe, s, 18, k))
+    fn = (_row3(fe, s, 3, k), _row3(fe, s, 9, k), _row3(fe, s, 15, k), _row3(fe, s, 21, k))
     return fo, fn
 
 
@@ -292,10 +325,10 @@ def _stage_gp(b, s, k, D, r, Cmb, xs, fe, we, first):
         fn = (z3, z3, z3, z3)
         w = 0.0
     else:
-        fo, fn = _forces_of(fe, b, k)
+        fo, fn = _forces_of(fe, s, k)
         w = we[b, k]
     fo, fn, wg = _gauss_point(D, x, n, u, v, Cmb, b, r, k, fo, fn)
-    store_nodes(fe, b, k, fo, fn, _Z4, n)
+    store_forces(fe, s, k, fo, fn)
     we[b, k] = w + wg
 
 
@@ -303,7 +336,7 @@ def _stage_gp(b, s, k, D, r, Cmb, xs, fe, we, first):
 def _stage_rest(b, s, k, Cs, Cz, rz, quasi, mu, xs, fe, we):
     """ANS transverse shear (Eq. 4) and thickness (Eq. 5 / Eq. 24): adds their forces and energy."""
     x, n, u, v = _nodes(xs, s, k)
-    fo, fn = _forces_of(fe, b, k)
+    fo, fn = _forces_of(fe, s, k)
     energy = we[b, k]
     # ---- ANS transverse shear (Eq. 4): tying values, their forces (core._element_force)
     ta0, td0, g0 = _tying(_A0, _B0, x, n, u, v)
@@ -339,7 +372,7 @@ def _stage_rest(b, s, k, Cs, Cz, rz, quasi, mu, xs, fe, we):
     h2 = Cz[b, 8, k] * z0 + Cz[b, 9, k] * z1 + Cz[b, 10, k] * z2 + Cz[b, 11, k] * z3_
     h3 = Cz[b, 12, k] * z0 + Cz[b, 13, k] * z1 + Cz[b, 14, k] * z2 + Cz[b, 15, k] * z3_
     energy += 0.5 * (h0 * z0 + h1 * z1 + h2 * z2 + h3 * z3_)
-    store_nodes(fe, b, k, fo, fn, (h0 * c0, h1 * c1, h2 * c2, h3 * c3), n)
+    store_nodes(fe, s, k, fo, fn, (h0 * c0, h1 * c1, h2 * c2, h3 * c3), n)
     we[b, k] = energy
 
 
@@ -360,22 +393,24 @@ def _block(b, s, X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we):
     """All lanes of block b, stage by stage (gather, four Gauss points, shear and thickness): each
     stage's lane loop is short enough for LLVM's vectoriser (one loop over the whole element was
     left scalar).  Inlined by LLVM into the parallel loop, whose arrays are marked non-aliasing
-    there: that is what lets the lane loops vectorise over the gathered loads.  Row s of xs is the
-    block's scratch: a caller that runs blocks one after another on a thread passes the same row
-    for all of them, so the scratch stays in L1 (a row per block streamed ~770 B per element
-    through memory every step, and the pass ran 1.5x slower: docs/benchmarks.md)."""
-    nl = conn.shape[2]
-    for k in range(nl):
+    there: that is what lets the lane loops vectorise over the gathered loads.  Row s of xs and of
+    fe is the block's scratch and forces (energies go to we[b] in any case): a caller that runs
+    blocks one after another on a thread and scatters each block's forces before the next passes
+    the same row for all of them, so both stay in L1 (a row per block streamed ~1150 B per
+    element through memory every step: the pass at 10^4 quads on 1 thread ran 1.3-1.5x slower).
+    Every lane loop runs LANES times, a literal (padded lanes are computed anyway): LLVM then
+    emits no scalar remainder loop and no runtime overlap checks, and vectorises the gather."""
+    for k in range(LANES):
         _gather(b, s, k, X, Xn, U, conn, xs, 4)
-    for k in range(nl):
+    for k in range(LANES):
         _stage_gp(b, s, k, _D0, 0, Cmb, xs, fe, we, True)
-    for k in range(nl):
+    for k in range(LANES):
         _stage_gp(b, s, k, _D1, 18, Cmb, xs, fe, we, False)
-    for k in range(nl):
+    for k in range(LANES):
         _stage_gp(b, s, k, _D2, 36, Cmb, xs, fe, we, False)
-    for k in range(nl):
+    for k in range(LANES):
         _stage_gp(b, s, k, _D3, 54, Cmb, xs, fe, we, False)
-    stages_rest(b, s, nl, Cs, Cz, rz, quasi, mu, xs, fe, we)
+    stages_rest(b, s, LANES, Cs, Cz, rz, quasi, mu, xs, fe, we)
 
 
 @njit(cache=True, parallel=True, fastmath=_FM, error_model="numpy")

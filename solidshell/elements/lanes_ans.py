@@ -32,8 +32,8 @@ from numba import njit, prange
 
 from . import lanes, quad4
 from .core import _FM
-from .lanes import (LANES, _D0, _D1, _D2, _D3, _Z4, _acc1, _acc2, _comb, _dot, _forces_of, _gather, _lin2,
-                    _nodes, curvatures, gradients, stages_rest, store_nodes)
+from .lanes import (LANES, _D0, _D1, _D2, _D3, _acc1, _acc2, _comb, _dot, _forces_of, _gather, _lin2,
+                    _nodes, curvatures, gradients, stages_rest, store_forces)
 
 # the basis of the six products: dN_i/dxi, dN_i/deta at the centre and the hourglass weights
 # xi_i eta_i / 4 (quad4.P_ALPHA rows 0, 1 and 3: the products (0,0), (1,1), (0,1), (2,2), (0,2),
@@ -47,12 +47,12 @@ N_BEND = 36            # bending rows: Gauss point g, 3x3 Cb at 9 g + 3 r + s
 N_K = 21               # membrane rows after them: K's upper triangle, row by row
 N_ROWS = N_BEND + N_K
 
-FLOPS_PER_ELEMENT = 2794
+FLOPS_PER_ELEMENT = 2458
 """Floating-point operations of one element (Green thickness strain), counted from this source as
 executed, as lanes.FLOPS_PER_ELEMENT is: membrane 420 (6 nodal combinations 126, products 87,
 K y 66, energy 12, forces on a_xi, a_eta, h 45, nodal forces 84); 4 bending points x 379 (8
 tangent combinations 168, curvatures 57, moments 15, energy 7, generalised forces 36, nodal forces
-96); shear, thickness and current coordinates as lanes.py's 858."""
+96); shear, thickness and current coordinates as lanes.py's 522."""
 
 
 def covers(c) -> bool:
@@ -100,9 +100,9 @@ def _bending_point(d, x, n, u, v, C, b, r, k, fo, fn):
 def _stage_bend(b, s, k, D, r, C, xs, fe, we):
     """Gauss point with derivatives D, rigidities C[b, r:r+9]: adds its forces and energy."""
     x, n, u, v = _nodes(xs, s, k)
-    fo, fn = _forces_of(fe, b, k)
+    fo, fn = _forces_of(fe, s, k)
     fo, fn, wg = _bending_point(D, x, n, u, v, C, b, r, k, fo, fn)
-    store_nodes(fe, b, k, fo, fn, _Z4, n)
+    store_forces(fe, s, k, fo, fn)
     we[b, k] = we[b, k] + wg
 
 
@@ -148,7 +148,7 @@ def _stage_membrane(b, s, k, C, xs, fe, we):
     z3 = (0.0, 0.0, 0.0)
     fo = _acc2((z3, z3, z3, z3), _C1, p1, _C2, p2)
     fo = _acc1(fo, 1.0, _H, ph)
-    store_nodes(fe, b, k, fo, (z3, z3, z3, z3), _Z4, n)
+    store_forces(fe, s, k, fo, (z3, z3, z3, z3))
     we[b, k] = w
 
 
@@ -156,20 +156,19 @@ def _stage_membrane(b, s, k, C, xs, fe, we):
 def _block(b, s, X, Xn, U, conn, C, Cs, Cz, rz, quasi, mu, xs, fe, we):
     """All lanes of block b, stage by stage (lanes._block's scheme: one short straight-line lane
     loop per stage, so that each vectorises)."""
-    nl = conn.shape[2]
-    for k in range(nl):
+    for k in range(LANES):
         _gather(b, s, k, X, Xn, U, conn, xs, 4)
-    for k in range(nl):
+    for k in range(LANES):
         _stage_membrane(b, s, k, C, xs, fe, we)
-    for k in range(nl):
+    for k in range(LANES):
         _stage_bend(b, s, k, _D0, 0, C, xs, fe, we)
-    for k in range(nl):
+    for k in range(LANES):
         _stage_bend(b, s, k, _D1, 9, C, xs, fe, we)
-    for k in range(nl):
+    for k in range(LANES):
         _stage_bend(b, s, k, _D2, 18, C, xs, fe, we)
-    for k in range(nl):
+    for k in range(LANES):
         _stage_bend(b, s, k, _D3, 27, C, xs, fe, we)
-    stages_rest(b, s, nl, Cs, Cz, rz, quasi, mu, xs, fe, we)
+    stages_rest(b, s, LANES, Cs, Cz, rz, quasi, mu, xs, fe, we)
 
 
 @njit(cache=True, parallel=True, fastmath=_FM, error_model="numpy")

@@ -156,9 +156,9 @@ def _stage_mb(b, s, k, C, xs, fe, we):
     q2 = _lin2(m1, a2, m2, a1)
     p0 = (-(p1[0] + p2[0]), -(p1[1] + p2[1]), -(p1[2] + p2[2]))
     q0 = (-(q1[0] + q2[0]), -(q1[1] + q2[1]), -(q1[2] + q2[2]))
-    _put(fe, b, 0, k, p0, q0)
-    _put(fe, b, 6, k, p1, q1)
-    _put(fe, b, 12, k, p2, q2)
+    _put(fe, s, 0, k, p0, q0)
+    _put(fe, s, 6, k, p1, q1)
+    _put(fe, s, 12, k, p2, q2)
 
 
 @njit(forceinline=True, fastmath=_FM, error_model="numpy")
@@ -182,9 +182,9 @@ def _stage_rest(b, s, k, Cs, Cz, rz, quasi, mu, xs, fe, we):
     s2 = Cs[b, 6, k] * g0 + Cs[b, 7, k] * g1 + Cs[b, 8, k] * g2
     energy = we[b, k] + 0.5 * (s0 * g0 + s1 * g1 + s2 * g2)
     # d g_t / d x_o,i = alpha_ti d_t, d g_t / d x_n,i = beta_ti a_t
-    fo0 = _row3(fe, b, 0, k)
-    fo1 = _row3(fe, b, 6, k)
-    fo2 = _row3(fe, b, 12, k)
+    fo0 = _row3(fe, s, 0, k)
+    fo1 = _row3(fe, s, 6, k)
+    fo2 = _row3(fe, s, 12, k)
     fo0 = (fo0[0] + (s0 * td0[0] - s1 * td1[0]), fo0[1] + (s0 * td0[1] - s1 * td1[1]),
            fo0[2] + (s0 * td0[2] - s1 * td1[2]))
     fo1 = (fo1[0] + (s1 * td1[0] - s2 * td2[0]), fo1[1] + (s1 * td1[1] - s2 * td2[1]),
@@ -194,9 +194,9 @@ def _stage_rest(b, s, k, Cs, Cz, rz, quasi, mu, xs, fe, we):
     h0 = 0.5 * s0
     h1 = 0.5 * s1
     h2 = 0.5 * s2
-    fn0 = _row3(fe, b, 3, k)
-    fn1 = _row3(fe, b, 9, k)
-    fn2 = _row3(fe, b, 15, k)
+    fn0 = _row3(fe, s, 3, k)
+    fn1 = _row3(fe, s, 9, k)
+    fn2 = _row3(fe, s, 15, k)
     fn0 = (fn0[0] + (h0 * ta0[0] + h1 * ta1[0]), fn0[1] + (h0 * ta0[1] + h1 * ta1[1]),
            fn0[2] + (h0 * ta0[2] + h1 * ta1[2]))
     fn1 = (fn1[0] + (h1 * ta1[0] + h2 * ta2[0]), fn1[1] + (h1 * ta1[1] + h2 * ta2[1]),
@@ -217,25 +217,24 @@ def _stage_rest(b, s, k, Cs, Cz, rz, quasi, mu, xs, fe, we):
     t1 = Cz[b, 3, k] * e0 + Cz[b, 4, k] * e1 + Cz[b, 5, k] * e2
     t2 = Cz[b, 6, k] * e0 + Cz[b, 7, k] * e1 + Cz[b, 8, k] * e2
     we[b, k] = energy + 0.5 * (t0 * e0 + t1 * e1 + t2 * e2)
-    _store(fe, b, 0, k, fo0, fn0, t0 * c0, n[0])
-    _store(fe, b, 6, k, fo1, fn1, t1 * c1, n[1])
-    _store(fe, b, 12, k, fo2, fn2, t2 * c2, n[2])
+    _store(fe, s, 0, k, fo0, fn0, t0 * c0, n[0])
+    _store(fe, s, 6, k, fo1, fn1, t1 * c1, n[1])
+    _store(fe, s, 12, k, fo2, fn2, t2 * c2, n[2])
 
 
 @njit(cache=True, forceinline=True, fastmath=_FM, error_model="numpy")
 def _block(b, s, X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we):
     """All lanes of block b, stage by stage (gather, membrane and bending, shear and thickness;
     lanes._block's scheme), the branch on the thickness strain outside the lane loop."""
-    nl = conn.shape[2]
-    for k in range(nl):
+    for k in range(LANES):
         _gather(b, s, k, X, Xn, U, conn, xs, NN)
-    for k in range(nl):
+    for k in range(LANES):
         _stage_mb(b, s, k, Cmb, xs, fe, we)
     if quasi:
-        for k in range(nl):
+        for k in range(LANES):
             _stage_rest(b, s, k, Cs, Cz, rz, True, mu, xs, fe, we)
     else:
-        for k in range(nl):
+        for k in range(LANES):
             _stage_rest(b, s, k, Cs, Cz, rz, False, mu, xs, fe, we)
 
 

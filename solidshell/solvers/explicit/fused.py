@@ -2,11 +2,12 @@
 
 One step is two compiled passes and no allocation:
 
-1. the element pass: every element's force and energy into one flat buffer -- quadrilaterals with
+1. the element pass: every element's force and energy into preallocated buffers -- quadrilaterals with
    the compatible membrane by the lane kernel (``elements/lanes.py``, elements in SIMD lanes),
    with the assumed membrane by ``elements/lanes_ans.py``, triangles by ``elements/lanes_tri.py``
-   (same layout), each block's forces scattered into the dofs right after it, in parallel over
-   CHUNKS fixed chunks of blocks (see CHUNKS: the sums of ``assembly.scatter_add_vec``'s order
+   (same layout), each block's forces scattered into the dofs right after it (while they are
+   in L1: a chunk reuses one block's rows of scratch and forces, FusedForces.element_pass), in
+   parallel over CHUNKS fixed chunks of blocks (see CHUNKS: the sums of ``assembly.scatter_add_vec``'s order
    but at chunk boundaries); any other block by ``elements/core.energy_force``;
 2. assembly and update, serial: the chunks' slots and the other blocks' forces are summed into the
    dofs (elements in mesh order, block by block); then R = P - F (+ C), D_n+1 of Eq. (23)
@@ -39,10 +40,11 @@ scatter_add_vec's sum bit for bit except at the few nodes on a chunk boundary (r
 
 
 @njit(forceinline=True, error_model="numpy")
-def _scatter_block(b, dest, fe, F, nn):
-    """Block b's element forces (nn nodes each: a literal, so that the node loop is unrolled as
-    for a fixed size) into F at ``dest`` (elements in order, node by node, dof by dof; a negative
-    dest is a padded lane).  No fast-math: every += stays one rounded addition in order."""
+def _scatter_block(b, s, dest, fe, F, nn):
+    """Block b's element forces (row s of fe; nn nodes each: a literal, so that the node loop is
+    unrolled as for a fixed size) into F at ``dest`` (elements in order, node by node, dof by dof;
+    a negative dest is a padded lane).  No fast-math: every += stays one rounded addition in
+    order."""
     L = dest.shape[2]
     for k in range(L):
         for i in range(nn):
@@ -50,36 +52,41 @@ def _scatter_block(b, dest, fe, F, nn):
             if o < 0:
                 continue
             for c in range(6):
-                F[o + c] += fe[b, (6 * i + c) * L + k]
+                F[o + c] += fe[s, (6 * i + c) * L + k]
 
 
 @njit(cache=True, parallel=True, fastmath=_FM, error_model="numpy")
-def lanes_scatter(X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we, bounds, dest, F):
+def lanes_scatter(X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we, bounds, dest, F, keep):
     """lanes.quad_forces and the scatter of each block right after it, chunk by chunk (CHUNKS):
-    F (zero on entry) gets the owned dofs, its tail the slots (chunk_plan); xs (CHUNKS, 48 LANES)
-    is the chunks' scratch, one row reused block after block (lanes._block)."""
+    F (zero on entry) gets the owned dofs, its tail the slots (chunk_plan).  xs and fe are the
+    scratch and the element forces (lanes._block): with ``keep`` one row per block (B rows: the
+    forces are kept), else one row per chunk (CHUNKS rows), reused block after block while in
+    L1."""
     for ch in prange(bounds.size - 1):
         for b in range(bounds[ch], bounds[ch + 1]):
-            lanes._block(b, ch, X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we)
-            _scatter_block(b, dest, fe, F, 4)
+            s = b if keep else np.int64(ch)     # (the parallel index is unsigned)
+            lanes._block(b, s, X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we)
+            _scatter_block(b, s, dest, fe, F, 4)
 
 
 @njit(cache=True, parallel=True, fastmath=_FM, error_model="numpy")
-def lanes_ans_scatter(X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we, bounds, dest, F):
+def lanes_ans_scatter(X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we, bounds, dest, F, keep):
     """lanes_scatter for assumed-membrane quads (lanes_ans._block, the same layout and contract)."""
     for ch in prange(bounds.size - 1):
         for b in range(bounds[ch], bounds[ch + 1]):
-            lanes_ans._block(b, ch, X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we)
-            _scatter_block(b, dest, fe, F, 4)
+            s = b if keep else np.int64(ch)     # (the parallel index is unsigned)
+            lanes_ans._block(b, s, X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we)
+            _scatter_block(b, s, dest, fe, F, 4)
 
 
 @njit(cache=True, parallel=True, fastmath=_FM, error_model="numpy")
-def lanes_tri_scatter(X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we, bounds, dest, F):
-    """lanes_scatter for triangles (lanes_tri._block: the same layout, 3 nodes, fe (B, 18 LANES))."""
+def lanes_tri_scatter(X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we, bounds, dest, F, keep):
+    """lanes_scatter for triangles (lanes_tri._block: the same layout, 3 nodes, fe rows of 18 LANES)."""
     for ch in prange(bounds.size - 1):
         for b in range(bounds[ch], bounds[ch + 1]):
-            lanes_tri._block(b, ch, X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we)
-            _scatter_block(b, dest, fe, F, 3)
+            s = b if keep else np.int64(ch)     # (the parallel index is unsigned)
+            lanes_tri._block(b, s, X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we)
+            _scatter_block(b, s, dest, fe, F, 3)
 
 
 @njit(cache=True)
@@ -220,9 +227,13 @@ class FusedForces:
             if kind == "lanes":
                 self.views.append((self.fe[o:o + size].reshape(pk["B"], 6 * pk["nn"] * lanes.LANES),
                                    np.zeros((pk["B"], lanes.LANES))))
-                # the lane kernel's scratch: one block's nodal values per chunk, reused block after
-                # block while in L1 (one per block was ~770 B/element of memory traffic per step)
-                pk["xs"] = np.zeros((pk["bounds"].size - 1, 12 * pk["nn"] * lanes.LANES))
+                # the stepping pass's scratch and element forces: one block's per chunk, reused
+                # block after block while in L1 (one per block streamed ~1150 B per element
+                # through memory every step); internal() keeps every block's forces (views)
+                nch = pk["bounds"].size - 1
+                pk["xs"] = np.zeros((nch, 12 * pk["nn"] * lanes.LANES))
+                pk["fe"] = np.zeros((nch, 6 * pk["nn"] * lanes.LANES))
+                pk["xs_blocks"] = None     # internal()'s scratch, made at its first call
             else:
                 M, nn = b.conn.shape
                 self.views.append((self.fe[o:o + size].reshape(M, nn, 6), np.zeros(M)))
@@ -232,17 +243,22 @@ class FusedForces:
         self._zero = np.zeros(0)
 
     # ------------------------------------------------------------ element pass
-    def element_pass(self, D6):
+    def element_pass(self, D6, keep=False):
         """Element forces and energies at the displacements D6 (N, 6) into the buffers; the lane
-        blocks' forces are also scattered (into F and the slots, lanes_scatter)."""
+        blocks' forces are also scattered (into F and the slots, lanes_scatter).  The lane parts'
+        element forces stay in ``views`` only with ``keep`` (else each chunk reuses one block's
+        rows); energies always do."""
         if self.needs_current:
             xo, xn, Uc = self.model._current(D6)
         nth = get_num_threads()
         self.F_all[:] = 0.0
         for (kind, b, pk, _, _), (fe, we) in zip(self.parts, self.views):
             if kind == "lanes":
+                if keep and pk["xs_blocks"] is None:
+                    pk["xs_blocks"] = np.zeros((pk["B"], pk["xs"].shape[1]))
+                xs, fk = (pk["xs_blocks"], fe) if keep else (pk["xs"], pk["fe"])
                 pk["kernel"](self.X, self.Xn, D6, pk["conn"], pk["Cmb"], pk["Cs"], pk["Cz"], pk["r_z"],
-                             self.quasi, self.mu, pk["xs"], fe, we, pk["bounds"], pk["dest"], self.F_all)
+                             self.quasi, self.mu, xs, fk, we, pk["bounds"], pk["dest"], self.F_all, keep)
             else:
                 core.energy_force(*b.args(xo, xn, Uc, self.quasi, self.mu), fe, we, nth)
 
@@ -265,8 +281,9 @@ class FusedForces:
                 scatter_add_vec(b.dofs, fe.reshape(len(fe), -1), F)
 
     def internal(self, D, want_energy):
-        """(F(D) flat, a new array; strain energy or None) -- Forces.internal's contract."""
-        self.element_pass(np.ascontiguousarray(D, dtype=float).reshape(self.N, 6))
+        """(F(D) flat, a new array; strain energy or None) -- Forces.internal's contract; every
+        element's forces are left in ``views``."""
+        self.element_pass(np.ascontiguousarray(D, dtype=float).reshape(self.N, 6), keep=True)
         self.assemble()
         return self.F.copy(), (self.energy() if want_energy else None)
 

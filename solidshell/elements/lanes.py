@@ -44,8 +44,7 @@ FLOPS_PER_ELEMENT = 2354
 executed: 4 Gauss points x 458 (8 tangent combinations 168, strains 92, stresses 30, energy 12,
 generalised forces 60, nodal forces 96), 4 shear ties x 50 (the tying tables have two nonzero
 weights a row, and zero weights cost nothing: _w) + 28 + 9 + 8 nodal force updates x 18,
-thickness 44 + 28 + 9 + 28, current coordinates 24 (2690 before the zero weights were skipped,
-336 fewer)."""
+thickness 44 + 28 + 9 + 28, current coordinates 24."""
 
 N_CMB = 4 * 2 * 9      # Cmb rows per element: (gp, membrane|bending, 3x3)
 N_CS = 16              # Cs rows (4x4 shear tying)
@@ -257,8 +256,9 @@ def store_nodes(F, b, k, fo, fn, h, n):
 
 @njit(forceinline=True, error_model="numpy")
 def _store_f(F, b, r, k, fo, fn):
-    """_store without a thickness stress: 0 h x_n would be multiplied and added (0 * x is not
-    folded without no-NaN fast-math)."""
+    """_store without a thickness stress (node rows r..r+5 of lane k: the U_o and U_n forces, rows
+    LANES apart, a compile-time distance, for the vectoriser): 0 h x_n would be multiplied and
+    added (0 * x is not folded without no-NaN fast-math)."""
     F[b, r * LANES + k] = fo[0]
     F[b, (r + 1) * LANES + k] = fo[1]
     F[b, (r + 2) * LANES + k] = fo[2]

@@ -32,7 +32,7 @@ from numba import njit, prange
 
 from . import lanes, tri3
 from .core import _FM
-from .lanes import LANES, _dot, _gather, _lin2, _row3, _sign_quasi, _store, _thick, curvatures
+from .lanes import LANES, _dot, _gather, _lin2, _row3, _sign_quasi, _store, _store_f, _thick, curvatures
 
 assert np.array_equal(tri3.DN, [[-1.0, -1.0], [1.0, 0.0], [0.0, 1.0]])
 assert np.array_equal(tri3.ALPHA, [[1.0, 0.0, -1.0], [-1.0, 1.0, 0.0], [0.0, -1.0, 1.0]])
@@ -100,18 +100,6 @@ def _tie(a, d, au, du):
 
 
 @njit(forceinline=True, error_model="numpy")
-def _put(F, b, r, k, fo, fn):
-    """Node rows r..r+5 of lane k: the U_o and U_n forces (lanes._store without a thickness
-    stress; rows LANES apart, a compile-time distance, for the vectoriser)."""
-    F[b, r * LANES + k] = fo[0]
-    F[b, (r + 1) * LANES + k] = fo[1]
-    F[b, (r + 2) * LANES + k] = fo[2]
-    F[b, (r + 3) * LANES + k] = fn[0]
-    F[b, (r + 4) * LANES + k] = fn[1]
-    F[b, (r + 5) * LANES + k] = fn[2]
-
-
-@njit(forceinline=True, error_model="numpy")
 def _nodes(xs, b, k):
     """(x, n, u, v): the three nodes' x_o, x_n, U_o, U_n of lane k from the scratch."""
     x = (_row3(xs, b, 0, k), _row3(xs, b, 12, k), _row3(xs, b, 24, k))
@@ -156,9 +144,9 @@ def _stage_mb(b, s, k, C, xs, fe, we):
     q2 = _lin2(m1, a2, m2, a1)
     p0 = (-(p1[0] + p2[0]), -(p1[1] + p2[1]), -(p1[2] + p2[2]))
     q0 = (-(q1[0] + q2[0]), -(q1[1] + q2[1]), -(q1[2] + q2[2]))
-    _put(fe, s, 0, k, p0, q0)
-    _put(fe, s, 6, k, p1, q1)
-    _put(fe, s, 12, k, p2, q2)
+    _store_f(fe, s, 0, k, p0, q0)
+    _store_f(fe, s, 6, k, p1, q1)
+    _store_f(fe, s, 12, k, p2, q2)
 
 
 @njit(forceinline=True, fastmath=_FM, error_model="numpy")

@@ -3,8 +3,9 @@
 A wool sheet hung by two adjacent corners (Section 4.1) on n x n quads, gravity, alpha = 5 1/s; the
 loop is timed for a fixed number of steps (the critical-step estimate is excluded: it is given).
 Each size is timed ``--repeats`` times and the median is reported, and the whole measurement is run
-twice (``--passes``) so that the spread between passes shows the machine's noise.  The force kernel
-alone (model.internal_force) is timed the same way, so that the loop's own overhead is the ratio of
+twice (``--passes``) so that the spread between passes shows the machine's noise.  The element pass
+alone (``FusedForces.element_pass``: the lane kernels and their scatter, what each step of the loop
+runs) is timed the same way, so that the loop's own overhead is the ratio of
 the two -- a ratio inside one run, which shared machines do not distort as much as absolute times.
 
     python benchmarks/explicit_throughput.py [--sizes 10 20 40] [--steps 300] [--threads 1]
@@ -33,6 +34,7 @@ from solidshell.meshing import build_mesh
 from solidshell.model import Model
 from solidshell.problem import Problem
 from solidshell.solvers import explicit
+from solidshell.solvers.explicit.fused import FusedForces
 
 
 def hung_sheet(n: int, size: float = 20.0) -> Problem:
@@ -47,7 +49,8 @@ def measure(n: int, steps: int, repeats: int, threads):
     prob = hung_sheet(n)
     m = prob.model
     U = np.zeros((m.n_nodes, 6))
-    m.internal_force(U)  # compile / warm
+    passes = FusedForces(m)
+    passes.element_pass(U)  # compile / warm
     s0 = explicit.run(prob, {"t_end": 1e-5, "threads": threads})
     dtc = s0.info["critical_time_step"]
     loop, kern = [], []
@@ -60,7 +63,7 @@ def measure(n: int, steps: int, repeats: int, threads):
         numba.set_num_threads(r.info["threads"])
         t = time.perf_counter()
         for _ in range(steps):
-            m.internal_force(U)
+            passes.element_pass(U)
         kern.append(m.mesh.n_elements * steps / (time.perf_counter() - t))
         numba.set_num_threads(old)
     return dict(elements=m.mesh.n_elements, steps=steps, threads=r.info["threads"],

@@ -143,8 +143,8 @@ def to_jsonable(v):
 def _no_h5py_needed():
     """meshio 5.3's XdmfWriter imports h5py unconditionally, even for data_format="XML" where it
     never touches it.  Unless h5py is already loaded, lend the writer an empty stand-in module for
-    the duration of the call: h5py is not a dependency, and where it is installed its import
-    (with HDF5) cost ~0.05 s of a 20-element run's start-up for nothing (issue 13)."""
+    the duration of the call: its import (with HDF5) cost ~0.05 s of a 20-element run's start-up
+    for nothing (issue 13)."""
     import sys
     import types
 

@@ -155,7 +155,7 @@ def estimate_omega_max(force, mass, free, U=None, *, method: str = "lanczos", fd
             if f0 is not None:
                 count[0] += 1
                 return _forward_product(s, Fp, idx, f0, e)
-            _gather(Fp, idx, fp)     # kept: force may reuse its buffer for the second evaluation
+            np.take(Fp, idx, out=fp)     # kept: force may reuse its buffer for the second evaluation
             _place(w, idx, base, e, v, -1.0)
             Fm = np.asarray(force(w.reshape(shape)), dtype=float).ravel()
             count[0] += 2
@@ -223,12 +223,6 @@ def _place(w, idx, base, e, v, sign):
     for k in range(idx.size):
         ev = e * v[k]
         w[idx[k]] = base[idx[k]] + ev if sign > 0 else base[idx[k]] - ev
-
-
-@njit(cache=True)
-def _gather(F, idx, out):
-    for k in range(idx.size):
-        out[k] = F[idx[k]]
 
 
 @njit(cache=True)

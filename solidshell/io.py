@@ -193,6 +193,24 @@ def write_mesh_file(path, mesh, U=None, deformed: bool = False, run_id: str | No
     return path
 
 
+def _fast_xml_series_writer():
+    """meshio's XDMF TimeSeriesWriter whose inline XML numbers are formatted in one join instead of
+    np.savetxt's Python loop: the same text byte for byte (each value ``fmt % v`` on its own line,
+    tests/test_io.py) in less than half the time -- savetxt took ~6 s of the sphere 100x100
+    relaxation's 23-frame, 34 MB series."""
+    from meshio.xdmf.common import dtype_to_format_string
+    from meshio.xdmf.time_series import TimeSeriesWriter
+
+    class _Writer(TimeSeriesWriter):
+        def numpy_to_xml_string(self, data):
+            if self.data_format != "XML":
+                return super().numpy_to_xml_string(data)
+            fmt = dtype_to_format_string[data.dtype.name]
+            return "\n".join(map(fmt.__mod__, np.ravel(data).tolist())) + "\n"
+
+    return _Writer
+
+
 def write_time_series(path, mesh, frames, run_id: str | None = None) -> Path:
     """XDMF time series (meshio TimeSeriesWriter, inline XML data) of ``frames`` = [(t, U (N,6)), ...]
     on the undeformed mesh: fields ``displacement`` and ``director_displacement`` per frame."""
@@ -205,7 +223,7 @@ def write_time_series(path, mesh, frames, run_id: str | None = None) -> Path:
     if mesh.n_tris:
         cells.append(("triangle", mesh.tris))
     with atomic_path(path) as tmp:
-        with meshio.xdmf.TimeSeriesWriter(str(tmp), data_format="XML") as w:
+        with _fast_xml_series_writer()(str(tmp), data_format="XML") as w:
             w.write_points_cells(mesh.nodes, cells)
             for t, U in frames:
                 U = np.asarray(U, dtype=float).reshape(mesh.n_nodes, 6)

@@ -14,6 +14,7 @@ from numba import get_num_threads
 
 from .assembly import FreeLowerPattern, SparsePattern, element_dofs, scatter_add_mat, scatter_add_vec
 from .elements import core, quad4, tri3
+from .elements.corners import corner_alignment
 from .errors import InputError
 from .mesh import ShellMesh
 
@@ -414,16 +415,16 @@ class Model:
     def interpenetration(self, U) -> list[np.ndarray]:
         """n_p . d_p per element corner (Section 4.3), one (M,nn) array per element block:
         n_p the unit normal of the deformed corner p (edges to its two neighbours), d_p the unit
-        deformed director; negative where the top and bottom surfaces interpenetrate."""
-        xo, xn, _ = self._current(U)
+        deformed director; negative where the top and bottom surfaces interpenetrate
+        (elements/corners.py)."""
+        U = np.ascontiguousarray(U, dtype=float).reshape(self.n_nodes, 6)
+        X = np.ascontiguousarray(self.mesh.nodes, dtype=float)
+        Xn = np.ascontiguousarray(self.mesh.directors, dtype=float)
         out = []
         for b in self.blocks:
-            P = xo[b.conn]
-            n = np.cross(np.roll(P, -1, axis=1) - P, np.roll(P, 1, axis=1) - P)
-            n /= np.linalg.norm(n, axis=-1, keepdims=True)
-            d = xn[b.conn]
-            d = d / np.linalg.norm(d, axis=-1, keepdims=True)
-            out.append(np.sum(n * d, -1))
+            nd = np.empty(b.conn.shape)
+            corner_alignment(X, Xn, U, b.conn, nd)
+            out.append(nd)
         return out
 
     def interpenetrated_nodes(self, U) -> np.ndarray:

@@ -145,6 +145,26 @@ def test_time_series(tmp_path, small):
     np.testing.assert_allclose(pd["displacement"], U[:, :3], atol=1e-12)
 
 
+def test_time_series_text_is_meshios_byte_for_byte(tmp_path, small):
+    """write_time_series formats the inline numbers itself (a join instead of np.savetxt's loop);
+    the file must be exactly what meshio's own TimeSeriesWriter writes (floats and the int
+    topology), so ParaView and meshio read it as before."""
+    import filecmp
+
+    import meshio
+
+    mesh, U = small
+    frames = [(0.0, 0 * U), (0.1, 0.5 * U), (0.4, U)]
+    ours = io.write_time_series(tmp_path / "series.xdmf", mesh, frames)
+    ref = tmp_path / "ref.xdmf"
+    with meshio.xdmf.TimeSeriesWriter(str(ref), data_format="XML") as w:
+        w.write_points_cells(mesh.nodes, [("quad", mesh.quads)] if mesh.n_quads else [])
+        for t, Uf in frames:
+            w.write_data(t, point_data={"displacement": Uf[:, :3].copy(), "director_displacement": Uf[:, 3:].copy()})
+    assert mesh.n_quads and not mesh.n_tris
+    assert filecmp.cmp(ours, ref, shallow=False)
+
+
 def test_versions_and_counts(small):
     v = io.package_versions()
     assert {"python", "numpy", "scipy", "numba", "gmsh", "meshio"} <= set(v)

@@ -213,14 +213,14 @@ class FreeLowerPattern:
     """The lower triangle (CSC, diagonal included) of a :class:`SparsePattern` restricted to the
     free dofs.  The static solver assembles its tangent straight into this form, the one CHOLMOD
     factorises, instead of assembling all 6N x 6N entries and gathering the free lower part every
-    iteration.  It holds the upper triangle of K_t transposed (``_lower_free`` says why), i.e. the
-    entries (row, column) with column dof >= row dof: with each element's nodes in global order
-    those are one triangle of each element matrix, so only those are formed and stored
-    (core.force_tangent_half, at about 60 % of the material flops of the whole matrices).
-    ``half_pos`` (one (M, nd(nd+1)/2) map per element block) gives the position in the data array of
-    each entry ``half_entries`` (rows, columns) of an element's half matrix, -1 for a fixed dof.  Each entry sums the same element
-    contributions in the same order as the full assembly, so the values are identical to the last
-    bit.
+    iteration.  It holds the upper triangle of K_t transposed (``_lower_free`` says why): the
+    entries whose global column dof is >= their global row dof.  Those are one triangle of each
+    element matrix with its nodes in global order, so only that triangle is formed
+    (core.force_tangent_half: about 60 % of the material flops of the whole matrix).  ``half_pos``
+    (one (M, nd(nd+1)/2) map per element block) gives the position in the data array of each
+    entry ``half_entries`` (rows, columns) of an element's half matrix, -1 for a fixed dof.  Each
+    entry sums the same element contributions in the same order as the full assembly, so the
+    values are identical to the last bit.
 
     ``node_pos`` (N, 3, 3): the positions of the translational 3x3 block of every node (contact
     stiffness), -1 where not stored; ``diag_pos``: the diagonal entries; ``free``: the free dofs.

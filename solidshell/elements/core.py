@@ -278,9 +278,12 @@ def _add_bt_d_gp(Ke, B, D, gp_membrane, half):
             x2 = B[2, a]; y2 = B[2, a + 1]; z2 = B[2, a + 2]
             for b in range(nb):
                 d0 = D[0, b]; d1 = D[1, b]; d2 = D[2, b]; d3 = D[3, b]; d4 = D[4, b]; d5 = D[5, b]
-                Ke[a, b] = (((((Ke[a, b] + x0 * d0) + x1 * d1) + x2 * d2) + x3 * d3) + x4 * d4) + x5 * d5
-                Ke[a + 1, b] = (((((Ke[a + 1, b] + y0 * d0) + y1 * d1) + y2 * d2) + y3 * d3) + y4 * d4) + y5 * d5
-                Ke[a + 2, b] = (((((Ke[a + 2, b] + z0 * d0) + z1 * d1) + z2 * d2) + z3 * d3) + z4 * d4) + z5 * d5
+                Ke[a, b] = ((((((Ke[a, b] + x0 * d0) + x1 * d1) + x2 * d2) + x3 * d3) + x4 * d4)
+                            + x5 * d5)
+                Ke[a + 1, b] = ((((((Ke[a + 1, b] + y0 * d0) + y1 * d1) + y2 * d2) + y3 * d3)
+                                 + y4 * d4) + y5 * d5)
+                Ke[a + 2, b] = ((((((Ke[a + 2, b] + z0 * d0) + z1 * d1) + z2 * d2) + z3 * d3)
+                                 + z4 * d4) + z5 * d5)
                 Ke[a + 3, b] = ((Ke[a + 3, b] + u3 * d3) + u4 * d4) + u5 * d5
                 Ke[a + 4, b] = ((Ke[a + 4, b] + v3 * d3) + v4 * d4) + v5 * d5
                 Ke[a + 5, b] = ((Ke[a + 5, b] + w3 * d3) + w4 * d4) + w5 * d5
@@ -516,7 +519,8 @@ def _element_tangent(e, xo, xn, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_z,
 @njit(cache=True)
 def _tangent_workspace(nn, nt):
     """Per-thread scratch of _element_tangent: B, D (max(6, nt), nd), oo, on (nn,nn), nz (nn,3,3),
-    v4 (10,6) (the vectors a_k, b_k, u_k, w_k of a point, its strains and stresses)."""
+    v4 (10,6) (the vectors a_k, b_k, u_k, w_k of a point, its strains and stresses), tk (max(6, nt),)
+    int (_add_bt_d_tying)."""
     nd = 6 * nn
     m = max(6, nt)
     return (np.empty((m, nd)), np.empty((m, nd)), np.empty((nn, nn)), np.empty((nn, nn)),

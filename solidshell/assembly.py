@@ -40,19 +40,19 @@ def scatter_add_mat(pos, Ke, data):
 
 
 @njit(cache=True)
-def scatter_add_half(pos, rows, cols, Kh, data):
-    """data[pos[e, k]] += Kh[e, rows[k], cols[k]], skipping pos < 0 (fixed dofs): the half element
-    matrices of core.force_tangent_half (entries core.half_entries) into a free lower-triangle
-    pattern (``FreeLowerPattern.half_pos``).  Elements in order, so every entry sums its element
-    terms in the same order as scatter_add_mat (an element adds to an entry once: its nodes are
-    distinct)."""
+def scatter_add_half(pos, flat, Kh, data):
+    """data[pos[e, k]] += Kh[e, flat[k]], skipping pos < 0 (fixed dofs): the half element matrices
+    of core.force_tangent_half, each flattened to (nd*nd,), at the entries ``flat`` = rows * nd +
+    columns of core.half_entries, into a free lower-triangle pattern (``FreeLowerPattern.
+    half_pos``).  Elements in order, so every entry sums its element terms in the same order as
+    scatter_add_mat (an element adds to an entry once: its nodes are distinct)."""
     M = Kh.shape[0]
-    n = rows.size
+    n = flat.size
     for e in range(M):
         for k in range(n):
             p = pos[e, k]
             if p >= 0:
-                data[p] += Kh[e, rows[k], cols[k]]
+                data[p] += Kh[e, flat[k]]
 
 
 @njit(cache=True)
@@ -218,7 +218,8 @@ class FreeLowerPattern:
     element matrix with its nodes in global order, so only that triangle is formed
     (core.force_tangent_half: about 60 % of the material flops of the whole matrix).  ``half_pos``
     (one (M, nd(nd+1)/2) map per element block) gives the position in the data array of each
-    entry ``half_entries`` (rows, columns) of an element's half matrix, -1 for a fixed dof.  Each
+    entry of an element's half matrix listed in ``half_entries`` (flat indices row * nd + column of
+    core.half_entries), -1 for a fixed dof.  Each
     entry sums the same element contributions in the same order as the full assembly, so the
     values are identical to the last bit.
 
@@ -250,7 +251,7 @@ class FreeLowerPattern:
             hp = np.empty((len(conn), rows.size), dtype=to_lower.dtype)
             _half_positions(conn, p, to_lower, rows, cols, hp)
             self.half_pos.append(hp)
-            self.half_entries.append((rows, cols))
+            self.half_entries.append(rows * (6 * conn.shape[1]) + cols)
         del to_lower
         self.indptr = lptr.astype(np.int32)
         self.nnz = int(lptr[-1])

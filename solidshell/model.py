@@ -379,7 +379,7 @@ class Model:
         F = np.zeros(self.n_dofs)
         data = np.zeros(lower.nnz)
         nth = get_num_threads()
-        for b, pos, (rows, cols) in zip(self.blocks, lower.half_pos, lower.half_entries):
+        for b, pos, flat in zip(self.blocks, lower.half_pos, lower.half_entries):
             M = len(b.conn)
             nd = 6 * b.nn
             step = min(M, HALF_TANGENT_CHUNK)
@@ -392,7 +392,7 @@ class Model:
                 core.force_tangent_half(*b.args(xo, xn, Uc, self.quasi, self.mu, sl), b.gp_membrane,
                                         fe[:m], we[:m], Kh[:m], nth)
                 scatter_add_vec(b.dofs[sl], fe[:m].reshape(m, -1), F)
-                scatter_add_half(pos[sl], rows, cols, Kh[:m], data)
+                scatter_add_half(pos[sl], flat, Kh[:m].reshape(m, nd * nd), data)
         return F.reshape(-1, 6), data
 
     def tangent(self, U):

@@ -10,6 +10,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from .elements.core import half_entries, half_slots
+
 
 def element_dofs(conn: np.ndarray) -> np.ndarray:
     """(M, 6 nn) global dof indices, node-major: 6*node + k with k = U_o (0..2), U_n (3..5)."""
@@ -35,6 +37,40 @@ def scatter_add_mat(pos, Ke, data):
                 k = pos[e, a, b]
                 if k >= 0:
                     data[k] += Ke[e, a, b]
+
+
+@njit(cache=True)
+def scatter_add_half(pos, flat, Kh, data):
+    """data[pos[e, k]] += Kh[e, flat[k]], skipping pos < 0 (fixed dofs): the half element matrices
+    of core.force_tangent_half, each flattened to (nd*nd,), at the entries ``flat`` = rows * nd +
+    columns of core.half_entries, into a free lower-triangle pattern (``FreeLowerPattern.
+    half_pos``).  Elements in order, so every entry sums its element terms in the same order as
+    scatter_add_mat (an element adds to an entry once: its nodes are distinct)."""
+    M = Kh.shape[0]
+    n = flat.size
+    for e in range(M):
+        for k in range(n):
+            p = pos[e, k]
+            if p >= 0:
+                data[p] += Kh[e, flat[k]]
+
+
+@njit(cache=True)
+def _half_positions(conn, pos, to_lower, rows, cols, out):
+    """out[e, k] = to_lower[pos[e, a, b]] for the k-th entry (a, b) = (rows[k], cols[k]) of element
+    e's half matrix (core.force_tangent_half: nodes in decreasing global order); a, b are dofs in
+    that order, ``pos`` (M, nd, nd) the full pattern's map in the local order."""
+    M, nn = conn.shape
+    nd = 6 * nn
+    local = np.empty(nd, dtype=np.int64)       # dof in the half matrix's order -> local dof
+    slot = np.empty(nn, dtype=np.int64)
+    for e in range(M):
+        half_slots(conn[e], slot)
+        for i in range(nn):
+            for c in range(6):
+                local[6 * slot[i] + c] = 6 * i + c
+        for k in range(rows.size):
+            out[e, k] = to_lower[pos[e, local[rows[k]], local[cols[k]]]]
 
 
 @njit(cache=True)
@@ -91,9 +127,11 @@ class SparsePattern:
     def __init__(self, n_dofs: int, dof_blocks: list[np.ndarray]):
         self.n = n_dofs
         conns = [d[:, ::6] // 6 for d in dof_blocks]
+        self.conns = None           # the blocks' connectivities when their dofs are node-major
         if n_dofs % 6 == 0 and all(d.shape[1] % 6 == 0 and np.array_equal(d, element_dofs(c))
                                    for d, c in zip(dof_blocks, conns)):
-            self._from_nodes(n_dofs // 6, [np.ascontiguousarray(c, dtype=np.int64) for c in conns])
+            self.conns = [np.ascontiguousarray(c, dtype=np.int64) for c in conns]
+            self._from_nodes(n_dofs // 6, self.conns)
         else:
             self._from_entries(n_dofs, dof_blocks)
 
@@ -173,12 +211,17 @@ def _lower_free(indptr, indices, new, nf, to_lower):
 
 class FreeLowerPattern:
     """The lower triangle (CSC, diagonal included) of a :class:`SparsePattern` restricted to the
-    free dofs, with the position of every element-matrix entry in its data array (-1: a fixed dof
-    or the upper triangle).  The static solver assembles its tangent straight into this form, the
-    one CHOLMOD factorises, instead of assembling all 6N x 6N entries and gathering the free lower
-    part every iteration.  Each entry sums the same element contributions in the same order as the
-    full assembly, so the values are identical to the last bit (of the upper triangle, transposed:
-    see ``_lower_free``).
+    free dofs.  The static solver assembles its tangent straight into this form, the one CHOLMOD
+    factorises, instead of assembling all 6N x 6N entries and gathering the free lower part every
+    iteration.  It holds the upper triangle of K_t transposed (``_lower_free`` says why): the
+    entries whose global column dof is >= their global row dof.  Those are one triangle of each
+    element matrix with its nodes in global order, so only that triangle is formed
+    (core.force_tangent_half: about 60 % of the material flops of the whole matrix).  ``half_pos``
+    (one (M, nd(nd+1)/2) map per element block) gives the position in the data array of each
+    entry of an element's half matrix listed in ``half_entries`` (flat indices row * nd + column of
+    core.half_entries), -1 for a fixed dof.  Each
+    entry sums the same element contributions in the same order as the full assembly, so the
+    values are identical to the last bit.
 
     ``node_pos`` (N, 3, 3): the positions of the translational 3x3 block of every node (contact
     stiffness), -1 where not stored; ``diag_pos``: the diagonal entries; ``free``: the free dofs.
@@ -196,7 +239,19 @@ class FreeLowerPattern:
                             dtype=np.int32 if pattern.indices.size < 2**31 else np.int64)
         lptr, self.indices = _lower_free(pattern.indptr.astype(np.int64), pattern.indices, new, nf,
                                          to_lower)
-        self.pos = [to_lower[p] for p in pattern.pos]
+        if pattern.conns is None:
+            raise ValueError("FreeLowerPattern needs a node-major pattern (dofs from element_dofs)")
+        self.half_pos = []
+        self.half_entries = []
+        for p, conn in zip(pattern.pos, pattern.conns):
+            srt = np.sort(conn, axis=1)
+            if np.any(srt[:, 1:] == srt[:, :-1]):
+                raise ValueError("an element repeats a node: its half element matrix is not defined")
+            rows, cols = half_entries(conn.shape[1])
+            hp = np.empty((len(conn), rows.size), dtype=to_lower.dtype)
+            _half_positions(conn, p, to_lower, rows, cols, hp)
+            self.half_pos.append(hp)
+            self.half_entries.append(rows * (6 * conn.shape[1]) + cols)
         del to_lower
         self.indptr = lptr.astype(np.int32)
         self.nnz = int(lptr[-1])

@@ -12,7 +12,8 @@ import copy
 import numpy as np
 from numba import get_num_threads
 
-from .assembly import FreeLowerPattern, SparsePattern, element_dofs, scatter_add_mat, scatter_add_vec
+from .assembly import (FreeLowerPattern, SparsePattern, element_dofs, scatter_add_half, scatter_add_mat,
+                       scatter_add_vec)
 from .elements import core, quad4, tri3
 from .elements.corners import corner_alignment
 from .errors import InputError
@@ -22,6 +23,10 @@ _THICKNESS_STRAINS = ("green", "quasi")
 
 TANGENT_CHUNK = 1024
 """Elements per kernel call when tangents are assembled (Model._force_and_tangent_into)."""
+
+HALF_TANGENT_CHUNK = 256
+"""The same for the half element matrices (Model.force_and_free_tangent): a chunk's matrices,
+written by the kernel and read back by the scatter, stay in the cache (1.2 MB of quads)."""
 
 
 _TYPE_CONSTANTS = ("alpha", "beta", "tie")
@@ -367,8 +372,28 @@ class Model:
 
     def force_and_free_tangent(self, U, lower: FreeLowerPattern):
         """(internal force (N,6), data of K_t's lower triangle on the free dofs in the CSC pattern
-        ``lower``) at U, Eq. (9): the static solver's form of the tangent (no 6N x 6N matrix)."""
-        F, data = self._force_and_tangent_into(U, lower.pos, lower.nnz)
+        ``lower``) at U, Eq. (9): the static solver's form of the tangent (no 6N x 6N matrix).
+        Only the triangle of each element matrix that lands in this triangle is formed
+        (core.force_tangent_half), chunk by chunk as in _force_and_tangent_into; the same bits as
+        the full assembly's entries."""
+        xo, xn, Uc = self._current(U)
+        F = np.zeros(self.n_dofs)
+        data = np.zeros(lower.nnz)
+        nth = get_num_threads()
+        for b, pos, flat in zip(self.blocks, lower.half_pos, lower.half_entries):
+            M = len(b.conn)
+            nd = 6 * b.nn
+            step = min(M, HALF_TANGENT_CHUNK)
+            fe = np.empty((step, b.nn, 6))
+            we = np.empty(step)
+            Kh = np.empty((step, nd, nd))
+            for s0 in range(0, M, step):
+                sl = slice(s0, min(M, s0 + step))
+                m = sl.stop - sl.start
+                core.force_tangent_half(*b.args(xo, xn, Uc, self.quasi, self.mu, sl), b.gp_membrane,
+                                        fe[:m], we[:m], Kh[:m], nth)
+                scatter_add_vec(b.dofs[sl], fe[:m].reshape(m, -1), F)
+                scatter_add_half(pos[sl], flat, Kh[:m].reshape(m, nd * nd), data)
         return F.reshape(-1, 6), data
 
     def tangent(self, U):

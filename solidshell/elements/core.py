@@ -242,10 +242,109 @@ def energy_force(xo, xn, U, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_z, quasi,
                                       r_z, quasi, mu, f_out[e], gs, gz, zs, at, dt, xe)
 
 
+_FM_ORDERED = {"nsz", "arcp", "contract"}
+"""_FM without reassoc: for the material sums of the tangent, written as chains in the order the
+element matrix has always summed them (see _add_bt_d_gp)."""
+
+
+@njit(cache=True, inline="always")
+def _row_end(a, nd, half):
+    """Columns 0.._row_end-1 of row a are formed: all of them, or with ``half`` those left of and in
+    a's node block (the block lower triangle, _element_tangent)."""
+    return 6 * (a // 6) + 6 if half else nd
+
+
+@njit(cache=True, fastmath=_FM_ORDERED)
+def _add_bt_d_gp(Ke, B, D, gp_membrane, half):
+    """Ke[a, b] += B[r, a] D[r, b] for the strain rows r = 0..5 of one integration point, in that
+    order for every entry (membrane rows only on U_o dofs and with gp_membrane; columns as
+    _row_end): the material part of k_t, Eq. (9).  One pass over b forms three rows of Ke (a
+    node's U_o or U_n dofs), each entry one chain of six or three terms: the loop overhead and the
+    loads of D, not the flops, were the cost of one pass per row and strain row (six rows per
+    pass measured 6 % slower than three: more runtime alias checks per pass).  Without
+    reassociation (_FM_ORDERED) each chain is summed exactly as the separate passes summed it."""
+    nd = Ke.shape[1]
+    for a in range(0, nd, 3):
+        nb = _row_end(a, nd, half)
+        x3 = B[3, a]; y3 = B[3, a + 1]; z3 = B[3, a + 2]
+        x4 = B[4, a]; y4 = B[4, a + 1]; z4 = B[4, a + 2]
+        x5 = B[5, a]; y5 = B[5, a + 1]; z5 = B[5, a + 2]
+        if (a % 6) < 3 and gp_membrane:
+            x0 = B[0, a]; y0 = B[0, a + 1]; z0 = B[0, a + 2]
+            x1 = B[1, a]; y1 = B[1, a + 1]; z1 = B[1, a + 2]
+            x2 = B[2, a]; y2 = B[2, a + 1]; z2 = B[2, a + 2]
+            for b in range(nb):
+                d0 = D[0, b]; d1 = D[1, b]; d2 = D[2, b]; d3 = D[3, b]; d4 = D[4, b]; d5 = D[5, b]
+                Ke[a, b] = ((((((Ke[a, b] + x0 * d0) + x1 * d1) + x2 * d2) + x3 * d3) + x4 * d4)
+                            + x5 * d5)
+                Ke[a + 1, b] = ((((((Ke[a + 1, b] + y0 * d0) + y1 * d1) + y2 * d2) + y3 * d3)
+                                 + y4 * d4) + y5 * d5)
+                Ke[a + 2, b] = ((((((Ke[a + 2, b] + z0 * d0) + z1 * d1) + z2 * d2) + z3 * d3)
+                                 + z4 * d4) + z5 * d5)
+        else:       # the membrane rows vanish on director dofs (and everywhere without gp_membrane)
+            for b in range(nb):
+                d3 = D[3, b]; d4 = D[4, b]; d5 = D[5, b]
+                Ke[a, b] = ((Ke[a, b] + x3 * d3) + x4 * d4) + x5 * d5
+                Ke[a + 1, b] = ((Ke[a + 1, b] + y3 * d3) + y4 * d4) + y5 * d5
+                Ke[a + 2, b] = ((Ke[a + 2, b] + z3 * d3) + z4 * d4) + z5 * d5
+
+
+@njit(cache=True, fastmath=_FM_ORDERED)
+def _tying_d(D, B, Cs_e, nt):
+    """D[t, b] = sum_u Cs_e[t, u] B[u, b] for the tying rows, the sum over u in order for every
+    entry: one pass over b per (t, u) (vectorised over b) instead of a short sum per entry."""
+    nd = D.shape[1]
+    for t in range(nt):
+        for b in range(nd):
+            D[t, b] = 0.0
+        for u in range(nt):
+            c = Cs_e[t, u]
+            for b in range(nd):
+                D[t, b] = D[t, b] + c * B[u, b]
+
+
+@njit(cache=True, fastmath=_FM_ORDERED)
+def _add_bt_d_tying(Ke, B, D, nt, half, tk):
+    """Ke[a, b] += B[t, a] D[t, b] for the tying rows t = 0..nt-1 in that order (columns as
+    _row_end), three rows of Ke and one tying row per pass (_add_bt_d_gp says why).  A tying
+    strain involves the nodes of its point's edge only, so for about half of the tying rows B[t, .]
+    is zero on all three: those are left out (adding 0 * D[t, b] leaves a finite entry as it is).
+    ``tk`` (nt,) int scratch."""
+    nd = Ke.shape[1]
+    for a in range(0, nd, 3):
+        nb = _row_end(a, nd, half)
+        n = 0
+        for t in range(nt):
+            if B[t, a] != 0.0 or B[t, a + 1] != 0.0 or B[t, a + 2] != 0.0:
+                tk[n] = t
+                n += 1
+        for p in range(n):
+            t = tk[p]
+            x = B[t, a]
+            y = B[t, a + 1]
+            z = B[t, a + 2]
+            for b in range(nb):
+                d = D[t, b]
+                Ke[a, b] = Ke[a, b] + x * d
+                Ke[a + 1, b] = Ke[a + 1, b] + y * d
+                Ke[a + 2, b] = Ke[a + 2, b] + z * d
+
+
 @njit(cache=True, fastmath=_FM, error_model="numpy")
 def _element_tangent(e, xo, xn, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_z,
-                     quasi, mu, gp_membrane, Ke, B, D, oo, on, nz, gs, gz, zs, at, dt, v4, xe):
-    """Tangent k_t of Eq. (9) of element e into Ke (nd,nd), nd = 6 nn (dof 6i+c: U_o then U_n).
+                     quasi, mu, gp_membrane, slot, half, Ke, B, D, oo, on, nz, gs, gz, zs, at, dt, v4,
+                     xe, tk):
+    """Tangent k_t of Eq. (9) of element e into Ke (nd,nd), nd = 6 nn, its dofs in the node order
+    ``slot`` (local node i's dofs are 6 slot[i] + c: U_o then U_n).
+
+    ``half`` True: only the block lower triangle is formed, the columns left of and in row a's node
+    block (_row_end), with the nodes in decreasing global order (``slot`` from half_slots): there
+    it holds every entry whose global column is >= its global row, i.e. one triangle of the
+    assembled (symmetric) matrix, the one a solver that stores one triangle needs.  The material
+    sums B^T D, the bulk of the cost, are skipped elsewhere; the entries written there (geometric
+    and thickness terms) are not meaningful.  Every formed entry is the same floating-point
+    expression, summed in the same order, in both forms: the half matrix equals the whole one's
+    entries to the last bit.
 
     ``xe`` (nn,12) [x_o | x_n | U_o | U_n], the tying values ``gs``, ``at``, ``dt`` and the nodal
     thickness strains ``gz`` (with the signs ``zs`` of Eq. 24) must be as _element_force leaves them
@@ -313,7 +412,7 @@ def _element_tangent(e, xo, xn, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_z,
         for i in range(nn):
             d1 = dN[g, i, 0]
             d2 = dN[g, i, 1]
-            o = 6 * i
+            o = 6 * slot[i]
             for c in range(3):
                 B[0, o + c] = d1 * a1[c]
                 B[1, o + c] = d2 * a2[c]
@@ -333,13 +432,7 @@ def _element_tangent(e, xo, xn, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_z,
             for b in range(nd):
                 D[r, b] = c0 * B[0, b] + c1 * B[1, b] + c2 * B[2, b]
                 D[3 + r, b] = k0 * B[3, b] + k1 * B[4, b] + k2 * B[5, b]
-        for a in range(nd):
-            # membrane rows vanish on director dofs (and everywhere without gp_membrane)
-            r0 = 3 if (a % 6) >= 3 or not gp_membrane else 0
-            for r in range(r0, 6):
-                bra = B[r, a]
-                for b in range(nd):
-                    Ke[a, b] += bra * D[r, b]
+        _add_bt_d_gp(Ke, B, D, gp_membrane, half)
         for i in range(nn):
             di1 = dN[g, i, 0]
             di2 = dN[g, i, 1]
@@ -356,9 +449,10 @@ def _element_tangent(e, xo, xn, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_z,
         for b in range(nd):
             B[t, b] = 0.0
         for i in range(nn):
+            o = 6 * slot[i]
             for c in range(3):
-                B[t, 6 * i + oa + c] += ct * alpha[t, i] * dt[t, c]
-                B[t, 6 * i + ob + c] += ct * beta[t, i] * at[t, c]
+                B[t, o + oa + c] += ct * alpha[t, i] * dt[t, c]
+                B[t, o + ob + c] += ct * beta[t, i] * at[t, c]
     for t in range(nt):
         q = 0.0
         for u in range(nt):
@@ -372,16 +466,8 @@ def _element_tangent(e, xo, xn, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_z,
             for i in range(nn):
                 for j in range(nn):
                     oo[i, j] += qt * (alpha[t, i] * beta[t, j] + beta[t, i] * alpha[t, j])
-        for b in range(nd):
-            v = 0.0
-            for u in range(nt):
-                v += Cs[e, t, u] * B[u, b]
-            D[t, b] = v
-    for a in range(nd):
-        for t in range(nt):
-            bta = B[t, a]
-            for b in range(nd):
-                Ke[a, b] += bta * D[t, b]
+    _tying_d(D, B, Cs[e], nt)
+    _add_bt_d_tying(Ke, B, D, nt, half, tk)
     # thickness strains at the nodes: d eps_i / d x_ni = w_i x_ni (w_i = 1 Green, s_i/|x_ni| Eq. 24)
     for i in range(nn):
         if quasi:
@@ -400,44 +486,107 @@ def _element_tangent(e, xo, xn, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_z,
         else:
             for c in range(3):
                 nz[i, c, c] += q
+        oi = 6 * slot[i] + 3
         for j in range(nn):
+            oj = 6 * slot[j] + 3
             cij = Cz[e, i, j] * zs[i] * zs[j]
             for c in range(3):
                 for d in range(3):
-                    Ke[6 * i + 3 + c, 6 * j + 3 + d] += cij * xe[i, 3 + c] * xe[j, 3 + d]
+                    Ke[oi + c, oj + d] += cij * xe[i, 3 + c] * xe[j, 3 + d]
     # geometric blocks
     for i in range(nn):
+        oi = 6 * slot[i]
         for j in range(nn):
+            oj = 6 * slot[j]
             for c in range(3):
-                Ke[6 * i + c, 6 * j + c] += oo[i, j]
-                Ke[6 * i + c, 6 * j + 3 + c] += on[i, j]
-                Ke[6 * j + 3 + c, 6 * i + c] += on[i, j]
+                Ke[oi + c, oj + c] += oo[i, j]
+                Ke[oi + c, oj + 3 + c] += on[i, j]
+                Ke[oj + 3 + c, oi + c] += on[i, j]
         for c in range(3):
             for d in range(3):
-                Ke[6 * i + 3 + c, 6 * i + 3 + d] += nz[i, c, d]
+                Ke[oi + 3 + c, oi + 3 + d] += nz[i, c, d]
+
+
+@njit(cache=True)
+def _tangent_workspace(nn, nt):
+    """Per-thread scratch of _element_tangent: B, D (max(6, nt), nd), oo, on (nn,nn), nz (nn,3,3),
+    v4 (10,6) (the vectors a_k, b_k, u_k, w_k of a point, its strains and stresses), tk (max(6, nt),)
+    int (_add_bt_d_tying)."""
+    nd = 6 * nn
+    m = max(6, nt)
+    return (np.empty((m, nd)), np.empty((m, nd)), np.empty((nn, nn)), np.empty((nn, nn)),
+            np.empty((nn, 3, 3)), np.empty((10, 6)), np.empty(m, dtype=np.int64))
 
 
 @njit(cache=True, parallel=True, fastmath=_FM)
 def force_tangent(xo, xn, U, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_z, quasi, mu,
                   gp_membrane, f_out, w_out, K_out, nth):
-    """Energies, forces (M,nn,6) and tangents (M,nd,nd) of all elements.  ``gp_membrane``: some
-    membrane rigidity sits at the integration points (False when all of it is in the tying terms)."""
+    """Energies, forces (M,nn,6) and tangents (M,nd,nd) of all elements, each tangent whole and in
+    the local node order.  ``gp_membrane``: some membrane rigidity sits at the integration points
+    (False when all of it is in the tying terms)."""
     M = conn.shape[0]
     nn = conn.shape[1]
     nt = alpha.shape[0]
-    nd = 6 * nn
     chunk = (M + nth - 1) // nth
     for th in prange(nth):
-        B = np.empty((max(6, nt), nd))
-        D = np.empty((max(6, nt), nd))
-        v4 = np.empty((10, 6))
-        oo = np.empty((nn, nn))
-        on = np.empty((nn, nn))
-        nz = np.empty((nn, 3, 3))
+        B, D, oo, on, nz, v4, tk = _tangent_workspace(nn, nt)
         gs, gz, zs, at, dt, xe = _force_workspace(nn, nt)
+        slot = np.arange(nn)
         for e in range(th * chunk, min(M, (th + 1) * chunk)):
             w_out[e] = _element_force(e, xo, xn, U, conn, dN, alpha, beta, tie, Cmb, Cs, Cz,
                                       r_z, quasi, mu, f_out[e], gs, gz, zs, at, dt, xe)
             _element_tangent(e, xo, xn, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_z,
-                             quasi, mu, gp_membrane, K_out[e], B, D, oo, on, nz, gs, gz, zs, at, dt,
-                             v4, xe)
+                             quasi, mu, gp_membrane, slot, False, K_out[e], B, D, oo, on, nz, gs, gz,
+                             zs, at, dt, v4, xe, tk)
+
+
+@njit(cache=True)
+def half_slots(conn_e, slot):
+    """slot[i] = the number of the element's nodes with a greater global number than local node i
+    (nodes distinct): the node order of the half element matrix (force_tangent_half)."""
+    nn = conn_e.size
+    for i in range(nn):
+        k = 0
+        for j in range(nn):
+            if conn_e[j] > conn_e[i]:
+                k += 1
+        slot[i] = k
+
+
+def half_entries(nn):
+    """(rows, columns) of the entries of a half element matrix (force_tangent_half) that hold one
+    triangle of the assembled matrix, row by row: in row a, the columns of the node blocks left
+    of a's, then b >= a in a's own block.  nd(nd+1)/2 entries, nd = 6 nn."""
+    nd = 6 * nn
+    rows, cols = [], []
+    for a in range(nd):
+        s = 6 * (a // 6)
+        b = list(range(s)) + list(range(a, s + 6))
+        rows += [a] * len(b)
+        cols += b
+    return np.array(rows, dtype=np.int64), np.array(cols, dtype=np.int64)
+
+
+@njit(cache=True, parallel=True, fastmath=_FM)
+def force_tangent_half(xo, xn, U, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_z, quasi, mu,
+                       gp_membrane, f_out, w_out, K_out, nth):
+    """Energies, forces (M,nn,6) and half tangents (M,nd,nd): each element's nodes in decreasing
+    global order (half_slots) and only the block lower triangle formed (_element_tangent), which
+    holds the entries of k_t (Eq. 9) whose global column dof is >= their global row dof
+    (half_entries), one triangle of the assembled matrix.  Those entries have the same bits as in
+    ``force_tangent``'s whole matrices; about 60 % of the material part's flops."""
+    M = conn.shape[0]
+    nn = conn.shape[1]
+    nt = alpha.shape[0]
+    chunk = (M + nth - 1) // nth
+    for th in prange(nth):
+        B, D, oo, on, nz, v4, tk = _tangent_workspace(nn, nt)
+        gs, gz, zs, at, dt, xe = _force_workspace(nn, nt)
+        slot = np.empty(nn, dtype=np.int64)
+        for e in range(th * chunk, min(M, (th + 1) * chunk)):
+            w_out[e] = _element_force(e, xo, xn, U, conn, dN, alpha, beta, tie, Cmb, Cs, Cz,
+                                      r_z, quasi, mu, f_out[e], gs, gz, zs, at, dt, xe)
+            half_slots(conn[e], slot)
+            _element_tangent(e, xo, xn, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_z,
+                             quasi, mu, gp_membrane, slot, True, K_out[e], B, D, oo, on, nz, gs, gz,
+                             zs, at, dt, v4, xe, tk)

@@ -94,6 +94,13 @@ def atomic_path(path, suffix: str | None = None):
         raise
 
 
+def is_temporary_of(name: str, target: str) -> bool:
+    """True when ``name`` is an :func:`atomic_path` temporary of a file named ``target`` (in the
+    same folder): what a writer killed mid-write leaves behind."""
+    t = Path(target)
+    return re.fullmatch(rf"\.{re.escape(t.stem)}\.[A-Za-z0-9_]+{re.escape(t.suffix)}", name) is not None
+
+
 @contextlib.contextmanager
 def atomic_write(path, mode: str = "w", encoding: str | None = "utf-8"):
     """``with atomic_write(p) as f: f.write(...)`` -- the file appears under ``p`` complete or not

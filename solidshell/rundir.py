@@ -5,7 +5,8 @@ Life of a run's folder (:class:`RunFolder`):
 
 1. :meth:`~RunFolder.check` -- before any work: the path must be a folder (or not exist yet), and
    every file in it must be one this package writes (an earlier run's outputs, listed in its
-   ``summary.json`` "files" or by their known names).  Anything else is refused, naming the files,
+   ``summary.json`` "files" or by their known names, and the temporaries a run killed mid-write
+   leaves of them or of this run's checkpoint).  Anything else is refused, naming the files,
    unless ``force`` (CLI ``--force``): then foreign files are left untouched and reported.
 2. :meth:`~RunFolder.open` -- the folder is created and a ``RUNNING`` marker holding the new run's id
    is written.  The earlier run's files are still all there, consistent with its summary.
@@ -91,7 +92,8 @@ class RunFolder:
         for n in names:
             if n in kept:
                 continue
-            if (n in listed or _OURS.match(n)) and (p / n).is_file():
+            ours = n in listed or _OURS.match(n) or any(sio.is_temporary_of(n, k) for k in kept)
+            if ours and (p / n).is_file():
                 self.stale.append(n)
             else:
                 self.foreign.append(n)

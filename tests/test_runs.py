@@ -260,6 +260,29 @@ def test_foreign_files_refused_or_left_with_force(tmp_path, capsys):
     assert err.strip().splitlines() == [f"solidshell: warning: {s['warnings'][0]}"]
 
 
+def test_checkpoint_temporary_of_a_killed_run_is_cleared(tmp_path, capsys):
+    """A run killed while writing its checkpoint leaves the atomic write's temporary in the
+    folder (what made the restart-after-kill test fail once in CI). The next run naming that
+    checkpoint takes the temporary for its own and removes it; a run that names no checkpoint
+    still refuses it as a file solidshell did not write."""
+    from solidshell.cli import main
+
+    out = tmp_path / "o"
+    out.mkdir()
+    ck = out / "state.ckpt.npz"
+    tmp = out / ".state.ckpt.k1ll3d_.npz"
+    assert sio.is_temporary_of(tmp.name, ck.name) and not sio.is_temporary_of("state.ckpt.npz.x.npz", ck.name)
+    tmp.write_bytes(b"half a zip")
+    common = ["run", "strip-warp", "--mesh", "2x1", "--solver", "relax", "--set", "output.pictures=[]",
+              "--no-progress", "--out", str(out)]
+    rc = main(common)
+    one_error_line(capsys.readouterr().err, 2, rc, tmp.name, "--force")
+    rc = main(common + ["--checkpoint", str(ck), "--set", "solver.relax.checkpoint_every=50"])
+    capsys.readouterr()
+    assert rc == 0 and not tmp.exists() and ck.exists()     # and written atomically itself
+    assert not any(n.startswith(".") for n in names(out))
+
+
 def test_checkpoint_refused_for_static(tmp_path, capsys):
     from solidshell.cli import main
 

@@ -11,12 +11,12 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
-import os
 import zipfile
 
 import numpy as np
 
 from ...errors import InputError
+from ...io import atomic_path
 from .state import FIELDS, State
 
 VERSION = 2
@@ -36,12 +36,9 @@ def save(path, state: State, extra: dict | None = None) -> None:
     for k, v in (extra or {}).items():
         arrays[_EXTRA + k] = np.asarray(v)
     arrays["version"] = np.asarray(VERSION)
-    tmp = f"{path}.tmp{os.getpid()}.npz"
-    with open(tmp, "wb") as fh:
-        np.savez(fh, **arrays)
-        fh.flush()
-        os.fsync(fh.fileno())
-    os.replace(tmp, path)
+    with atomic_path(path) as tmp:      # a run killed mid-write leaves a temporary the run
+        with open(tmp, "wb") as fh:      # folder knows as this file's (rundir), not a stray file
+            np.savez(fh, **arrays)
 
 
 def load(path) -> tuple[State, dict]:

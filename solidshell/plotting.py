@@ -25,8 +25,8 @@ _VIEW_NAMES = {"top": "top view", "iso": "isometric view", "side": "side view (x
 
 
 def _figure(figsize):
-    """A matplotlib Figure on the Agg canvas, made without pyplot: pyplot's import resolves the
-    default backend by trying the GUI toolkits, which took ~1.1 s of a run's first picture."""
+    """A matplotlib Figure on the Agg canvas, made without pyplot: writing a PNG needs neither
+    pyplot nor a change of the process's backend (a notebook that calls render keeps its own)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 

@@ -326,32 +326,38 @@ class Model:
             self._pattern = SparsePattern(self.n_dofs, [b.dofs for b in self.blocks])
         return self._pattern
 
-    def _force_and_tangent_into(self, U, pos_maps, nnz):
-        """(internal force (6N,), tangent data (nnz,)) at U: the element tangents of each block,
-        computed ``TANGENT_CHUNK`` elements at a time, scattered through ``pos_maps`` (one
-        (M, nd, nd) position map per block; negative positions are skipped).  Chunks
-        follow the element order, so every entry sums the same terms in the same order as one
-        whole-mesh call would; only a chunk's element matrices are held at a time (the whole
-        mesh's were 14 MB on square-pedestal 48x16x4, alive next to the last factorisation)."""
+    def _chunked_tangent(self, U, nnz, chunk, kernel, scatter):
+        """(internal force (6N,), tangent data (nnz,)) at U: per block, ``kernel``
+        (core.force_tangent or core.force_tangent_half) on ``chunk`` elements at a time, each
+        chunk's element matrices added into the data by ``scatter(block index, slice, matrices,
+        data)``.  Chunks follow the element order, so every entry sums the same terms in the same
+        order as one whole-mesh call would; only a chunk's element matrices are held at a time
+        (the whole mesh's were 14 MB on square-pedestal 48x16x4, alive next to the last
+        factorisation)."""
         xo, xn, Uc = self._current(U)
         F = np.zeros(self.n_dofs)
         data = np.zeros(nnz)
         nth = get_num_threads()
-        for b, pos in zip(self.blocks, pos_maps):
+        for k, b in enumerate(self.blocks):
             M = len(b.conn)
             nd = 6 * b.nn
-            step = min(M, TANGENT_CHUNK)
+            step = min(M, chunk)
             fe = np.empty((step, b.nn, 6))
             we = np.empty(step)
             Ke = np.empty((step, nd, nd))
             for s0 in range(0, M, step):
                 sl = slice(s0, min(M, s0 + step))
                 m = sl.stop - sl.start
-                core.force_tangent(*b.args(xo, xn, Uc, self.quasi, self.mu, sl), b.gp_membrane,
-                                   fe[:m], we[:m], Ke[:m], nth)
+                kernel(*b.args(xo, xn, Uc, self.quasi, self.mu, sl), b.gp_membrane, fe[:m], we[:m], Ke[:m], nth)
                 scatter_add_vec(b.dofs[sl], fe[:m].reshape(m, -1), F)
-                scatter_add_mat(pos[sl], Ke[:m], data)
+                scatter(k, sl, Ke[:m], data)
         return F, data
+
+    def _force_and_tangent_into(self, U, pos_maps, nnz):
+        """_chunked_tangent with the whole element matrices, scattered through ``pos_maps`` (one
+        (M, nd, nd) position map per block; negative positions are skipped)."""
+        return self._chunked_tangent(U, nnz, TANGENT_CHUNK, core.force_tangent,
+                                     lambda k, sl, Ke, data: scatter_add_mat(pos_maps[k][sl], Ke, data))
 
     def force_and_tangent(self, U):
         """(internal force (N,6), tangent K_t (6N,6N) CSR) at U, Eq. (9)."""
@@ -374,26 +380,12 @@ class Model:
         """(internal force (N,6), data of K_t's lower triangle on the free dofs in the CSC pattern
         ``lower``) at U, Eq. (9): the static solver's form of the tangent (no 6N x 6N matrix).
         Only the triangle of each element matrix that lands in this triangle is formed
-        (core.force_tangent_half), chunk by chunk as in _force_and_tangent_into; the same bits as
-        the full assembly's entries."""
-        xo, xn, Uc = self._current(U)
-        F = np.zeros(self.n_dofs)
-        data = np.zeros(lower.nnz)
-        nth = get_num_threads()
-        for b, pos, flat in zip(self.blocks, lower.half_pos, lower.half_entries):
-            M = len(b.conn)
-            nd = 6 * b.nn
-            step = min(M, HALF_TANGENT_CHUNK)
-            fe = np.empty((step, b.nn, 6))
-            we = np.empty(step)
-            Kh = np.empty((step, nd, nd))
-            for s0 in range(0, M, step):
-                sl = slice(s0, min(M, s0 + step))
-                m = sl.stop - sl.start
-                core.force_tangent_half(*b.args(xo, xn, Uc, self.quasi, self.mu, sl), b.gp_membrane,
-                                        fe[:m], we[:m], Kh[:m], nth)
-                scatter_add_vec(b.dofs[sl], fe[:m].reshape(m, -1), F)
-                scatter_add_half(pos[sl], flat, Kh[:m].reshape(m, nd * nd), data)
+        (core.force_tangent_half) and scattered (lower.half_pos); the same bits as the full
+        assembly's entries."""
+        def scatter(k, sl, Kh, data):
+            scatter_add_half(lower.half_pos[k][sl], lower.half_entries[k], Kh.reshape(len(Kh), -1), data)
+
+        F, data = self._chunked_tangent(U, lower.nnz, HALF_TANGENT_CHUNK, core.force_tangent_half, scatter)
         return F.reshape(-1, 6), data
 
     def tangent(self, U):

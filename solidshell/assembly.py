@@ -42,7 +42,7 @@ def scatter_add_mat(pos, Ke, data):
 @njit(cache=True)
 def scatter_add_half(pos, flat, Kh, data):
     """data[pos[e, k]] += Kh[e, flat[k]], skipping pos < 0 (fixed dofs): the half element matrices
-    of core.force_tangent_half, each flattened to (nd*nd,), at the entries ``flat`` = rows * nd +
+    of core.force_tangent with ``half``, each flattened to (nd*nd,), at the entries ``flat`` = rows * nd +
     columns of core.half_entries, into a free lower-triangle pattern (``FreeLowerPattern.
     half_pos``).  Elements in order, so every entry sums its element terms in the same order as
     scatter_add_mat (an element adds to an entry once: its nodes are distinct)."""
@@ -58,7 +58,7 @@ def scatter_add_half(pos, flat, Kh, data):
 @njit(cache=True)
 def _half_positions(conn, pos, to_lower, rows, cols, out):
     """out[e, k] = to_lower[pos[e, a, b]] for the k-th entry (a, b) = (rows[k], cols[k]) of element
-    e's half matrix (core.force_tangent_half: nodes in decreasing global order); a, b are dofs in
+    e's half matrix (core.force_tangent with ``half``: nodes in decreasing global order); a, b are dofs in
     that order, ``pos`` (M, nd, nd) the full pattern's map in the local order."""
     M, nn = conn.shape
     nd = 6 * nn
@@ -216,12 +216,11 @@ class FreeLowerPattern:
     iteration.  It holds the upper triangle of K_t transposed (``_lower_free`` says why): the
     entries whose global column dof is >= their global row dof.  Those are one triangle of each
     element matrix with its nodes in global order, so only that triangle is formed
-    (core.force_tangent_half: about 60 % of the material flops of the whole matrix).  ``half_pos``
+    (core.force_tangent with ``half``: about 60 % of the material flops of the whole matrix).  ``half_pos``
     (one (M, nd(nd+1)/2) map per element block) gives the position in the data array of each
     entry of an element's half matrix listed in ``half_entries`` (flat indices row * nd + column of
-    core.half_entries), -1 for a fixed dof.  Each
-    entry sums the same element contributions in the same order as the full assembly, so the
-    values are identical to the last bit.
+    core.half_entries), -1 for a fixed dof.  Each entry sums the same element contributions in the
+    same order as the full assembly, so the values are identical to the last bit.
 
     ``node_pos`` (N, 3, 3): the positions of the translational 3x3 block of every node (contact
     stiffness), -1 where not stored; ``diag_pos``: the diagonal entries; ``free``: the free dofs.

@@ -29,6 +29,11 @@ HALF_TANGENT_CHUNK = 256
 written by the kernel and read back by the scatter, stay in the cache (1.2 MB of quads)."""
 
 
+def _force_tangent_half(*args):
+    """core.force_tangent with ``half``: the static solver's half element matrices."""
+    return core.force_tangent(*args, True)
+
+
 _TYPE_CONSTANTS = ("alpha", "beta", "tie")
 """Entries of an element type's constants shared by all its elements (not per element)."""
 
@@ -328,7 +333,7 @@ class Model:
 
     def _chunked_tangent(self, U, nnz, chunk, kernel, scatter):
         """(internal force (6N,), tangent data (nnz,)) at U: per block, ``kernel``
-        (core.force_tangent or core.force_tangent_half) on ``chunk`` elements at a time, each
+        (core.force_tangent, whole or half matrices) on ``chunk`` elements at a time, each
         chunk's element matrices added into the data by ``scatter(block index, slice, matrices,
         data)``.  Chunks follow the element order, so every entry sums the same terms in the same
         order as one whole-mesh call would; only a chunk's element matrices are held at a time
@@ -380,12 +385,12 @@ class Model:
         """(internal force (N,6), data of K_t's lower triangle on the free dofs in the CSC pattern
         ``lower``) at U, Eq. (9): the static solver's form of the tangent (no 6N x 6N matrix).
         Only the triangle of each element matrix that lands in this triangle is formed
-        (core.force_tangent_half) and scattered (lower.half_pos); the same bits as the full
+        (core.force_tangent with ``half``) and scattered (lower.half_pos); the same bits as the full
         assembly's entries."""
         def scatter(k, sl, Kh, data):
             scatter_add_half(lower.half_pos[k][sl], lower.half_entries[k], Kh.reshape(len(Kh), -1), data)
 
-        F, data = self._chunked_tangent(U, lower.nnz, HALF_TANGENT_CHUNK, core.force_tangent_half, scatter)
+        F, data = self._chunked_tangent(U, lower.nnz, HALF_TANGENT_CHUNK, _force_tangent_half, scatter)
         return F.reshape(-1, 6), data
 
     def tangent(self, U):

@@ -1,4 +1,4 @@
-"""The static solver's tangent assembly from half element matrices (core.force_tangent_half into
+"""The static solver's tangent assembly from half element matrices (core.force_tangent with ``half`` into
 FreeLowerPattern, Model.force_and_free_tangent) against the whole-matrix path it replaced: the
 assembled data must be the same to the last bit, because the static paths of some scenes are chaotic
 (square-on-disc) and a last-bit change can pick another equilibrium.  The full-pattern tangent's
@@ -88,7 +88,7 @@ def test_half_matrix_assembly_equals_the_whole_matrix_one_to_the_last_bit(case):
 
 
 def test_half_element_matrices_are_entries_of_the_whole_ones():
-    """core.force_tangent_half's formed entries (core.half_entries, nodes in decreasing global
+    """core.force_tangent's half matrices: their formed entries (core.half_entries, nodes in decreasing global
     order) are bit for bit the corresponding entries of core.force_tangent's whole matrices."""
     mesh = mixed_mesh()
     m = Model(mesh, Fabric.wool(), membrane=["ans", "full"] * 4, thickness_strain="quasi")
@@ -100,7 +100,7 @@ def test_half_element_matrices_are_entries_of_the_whole_ones():
         f1, w1, K1 = np.empty((M, nn, 6)), np.empty(M), np.empty((M, nd, nd))
         f2, w2, K2 = np.empty((M, nn, 6)), np.empty(M), np.empty((M, nd, nd))
         core.force_tangent(*args, b.gp_membrane, f1, w1, K1, 1)
-        core.force_tangent_half(*args, b.gp_membrane, f2, w2, K2, 1)
+        core.force_tangent(*args, b.gp_membrane, f2, w2, K2, 1, True)
         assert np.array_equal(f1, f2) and np.array_equal(w1, w2)
         rows, cols = core.half_entries(nn)
         assert rows.size == nd * (nd + 1) // 2

@@ -520,10 +520,15 @@ def _tangent_workspace(nn, nt):
 
 @njit(cache=True, parallel=True, fastmath=_FM)
 def force_tangent(xo, xn, U, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_z, quasi, mu,
-                  gp_membrane, f_out, w_out, K_out, nth):
-    """Energies, forces (M,nn,6) and tangents (M,nd,nd) of all elements, each tangent whole and in
-    the local node order.  ``gp_membrane``: some membrane rigidity sits at the integration points
-    (False when all of it is in the tying terms)."""
+                  gp_membrane, f_out, w_out, K_out, nth, half=False):
+    """Energies, forces (M,nn,6) and tangents (M,nd,nd) of all elements.  ``gp_membrane``: some
+    membrane rigidity sits at the integration points (False when all of it is in the tying terms).
+
+    ``half`` False: each tangent whole and in the local node order.  True: half tangents, each
+    element's nodes in decreasing global order (half_slots) and only the block lower triangle
+    formed (_element_tangent), which holds the entries of k_t (Eq. 9) whose global column dof is
+    >= their global row dof (half_entries), one triangle of the assembled matrix.  Those entries
+    have the same bits as in the whole matrices; about 60 % of the material part's flops."""
     M = conn.shape[0]
     nn = conn.shape[1]
     nt = alpha.shape[0]
@@ -535,15 +540,17 @@ def force_tangent(xo, xn, U, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_z, quasi
         for e in range(th * chunk, min(M, (th + 1) * chunk)):
             w_out[e] = _element_force(e, xo, xn, U, conn, dN, alpha, beta, tie, Cmb, Cs, Cz,
                                       r_z, quasi, mu, f_out[e], gs, gz, zs, at, dt, xe)
+            if half:
+                half_slots(conn[e], slot)
             _element_tangent(e, xo, xn, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_z,
-                             quasi, mu, gp_membrane, slot, False, K_out[e], B, D, oo, on, nz, gs, gz,
+                             quasi, mu, gp_membrane, slot, half, K_out[e], B, D, oo, on, nz, gs, gz,
                              zs, at, dt, v4, xe, tk)
 
 
 @njit(cache=True)
 def half_slots(conn_e, slot):
     """slot[i] = the number of the element's nodes with a greater global number than local node i
-    (nodes distinct): the node order of the half element matrix (force_tangent_half)."""
+    (nodes distinct): the node order of the half element matrix (force_tangent with ``half``)."""
     nn = conn_e.size
     for i in range(nn):
         k = 0
@@ -554,7 +561,7 @@ def half_slots(conn_e, slot):
 
 
 def half_entries(nn):
-    """(rows, columns) of the entries of a half element matrix (force_tangent_half) that hold one
+    """(rows, columns) of the entries of a half element matrix (force_tangent with ``half``) that hold one
     triangle of the assembled matrix, row by row: in row a, the columns of the node blocks left
     of a's, then b >= a in a's own block.  nd(nd+1)/2 entries, nd = 6 nn."""
     nd = 6 * nn
@@ -565,28 +572,3 @@ def half_entries(nn):
         rows += [a] * len(b)
         cols += b
     return np.array(rows, dtype=np.int64), np.array(cols, dtype=np.int64)
-
-
-@njit(cache=True, parallel=True, fastmath=_FM)
-def force_tangent_half(xo, xn, U, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_z, quasi, mu,
-                       gp_membrane, f_out, w_out, K_out, nth):
-    """Energies, forces (M,nn,6) and half tangents (M,nd,nd): each element's nodes in decreasing
-    global order (half_slots) and only the block lower triangle formed (_element_tangent), which
-    holds the entries of k_t (Eq. 9) whose global column dof is >= their global row dof
-    (half_entries), one triangle of the assembled matrix.  Those entries have the same bits as in
-    ``force_tangent``'s whole matrices; about 60 % of the material part's flops."""
-    M = conn.shape[0]
-    nn = conn.shape[1]
-    nt = alpha.shape[0]
-    chunk = (M + nth - 1) // nth
-    for th in prange(nth):
-        B, D, oo, on, nz, v4, tk = _tangent_workspace(nn, nt)
-        gs, gz, zs, at, dt, xe = _force_workspace(nn, nt)
-        slot = np.empty(nn, dtype=np.int64)
-        for e in range(th * chunk, min(M, (th + 1) * chunk)):
-            w_out[e] = _element_force(e, xo, xn, U, conn, dN, alpha, beta, tie, Cmb, Cs, Cz,
-                                      r_z, quasi, mu, f_out[e], gs, gz, zs, at, dt, xe)
-            half_slots(conn[e], slot)
-            _element_tangent(e, xo, xn, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_z,
-                             quasi, mu, gp_membrane, slot, True, K_out[e], B, D, oo, on, nz, gs, gz,
-                             zs, at, dt, v4, xe, tk)

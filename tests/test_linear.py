@@ -92,6 +92,61 @@ def test_pardiso_and_cholmod_agree_on_a_drape_tangent_and_repeat_bit_for_bit():
     assert P.factor(A, shift) and np.array_equal(P.solve(b), x)
 
 
+_THREADED_CHILD = """
+import numpy as np, numba
+from solidshell.runner import build_problem, build_scene_mesh
+from solidshell.scenes import load
+from solidshell.solvers import pardiso
+from solidshell.solvers.static import _System
+
+sc = load("square-pedestal")
+mesh = build_scene_mesh(sc, "12x4x4")[0]
+pb = build_problem(sc, mesh)
+sys_ = _System(pb.model, pb.fixed, pb.loads, pb.prescribed, pb.contact, None, "pardiso")
+U = np.zeros((mesh.n_nodes, 6))
+U[:, 2] = -0.05 * np.hypot(mesh.nodes[:, 0], mesh.nodes[:, 1])
+_, A = sys_.free_tangent(U.ravel())
+shift = 0.1 * np.abs(A.diagonal())
+b = np.random.default_rng(3).standard_normal(A.shape[0])
+seq = pardiso.Pardiso()
+assert seq.factor(A, shift) and seq._threads == 1
+x_seq = seq.solve(b)
+pardiso.THREADED_MFLOP = 0          # this small tangent takes the threaded path
+xs = []
+for n in (1, 2):
+    numba.set_num_threads(n)
+    P = pardiso.Pardiso()
+    assert P.factor(A, shift) and P._threads == n
+    numba.set_num_threads(3 - n)    # the other count between the factor and the solve
+    xs.append(P.solve(b))
+dense = A.toarray() + np.diag(shift)
+err = np.abs(xs[0] - x_seq).max() / (np.linalg.cond(dense) * 2.2e-16 * np.abs(x_seq).max())
+print(int(np.array_equal(xs[0], xs[1])), err)
+"""
+
+
+@pytest.mark.skipif(not pardiso.available(), reason=str(pardiso.unavailable_reason()))
+def test_threaded_pardiso_is_the_same_bits_on_one_and_two_threads():
+    """A factorisation of at least pardiso.THREADED_MFLOP runs on numba's threads in MKL's
+    reproducible mode: on one thread and on two the solution is the same bits (the static solver's
+    path must not depend on the thread count), and a solve after numba's thread count changed keeps
+    the handle's own (MKL crashed solving on one thread with a factor made on two).  It agrees with
+    the one-thread factor of smaller systems to cond * 1e-14 (both backward stable).  In a child
+    process, so that a crash fails this test rather than ending the test run."""
+    import subprocess
+    import sys
+
+    import numba
+
+    if numba.config.NUMBA_NUM_THREADS < 2:
+        pytest.skip("needs two numba threads (NUMBA_NUM_THREADS >= 2)")
+    p = subprocess.run([sys.executable, "-c", _THREADED_CHILD], capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr[-2000:]
+    same, err = p.stdout.split()
+    assert same == "1"
+    assert float(err) <= 100.0
+
+
 def test_factorization_names_resolve_and_a_missing_mkl_is_one_input_error_line(monkeypatch):
     assert linear.resolve_factorization("cholmod") == "cholmod"
     assert linear.resolve_factorization("auto") == ("pardiso" if pardiso.available() else "cholmod")

@@ -16,9 +16,13 @@ energy Newton asks for (linear.Cholesky).  The input is the lower triangle in CS
 (iparm[34] = 1): no copy of the pattern.  The analysis (minimum-degree ordering, symbolic
 factorisation) is done once per pattern; ``factor`` runs the numeric phase only.
 
-MKL runs sequentially (its "sequential" threading layer): its OpenMP threads would compete with
-numba's for the cores (docs/solvers.md, section 5), and sequential results are the same bits
-whatever the thread count.
+Threads: a factorisation of at least ``THREADED_MFLOP`` (PARDISO's own count from the analysis)
+runs on numba's thread count (``numba.get_num_threads()`` at the analysis: ``NUMBA_NUM_THREADS``
+governs both), in MKL's conditional numerical reproducibility mode (``iparm[33]``), so that its
+factor and solutions are the same bits on one thread or two.  Smaller ones run on one thread without
+that mode, the bits of MKL's sequential layer.  MKL runs on its GNU OpenMP layer: the libgomp whose
+thread pool numba's "omp" layer already uses, so the two never hold four threads on two cores
+(sequential where that layer is not installed).  Measurements: docs/solvers.md, section 5.
 """
 
 from __future__ import annotations
@@ -38,6 +42,15 @@ __all__ = ["Pardiso", "PardisoLDL", "available", "unavailable_reason"]
 _LIB = None
 _REASON = None
 _SEQUENTIAL = 1           # MKL_THREADING_SEQUENTIAL (mkl_service.h)
+_GNU_OPENMP = 3           # MKL_THREADING_GNU
+_CNR = 2                  # iparm[33] > 0: reproducible mode (the value: threads to tune for; the
+                          # factors were the same bits for 1-8 and on 1 or 2 threads)
+
+THREADED_MFLOP = 1000
+"""Factorisations of at least this many Mflop run threaded.  square-on-disc 30x240 (1,875 Mflop):
+100 -> 60-80 ms per factorisation on two threads; square-pedestal 48x16x4 (394 Mflop): 35 -> 18-24
+ms, but its solves, which outnumber the factorisations 3 to 1 there, went 5 -> 9 ms and the run was
+slower (docs/solvers.md, section 5)."""
 _MTYPE_SPD = 2
 _MTYPE_SYM_INDEFINITE = -2
 _INT = ctypes.c_int32
@@ -56,6 +69,16 @@ def _candidates():
         yield name
 
 
+def _has_gnu_layer(path):
+    """True when MKL's GNU OpenMP layer is installed with the library at ``path`` (MKL ends the
+    process when a layer it was told to use cannot be loaded)."""
+    if os.sep in path:
+        dirs = [os.path.dirname(os.path.realpath(path))]
+    else:
+        dirs = [os.path.join(b, "lib") for b in (sys.prefix, sys.base_prefix)]
+    return any(glob.glob(os.path.join(d, "libmkl_gnu_thread.so*")) for d in dirs)
+
+
 def _load():
     """The mkl_rt library with PARDISO's argument types declared, or None (reason in _REASON)."""
     global _LIB, _REASON
@@ -68,7 +91,9 @@ def _load():
         except (OSError, AttributeError):
             continue
         lib.MKL_Set_Threading_Layer.argtypes = [ctypes.c_int]
-        lib.MKL_Set_Threading_Layer(_SEQUENTIAL)
+        lib.MKL_Set_Threading_Layer(_GNU_OPENMP if _has_gnu_layer(path) else _SEQUENTIAL)
+        lib.MKL_Set_Num_Threads_Local.argtypes = [ctypes.c_int]
+        lib.MKL_Set_Num_Threads_Local.restype = ctypes.c_int
         # MKL's own memory pool keeps every freed buffer: without it the static square-pedestal
         # run peaks 2.6 MB lower, at no measured cost (PARDISO allocates a few buffers per call)
         lib.mkl_disable_fast_mm()
@@ -119,10 +144,20 @@ class Pardiso(PatternFactor):
         ip[55] = 1         # keep the factor's diagonal (pardiso_getdiag: the singular-pivot test)
         self._v = None
         self._n = 0
+        self._threads = 1
         self.n_symbolic = 0
 
     # ------------------------------------------------------------------ the one routine
     def _call(self, phase, a, b=None, x=None):
+        # every phase of a handle on the thread count of its analysis: MKL 2025 crashed
+        # (segmentation fault) solving on one thread with a factor made on two
+        old = self._lib.MKL_Set_Num_Threads_Local(self._threads)
+        try:
+            return self._pardiso(phase, a, b, x)
+        finally:
+            self._lib.MKL_Set_Num_Threads_Local(old)
+
+    def _pardiso(self, phase, a, b, x):
         err = _INT(0)
         self._lib.pardiso(self._pt.ctypes.data_as(ctypes.POINTER(ctypes.c_int64)),
                           ctypes.byref(_INT(1)), ctypes.byref(_INT(1)), ctypes.byref(_INT(self._mtype)),
@@ -153,7 +188,14 @@ class Pardiso(PatternFactor):
         self._indptr = np.ascontiguousarray(L.indptr, dtype=np.int32)
         self._indices = np.ascontiguousarray(L.indices, dtype=np.int32)
         self._v = np.array(L.data, dtype=float)
+        self._threads, self._iparm[33], self._iparm[18] = 1, 0, -1   # [18] < 0: count the flops
         err = self._call(11, self._v)
+        if err == 0 and self._iparm[18] >= THREADED_MFLOP:
+            from numba import get_num_threads
+
+            self._call(-1, self._v)
+            self._threads, self._iparm[33] = get_num_threads(), _CNR
+            err = self._call(11, self._v)
         if err != 0:
             raise RuntimeError(f"PARDISO analysis failed (MKL error {err})")
         self._key = L.key

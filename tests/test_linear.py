@@ -112,26 +112,31 @@ seq = pardiso.Pardiso()
 assert seq.factor(A, shift) and seq._threads == 1
 x_seq = seq.solve(b)
 pardiso.THREADED_MFLOP = 0          # this small tangent takes the threaded path
-xs = []
+xs, ys, negs = [], [], []
 for n in (1, 2):
     numba.set_num_threads(n)
     P = pardiso.Pardiso()
     assert P.factor(A, shift) and P._threads == n
+    ldl = pardiso.PardisoLDL().ldl(A)   # the unshifted tangent is indefinite
     numba.set_num_threads(3 - n)    # the other count between the factor and the solve
     xs.append(P.solve(b))
+    ys.append(ldl[0].solve(b))
+    negs.append(ldl[1])
 dense = A.toarray() + np.diag(shift)
 err = np.abs(xs[0] - x_seq).max() / (np.linalg.cond(dense) * 2.2e-16 * np.abs(x_seq).max())
-print(int(np.array_equal(xs[0], xs[1])), err)
+n_neg = int(np.count_nonzero(np.linalg.eigvalsh(A.toarray()) < 0))
+print(int(np.array_equal(xs[0], xs[1]) and np.array_equal(ys[0], ys[1])), int(negs == [n_neg, n_neg]), err)
 """
 
 
 @pytest.mark.skipif(not pardiso.available(), reason=str(pardiso.unavailable_reason()))
 def test_threaded_pardiso_is_the_same_bits_on_one_and_two_threads():
     """A factorisation of at least pardiso.THREADED_MFLOP runs on numba's threads in MKL's
-    reproducible mode: on one thread and on two the solution is the same bits (the static solver's
-    path must not depend on the thread count), and a solve after numba's thread count changed keeps
-    the handle's own (MKL crashed solving on one thread with a factor made on two).  It agrees with
-    the one-thread factor of smaller systems to cond * 1e-14 (both backward stable).  In a child
+    reproducible mode: on one thread and on two the Cholesky and the LDL^T solutions are the same
+    bits (the static solver's path must not depend on the thread count), the LDL^T's inertia is the
+    dense eigenvalue count, and a solve after numba's thread count changed keeps the handle's own
+    (MKL crashed solving on one thread with a factor made on two).  The Cholesky solution agrees
+    with the one-thread factor of smaller systems to 100 cond eps (both backward stable).  In a child
     process, so that a crash fails this test rather than ending the test run."""
     import subprocess
     import sys
@@ -142,8 +147,8 @@ def test_threaded_pardiso_is_the_same_bits_on_one_and_two_threads():
         pytest.skip("needs two numba threads (NUMBA_NUM_THREADS >= 2)")
     p = subprocess.run([sys.executable, "-c", _THREADED_CHILD], capture_output=True, text=True, timeout=300)
     assert p.returncode == 0, p.stderr[-2000:]
-    same, err = p.stdout.split()
-    assert same == "1"
+    same, inertia, err = p.stdout.split()
+    assert same == "1" and inertia == "1"
     assert float(err) <= 100.0
 
 

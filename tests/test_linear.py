@@ -152,6 +152,24 @@ def test_threaded_pardiso_is_the_same_bits_on_one_and_two_threads():
     assert float(err) <= 100.0
 
 
+def test_mkl_threading_layer_is_gnu_openmp_only_where_it_is_installed(tmp_path):
+    """MKL ends the process when told to use a threading layer it cannot load, so the GNU OpenMP
+    layer is chosen only where its library sits beside libmkl_rt (and libgomp loads); else MKL
+    runs sequentially."""
+    import ctypes
+
+    rt = tmp_path / "libmkl_rt.so.2"
+    rt.touch()
+    assert not pardiso._has_gnu_layer(str(rt))
+    (tmp_path / "libmkl_gnu_thread.so.2").touch()
+    try:
+        ctypes.CDLL("libgomp.so.1")
+        gomp = True
+    except OSError:
+        gomp = False
+    assert pardiso._has_gnu_layer(str(rt)) == gomp
+
+
 def test_factorization_names_resolve_and_a_missing_mkl_is_one_input_error_line(monkeypatch):
     assert linear.resolve_factorization("cholmod") == "cholmod"
     assert linear.resolve_factorization("auto") == ("pardiso" if pardiso.available() else "cholmod")

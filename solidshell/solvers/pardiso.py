@@ -70,13 +70,20 @@ def _candidates():
 
 
 def _has_gnu_layer(path):
-    """True when MKL's GNU OpenMP layer is installed with the library at ``path`` (MKL ends the
-    process when a layer it was told to use cannot be loaded)."""
+    """True when MKL's GNU OpenMP layer is installed with the library at ``path`` and the GNU
+    OpenMP runtime it needs loads (MKL ends the process when a layer it was told to use cannot be
+    loaded)."""
     if os.sep in path:
         dirs = [os.path.dirname(os.path.realpath(path))]
     else:
         dirs = [os.path.join(b, "lib") for b in (sys.prefix, sys.base_prefix)]
-    return any(glob.glob(os.path.join(d, "libmkl_gnu_thread.so*")) for d in dirs)
+    if not any(glob.glob(os.path.join(d, "libmkl_gnu_thread.so*")) for d in dirs):
+        return False
+    try:
+        ctypes.CDLL("libgomp.so.1")
+    except OSError:
+        return False
+    return True
 
 
 def _load():

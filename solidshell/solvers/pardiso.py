@@ -19,10 +19,10 @@ factorisation) is done once per pattern; ``factor`` runs the numeric phase only.
 Threads: a factorisation of at least ``THREADED_MFLOP`` (PARDISO's own count from the analysis)
 runs on numba's thread count (``numba.get_num_threads()`` at the analysis: ``NUMBA_NUM_THREADS``
 governs both), in MKL's conditional numerical reproducibility mode (``iparm[33]``), so that its
-factor and solutions are the same bits on one thread or two.  Smaller ones run on one thread without
-that mode.  MKL runs on its GNU OpenMP layer: the libgomp whose
-thread pool numba's "omp" layer already uses, so the two never hold four threads on two cores
-(sequential where that layer is not installed).  Measurements: docs/solvers.md, section 5.
+factor and solutions are the same bits on one thread or two.  Smaller ones run on one thread
+without that mode.  MKL runs on its GNU OpenMP layer, the libgomp whose thread pool numba's "omp"
+layer already uses, so the two never hold four threads on two cores (sequential where that layer
+is not installed).  Measurements: docs/solvers.md, section 5.
 """
 
 from __future__ import annotations

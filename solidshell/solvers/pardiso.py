@@ -156,7 +156,7 @@ class Pardiso(PatternFactor):
 
     # ------------------------------------------------------------------ the one routine
     def _call(self, phase, a, b=None, x=None):
-        # every phase of a handle on the thread count of its analysis: MKL 2025 crashed
+        # every phase of a handle on the thread count of its analysis: MKL 2026.2 crashed
         # (segmentation fault) solving on one thread with a factor made on two
         old = self._lib.MKL_Set_Num_Threads_Local(self._threads)
         try:

@@ -193,6 +193,39 @@ def test_restart_of_an_adaptive_run_is_bit_for_bit(tmp_path):
         _driver({"restart": str(ck), "alpha": 1.0}, **RESTART).run()
 
 
+def test_freeze_leaves_stops_the_passes_and_a_restart_stays_frozen(tmp_path):
+    """adapt.freeze_leaves: past freeze_after, the first pass that would change the mesh (K = 10**6:
+    any number of leaves) is not made, and no pass follows.  With freeze_after just past the first
+    remesh (step 2700), the run keeps that mesh to the end, stopping at the pass that would have made
+    the second (step 3350).  Its first remesh is the unfrozen run's, to the last bit of the booked
+    energy jump and kinetic energy.  A checkpoint taken after the freeze restarts frozen, bit for bit."""
+    ref_run = _driver({}, **RESTART)
+    ref = ref_run.run()
+    first, second = ref_run.remeshes[0], ref_run.remeshes[1]
+    frz = dict(RESTART, freeze_leaves=10**6, freeze_after=first["t"] * (1.0 + 1e-9))
+    whole = _driver({}, **frz)
+    out = whole.run()
+    assert whole.frozen is not None and whole.frozen[1] == second["step"]
+    assert whole.remeshes == [first]
+    assert whole.summary_info()["remesh_frozen_at"] == {"t": whole.frozen[0], "step": second["step"]}
+    assert out.mesh.n_nodes == whole.history[-1][1] == first["active_nodes"]   # that mesh to the end
+
+    part = _driver({}, **frz)
+    part.start()
+    while part.integ.state.step < second["step"] + part.adapt.every:
+        with threads_for(part.integ, part.settings.threads):
+            assert part.integ.advance(part.adapt.every) == "running"
+        if part.frozen is None:
+            part._adapt_pass()
+    assert part.frozen == whole.frozen
+    ck = tmp_path / "frozen.npz"
+    checkpoint.save(ck, part.integ.state, part._checkpoint_arrays())
+    again = _driver({"restart": str(ck)}, **frz)
+    res = again.run()
+    assert again.frozen == whole.frozen and again.remeshes == whole.remeshes
+    assert np.array_equal(res.result.U, out.result.U)
+
+
 def test_new_node_settling_that_falls_short_falls_back_to_directors_only(monkeypatch):
     """adapt.settle_new_nodes (on by default in relaxation): when the settling of the new nodes'
     positions misses its three digits, the remesh settles the directors alone.  Forced here (every

@@ -87,6 +87,7 @@ class AdaptiveRun:
         self.born = [np.full(self.bg.n_elements(l), -1, dtype=np.int64) for l in range(self.bg.levels + 1)]
         self.settle_failures = 0   # director settlings whose residual did not fall by three digits
         self.new_node_fallbacks = 0   # remeshes whose new-node settling fell short (directors only)
+        self.frozen = None         # (t, step) at which adapt.freeze_leaves stopped the passes
         self.integ = None
         self.restart_path = restart
 
@@ -124,6 +125,8 @@ class AdaptiveRun:
             b[:] = np.asarray(extra.get(f"{_STATE_PREFIX}born_{l}", b), dtype=np.int64)
         phases = np.asarray(extra.get(_STATE_PREFIX + "phase_seconds", np.zeros(len(_PHASES))), dtype=float)
         self.phase_seconds = dict(zip(_PHASES, map(float, phases)))
+        frozen = np.asarray(extra.get(_STATE_PREFIX + "frozen", np.zeros(0)), dtype=float)
+        self.frozen = (float(frozen[0]), int(frozen[1])) if frozen.size == 2 else None
         self.forest = AdaptiveMesh.from_state_arrays(self.bg, self.segments[-1].leaves)
         act = self.segments[-1].active
         self._check_same_adapt(extra, path)
@@ -164,6 +167,7 @@ class AdaptiveRun:
                _STATE_PREFIX + "remesh_seconds": np.asarray(self.remesh_seconds),
                _STATE_PREFIX + "phase_seconds": np.array([self.phase_seconds[k] for k in _PHASES]),
                _STATE_PREFIX + "settings": np.asarray(json.dumps(self._adapt_key(), sort_keys=True)),
+               _STATE_PREFIX + "frozen": np.array(self.frozen if self.frozen is not None else [], dtype=float),
                **{f"{_STATE_PREFIX}born_{l}": b.copy() for l, b in enumerate(self.born)}}
         for j, i in enumerate(keep):
             out.update({f"{_STATE_PREFIX}s{j}_{k}": v for k, v in self.segments[i].leaves.items()})
@@ -183,7 +187,7 @@ class AdaptiveRun:
                 status = self.integ.advance(check - self.integ.state.step % check)
                 if status != "running":
                     break
-                if self._pass_due():
+                if self.frozen is None and self._pass_due():
                     t0 = time.perf_counter()
                     self._adapt_pass()
                     self.remesh_seconds += time.perf_counter() - t0
@@ -238,6 +242,10 @@ class AdaptiveRun:
         n_merge = len(merge)
         if not n_split and not n_merge:
             return
+        if self._freezes(n_split, len(marks.merge)):
+            st = self.integ.state
+            self.frozen = (float(st.t), int(st.step))
+            return
         with self._timed("mesh"):
             before = self.forest.state_arrays()
             if n_merge:
@@ -249,6 +257,13 @@ class AdaptiveRun:
         if np.array_equal(new.nodes, self.active.nodes) and _same_leaves(before, self.forest.state_arrays()):
             return
         self._switch(new, n_split, n_merge)
+
+    def _freezes(self, n_split: int, n_merge_marked: int) -> bool:
+        """adapt.freeze_leaves: past ``freeze_after``, a pass that would split 1-K leaves and merge
+        none stops the passes for the rest of the run (instead of being made)."""
+        a = self.adapt
+        return (a.freeze_leaves > 0 and n_merge_marked == 0 and n_split <= a.freeze_leaves
+                and self.integ.state.t > a.freeze_after)
 
     def _held(self, parents):
         """The merges of Eq. (26) less those whose children a split made within the last
@@ -387,6 +402,9 @@ class AdaptiveRun:
             "adapt_settle_scope": self.adapt.settle_scope,
             "adapt_settle_new_nodes": self._settle_new_nodes,
             "adapt_coarse_membrane": self.adapt.coarse_membrane,
+            "adapt_freeze_leaves": int(self.adapt.freeze_leaves),
+            "adapt_freeze_after": float(self.adapt.freeze_after),
+            "remesh_frozen_at": None if self.frozen is None else {"t": self.frozen[0], "step": self.frozen[1]},
             "settle_failures": int(self.settle_failures),
             "settle_new_node_fallbacks": int(self.new_node_fallbacks),
             "level0_elements": int(self.bg.n_elements(0)), "background_nodes": int(len(self.bg.Xo)),

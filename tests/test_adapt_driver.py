@@ -226,6 +226,21 @@ def test_freeze_leaves_stops_the_passes_and_a_restart_stays_frozen(tmp_path):
     assert np.array_equal(res.result.U, out.result.U)
 
 
+def test_a_checkpoint_without_a_later_adapt_key_restarts_with_its_default():
+    """A checkpoint written before an adapt key existed (e.g. freeze_leaves) ran with that key's
+    default: it continues under the default and is refused under another value."""
+    import json
+
+    from solidshell.adapt.driver import _STATE_PREFIX
+
+    drv = _driver({}, **RESTART)
+    old = {k: v for k, v in drv._adapt_key().items() if not k.startswith("freeze_")}
+    extra = {_STATE_PREFIX + "settings": np.asarray(json.dumps(old, sort_keys=True))}
+    drv._check_same_adapt(extra, "old.npz")
+    with pytest.raises(InputError, match=r"adapt\.freeze_leaves 0 -> 5"):
+        _driver({}, **RESTART, freeze_leaves=5)._check_same_adapt(extra, "old.npz")
+
+
 def test_new_node_settling_that_falls_short_falls_back_to_directors_only(monkeypatch):
     """adapt.settle_new_nodes (on by default in relaxation): when the settling of the new nodes'
     positions misses its three digits, the remesh settles the directors alone.  Forced here (every

@@ -139,8 +139,10 @@ class AdaptiveRun:
 
     def _check_same_adapt(self, extra, path) -> None:
         """A restart continues the run that wrote the checkpoint: its adaptive settings too."""
-        saved = json.loads(str(extra.get(_STATE_PREFIX + "settings", "{}")))
         now = json.loads(json.dumps(self._adapt_key()))
+        # a key the checkpoint lacks is one added since it was written: that run had its default
+        defaults = json.loads(json.dumps({k: v for k, v in type(self.adapt)().as_dict().items() if k in now}))
+        saved = {**defaults, **json.loads(str(extra.get(_STATE_PREFIX + "settings", "{}")))}
         diff = sorted(k for k in set(saved) | set(now) if saved.get(k) != now.get(k))
         if diff:
             raise InputError(f"restart file {path} was written with other adaptive settings: "

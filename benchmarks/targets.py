@@ -13,9 +13,9 @@ runs it, ``--repeats`` times (default 2), with the load average before each run.
 Newton iterations; no meshing or files).  Each run also records the share of the CPUs' time the
 hypervisor stole during it (/proc/stat), one visible cause of a slow run on a virtual machine.  It
 is not the only one: the sphere took 73.6 s and 105.7 s hours apart on the same code path, with
-3 % stolen in the slow run (a shared host's memory bandwidth shows in neither figure).  Each row gives the median, every run's figure, the state
-(iterations or steps, drape coefficient, folds) so that a faster run is seen to reach the same
-state, and whether the median meets the target.  The explicit loop's target (>= 5 M element-steps/s)
+3 % stolen in the slow run (a shared host's memory bandwidth shows in neither figure).  Each row
+gives the median, every run's figure, the state (iterations or steps, drape coefficient, folds) so
+that a faster run is seen to reach the same state, and whether the median meets the target.  The explicit loop's target (>= 5 M element-steps/s)
 has its own script: ``benchmarks/explicit_throughput.py --sizes 100 --steps 300 --threads 2``.
 Rules for timing on this shared machine: docs/benchmarks.md, section 1 (nothing else running; the
 load these runs report includes their own two threads).
@@ -40,12 +40,12 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 
 CASES = {
-    # name: (CLI arguments after "run", figure, limit, unit)
-    "static": (["square-pedestal"], "wall_time_s", 5.0, "s"),
-    "disc": (["square-on-disc"], "wall_time_s", 30.0, "s"),
-    "relax": (["square-pedestal", "--solver", "relax"], "wall_time_s", 15.0, "s"),
-    "sphere": (["sphere", "--mesh", "100x100"], "wall_time_s", 60.0, "s"),
-    "strip": (["strip-warp"], "process_s", 1.0, "s"),
+    # name: (CLI arguments after "run", figure, limit [s])
+    "static": (["square-pedestal"], "wall_time_s", 5.0),
+    "disc": (["square-on-disc"], "wall_time_s", 30.0),
+    "relax": (["square-pedestal", "--solver", "relax"], "wall_time_s", 15.0),
+    "sphere": (["sphere", "--mesh", "100x100"], "wall_time_s", 60.0),
+    "strip": (["strip-warp"], "process_s", 1.0),
 }
 MEMORY_LIMIT_MB = {"static": 300.0}
 
@@ -84,12 +84,12 @@ def run_once(args: list[str], out: str) -> dict:
 
 
 def measure(name: str, repeats: int, tmp: str) -> dict:
-    args, key, limit, unit = CASES[name]
+    args, key, limit = CASES[name]
     runs = []
     for k in range(repeats):
         r = run_once(args, os.path.join(tmp, f"{name}_{k}"))
         runs.append(r)
-        print(f"  {name} run {k + 1}: {key} {r[key]:.2f} {unit}, process {r['process_s']:.2f} s, "
+        print(f"  {name} run {k + 1}: {key} {r[key]:.2f} s, process {r['process_s']:.2f} s, "
               f"load {r['load']:.2f}, stolen {_pct(r['steal'])}", flush=True)
     med = statistics.median(r[key] for r in runs)
     row = {"case": name, "command": "solidshell run " + " ".join(args) + " --no-pictures", "figure": key,

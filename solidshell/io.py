@@ -70,6 +70,12 @@ def _fsync_file(p: Path) -> None:
         os.fsync(f.fileno())
 
 
+def _temporary_affixes(path: Path, suffix: str | None = None) -> tuple[str, str]:
+    """(prefix, suffix) of :func:`atomic_path`'s temporaries of ``path``, tempfile's random part
+    between them: the one naming rule the writer and :func:`is_temporary_of` share."""
+    return f".{path.stem}.", suffix if suffix is not None else path.suffix
+
+
 @contextlib.contextmanager
 def atomic_path(path, suffix: str | None = None):
     """Yield a temporary path in the same directory as ``path``; on normal exit the file written
@@ -78,8 +84,8 @@ def atomic_path(path, suffix: str | None = None):
     pick the format from the extension see the right one."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=suffix if suffix is not None else path.suffix,
-                               dir=path.parent)
+    prefix, suffix = _temporary_affixes(path, suffix)
+    fd, tmp = tempfile.mkstemp(prefix=prefix, suffix=suffix, dir=path.parent)
     os.close(fd)
     tmp = Path(tmp)
     try:
@@ -97,8 +103,8 @@ def atomic_path(path, suffix: str | None = None):
 def is_temporary_of(name: str, target: str) -> bool:
     """True when ``name`` is an :func:`atomic_path` temporary of a file named ``target`` (in the
     same folder): what a writer killed mid-write leaves behind."""
-    t = Path(target)
-    return re.fullmatch(rf"\.{re.escape(t.stem)}\.[A-Za-z0-9_]+{re.escape(t.suffix)}", name) is not None
+    prefix, suffix = _temporary_affixes(Path(target))
+    return re.fullmatch(rf"{re.escape(prefix)}[A-Za-z0-9_]+{re.escape(suffix)}", name) is not None
 
 
 @contextlib.contextmanager

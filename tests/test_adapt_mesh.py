@@ -11,7 +11,7 @@ from scipy.spatial.transform import Rotation
 from solidshell import Fabric, IsotropicShell, ShellMesh
 from solidshell.adapt import (AdaptiveMesh, BackgroundMesh, boundary_area_report, circle_projector,
                               estimate_background_bytes)
-from solidshell.adapt.transition import TABLE, pattern_quality
+from solidshell.adapt.transition import CENTRE, TABLE, TRANSITION_POLICIES, choose_variant, pattern_quality
 from solidshell.errors import InputError
 from solidshell.meshing import build_mesh
 from solidshell.model import Model
@@ -206,6 +206,44 @@ def test_patterns_cover_every_mask_and_tile_the_square():
     assert max(r for _, r in quality.values()) <= 2.0 + 1e-9
 
 
+def test_fewest_nodes_policy_leaves_the_centre_out_of_patterns_one_and_four():
+    """adapt.transitions = "fewest_nodes": patterns 1 and 4 take a variant without the centre node
+    (the best of those on the leaf's geometry), every other pattern what "quality" takes."""
+    pts = np.array([[0, 0], [1, 0], [1, 1], [0, 1], [.5, 0], [1, .5], [.5, 1], [0, .5], [.5, .5]])[None]
+    for mask in range(16):
+        pid, variants = TABLE[mask]
+        q, t = variants[choose_variant(mask, pts, "fewest_nodes")[0]]
+        uses_centre = CENTRE in np.ravel(q) or CENTRE in np.ravel(t)
+        assert uses_centre == (pid in (2, 5)), mask
+        if pid not in (1, 4):
+            assert choose_variant(mask, pts, "fewest_nodes")[0] == choose_variant(mask, pts)[0]
+    # on the unit square: one side -> a trapezoid and a right triangle with legs 1/2 and 1 (smallest
+    # angle atan(1/2) = 26.57 deg, longest / shortest edge sqrt(5)); three sides -> two quads and a
+    # corner triangle at 45 deg, as "quality"'s worst; exact geometry, so 1e-9 is round-off
+    sq = pts[0, :4]
+    lean, best = pattern_quality(sq, "fewest_nodes"), pattern_quality(sq)
+    assert lean[1] == pytest.approx((np.degrees(np.arctan(0.5)), np.sqrt(5.0)), abs=1e-9)
+    assert lean[4] == pytest.approx((45.0, 2.0), abs=1e-9)
+    assert {k: v for k, v in lean.items() if k not in (1, 4)} == {k: v for k, v in best.items() if k not in (1, 4)}
+    with pytest.raises(InputError, match="transitions"):
+        BackgroundMesh.from_level0(grid(1, 1), 1, transitions="fewest")
+
+
+def test_fewest_nodes_policy_saves_one_node_per_one_and_three_sided_patch():
+    """The same leaves under both policies: one active node fewer per patch of pattern 1 or 4 (its
+    centre), the same nodes otherwise; on a straight grid every lean variant is valid."""
+    meshes = {}
+    for policy in TRANSITION_POLICIES:
+        am, a = every_pattern_state(grid(8, 8), policy=policy)
+        meshes[policy] = a
+    a, b = meshes["quality"], meshes["fewest_nodes"]
+    patches = {(l, e) for (l, e), k in zip(a.elem_leaf.tolist(), a.elem_kind) if k in (1, 4)}
+    assert len(patches) >= 2
+    assert a.mesh.n_nodes - b.mesh.n_nodes == len(patches)
+    assert set(np.flatnonzero(b.active)) < set(np.flatnonzero(a.active))
+    assert a.mesh.area() == pytest.approx(b.mesh.area(), rel=1e-14)
+
+
 @pytest.mark.parametrize("chunk", [None, 7])
 def test_memoised_transition_variants_are_each_elements_own_choice(chunk, monkeypatch):
     """BackgroundMesh.transition_variants chooses every element of a level at the first use of a
@@ -253,9 +291,9 @@ def level0_meshes(draw):
 @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(m=level0_meshes(), levels=st.integers(1, 3), ops=st.lists(
     st.tuples(st.sampled_from(["split", "merge"]), st.floats(0.05, 1.0), st.integers(0, 2**31)),
-    min_size=1, max_size=8))
-def test_random_split_merge_sequences_stay_conforming(m, levels, ops):
-    bg = BackgroundMesh.from_level0(m, levels)
+    min_size=1, max_size=8), policy=st.sampled_from(TRANSITION_POLICIES))
+def test_random_split_merge_sequences_stay_conforming(m, levels, ops, policy):
+    bg = BackgroundMesh.from_level0(m, levels, transitions=policy)
     am = AdaptiveMesh(bg)
     s0 = am.state_arrays()
     a0 = am.active_mesh()
@@ -307,10 +345,10 @@ def test_balance_propagates_splits_and_vetoes_merges():
 
 
 # ----------------------------------------------------------------------------- consistency
-def every_pattern_state(mesh_level0, nx=8):
+def every_pattern_state(mesh_level0, nx=8, policy="quality"):
     """A state of an nx x nx level-0 grid whose computational mesh holds every transition pattern
-    at level 0 and transitions at level 1 as well."""
-    am = AdaptiveMesh(BackgroundMesh.from_level0(mesh_level0, 2))
+    at level 0 and transitions at level 1 as well (variants chosen under ``policy``)."""
+    am = AdaptiveMesh(BackgroundMesh.from_level0(mesh_level0, 2, transitions=policy))
     cell = [(1, 1), (3, 1), (5, 1), (5, 3), (4, 2), (0, 5), (1, 6), (3, 5), (5, 5), (4, 4), (4, 6),
             (6, 6), (7, 6), (6, 7), (7, 7)]
     am.split([[0, j * nx + i] for i, j in cell])
@@ -330,9 +368,10 @@ def _interior(mesh):
     return np.setdiff1d(np.arange(mesh.n_nodes), b)
 
 
+@pytest.mark.parametrize("policy", TRANSITION_POLICIES)
 @pytest.mark.parametrize("level0", [FLAT8, CURVED8], ids=["flat", "curved"])
-def test_rigid_motion_has_no_energy_on_an_adapted_mesh(level0):
-    am, a = every_pattern_state(level0)
+def test_rigid_motion_has_no_energy_on_an_adapted_mesh(level0, policy):
+    am, a = every_pattern_state(level0, policy=policy)
     mesh = a.mesh
     model = Model(mesh, WOOL)
     R = Rotation.from_rotvec([0.9, -1.7, 0.4]).as_matrix()
@@ -358,9 +397,10 @@ def test_rigid_motion_has_no_energy_on_an_adapted_mesh(level0):
     assert abs(model.energy(rigid(Uref)) - Wref) <= 1e-11 * Wref
 
 
+@pytest.mark.parametrize("policy", TRANSITION_POLICIES)
 @pytest.mark.parametrize("membrane", ["full", "ans"])
-def test_membrane_patch_test_on_an_adapted_mesh(membrane):
-    am, a = every_pattern_state(FLAT8)
+def test_membrane_patch_test_on_an_adapted_mesh(membrane, policy):
+    am, a = every_pattern_state(FLAT8, policy=policy)
     mesh = a.mesh
     model = Model(mesh, ISO, membrane=membrane)
     G = np.array([[2e-3, 1e-3], [-0.5e-3, 3e-3]])      # linear in-plane field, constant strain
@@ -375,8 +415,9 @@ def test_membrane_patch_test_on_an_adapted_mesh(membrane):
     assert np.abs(F[inner]).max() <= 1e-10 * np.abs(F).max()
 
 
-def test_bending_patch_test_on_an_adapted_mesh():
-    am, a = every_pattern_state(FLAT8)
+@pytest.mark.parametrize("policy", TRANSITION_POLICIES)
+def test_bending_patch_test_on_an_adapted_mesh(policy):
+    am, a = every_pattern_state(FLAT8, policy=policy)
     mesh = a.mesh
     model = Model(mesh, ISO)
     kappa, n = 0.02, np.array([np.cos(0.6), np.sin(0.6)])
@@ -399,8 +440,9 @@ def test_bending_patch_test_on_an_adapted_mesh():
     assert np.abs(F[inner]).max() <= 1e-10 * np.abs(F).max()
 
 
-def test_internal_force_is_the_energy_gradient_on_an_adapted_mesh():
-    am, a = every_pattern_state(CURVED8)
+@pytest.mark.parametrize("policy", TRANSITION_POLICIES)
+def test_internal_force_is_the_energy_gradient_on_an_adapted_mesh(policy):
+    am, a = every_pattern_state(CURVED8, policy=policy)
     mesh = a.mesh
     model = Model(mesh, WOOL)
     rng = np.random.default_rng(5)

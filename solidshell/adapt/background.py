@@ -127,7 +127,16 @@ class BackgroundMesh:
 
     # ------------------------------------------------------------------ construction
     @classmethod
-    def from_level0(cls, mesh: ShellMesh, levels: int = 3, curves=None) -> "BackgroundMesh":
+    def from_level0(cls, mesh: ShellMesh, levels: int = 3, curves=None,
+                    transitions: str = "quality") -> "BackgroundMesh":
+        """All levels of ``mesh`` split ``levels`` times; ``curves`` places new boundary nodes on
+        the true curve; ``transitions`` is the variant policy of the transition patterns
+        (transition.TRANSITION_POLICIES)."""
+        from .transition import TRANSITION_POLICIES
+
+        if transitions not in TRANSITION_POLICIES:
+            raise InputError(f"adapt transitions must be one of {', '.join(TRANSITION_POLICIES)}, "
+                             f"got {transitions!r}")
         if len(mesh.tris):
             raise InputError(f"adaptivity needs a level-0 mesh of quadrilaterals only; this one has "
                              f"{len(mesh.tris)} triangle(s) (only quadrilateral level-0 meshes are supported)")
@@ -145,7 +154,7 @@ class BackgroundMesh:
                              f"{n0 * 4 ** levels_i:.3g} elements, about {est / 2**30:.3g} GiB, more than half "
                              f"the {avail / 2**30:.3g} GiB available; use fewer levels")
         self = cls()
-        self.levels, self.n0, self.level0 = levels_i, n0, mesh
+        self.levels, self.n0, self.level0, self.transitions = levels_i, n0, mesh, transitions
         X = [mesh.nodes.astype(float)]
         D = [mesh.directors.astype(float)]
         lev = [np.zeros(mesh.n_nodes, dtype=np.int64)]
@@ -255,7 +264,8 @@ class BackgroundMesh:
 
     def transition_variants(self, level: int, index: np.ndarray, mask: np.ndarray) -> np.ndarray:
         """(K,) variant of the transition pattern for refined-edge ``mask`` (K,) that each element
-        (level, index) (K,) takes (transition.choose_variant on its X_o).  Memoised per level and
+        (level, index) (K,) takes (transition.choose_variant on its X_o under this mesh's
+        ``transitions`` policy).  Memoised per level and
         mask, since the geometry never changes: the first time a mask is asked for on a level, the
         variant of every element of that level is chosen in one vectorised call (choose_variant
         treats each element apart from the others, so this is the per-element choice; 195 small
@@ -279,7 +289,7 @@ class BackgroundMesh:
                 e = np.arange(a, min(a + _VARIANT_CHUNK, n))
                 ch = self.conn[l + 1][(4 * e[:, None] + np.arange(4)).ravel()].reshape(-1, 4, 4)
                 loc = np.concatenate([self.conn[l][e], ch[:, :, 1], ch[:, :1, 2]], axis=1)
-                tab[e, m] = choose_variant(int(m), self.Xo[loc])
+                tab[e, m] = choose_variant(int(m), self.Xo[loc], self.transitions)
         return tab[index, mask]
 
     def element_nodes(self, level: int, index) -> np.ndarray:

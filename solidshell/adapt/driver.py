@@ -73,7 +73,8 @@ class AdaptiveRun:
                  curves=None, progress=no_progress, restart=None):
         self.make_problem, self.cls, self.settings, self.adapt = make_problem, integrator_cls, settings, adapt
         self.relax, self.progress = relax, _monotone(progress or no_progress)
-        self.bg = BackgroundMesh.from_level0(level0, adapt.levels, curves if adapt.project_boundary else None)
+        self.bg = BackgroundMesh.from_level0(level0, adapt.levels, curves if adapt.project_boundary else None,
+                                             adapt.transitions)
         self.L = level_side_lengths(self.bg)
         self._h_fine = float(np.min(self.L[-1]))   # smallest finest-level side [length]
         self.forest = AdaptiveMesh(self.bg)

@@ -37,6 +37,12 @@ import numpy as np
 
 PATTERN_NAMES = {0: "plain", 1: "one side", 2: "two adjacent", 3: "two opposite", 4: "three", 5: "four"}
 
+#: how a leaf picks among its pattern's variants (``adapt.transitions``): "quality" the variant
+#: furthest from degenerate; "fewest_nodes" a variant without the centre node whenever one is
+#: valid (patterns 1 and 4: one node and one element fewer), the best of those
+TRANSITION_POLICIES = ("quality", "fewest_nodes")
+CENTRE = 8          # local index of the centre node
+
 # variants of each canonical pattern: (quads, triangles); the first is the one drawn in the docs
 # and the one chosen on a square parent, the others serve distorted parents (see choose_variant)
 _CANON = {
@@ -101,11 +107,15 @@ def angle_score(P: np.ndarray) -> np.ndarray:
     return np.minimum(ang.min(-1), 180.0 - ang.max(-1))
 
 
-def choose_variant(mask: int, pts: np.ndarray) -> np.ndarray:
-    """(n,) index of the variant of pattern ``mask`` whose elements are furthest from degenerate
-    on each leaf with local node positions pts (n,9,D): the largest min over its elements of
-    :func:`angle_score` (no angle near 0 or 180 deg); ties (within 1e-6 deg) go to the lower
-    index, so a square parent always gets the first variant."""
+def choose_variant(mask: int, pts: np.ndarray, policy: str = "quality") -> np.ndarray:
+    """(n,) index of the variant of pattern ``mask`` that each leaf with local node positions pts
+    (n,9,D) takes.  Policy "quality": the variant whose elements are furthest from degenerate, the
+    largest min over its elements of :func:`angle_score` (no angle near 0 or 180 deg); ties (within
+    1e-6 deg) go to the lower index, so a square parent always gets the first variant.  Policy
+    "fewest_nodes": the same choice among the variants that leave the centre node out (patterns 1
+    and 4 have them), and among all variants only where none of those is valid."""
+    if policy not in TRANSITION_POLICIES:
+        raise ValueError(f"transition policy {policy!r} is not one of {TRANSITION_POLICIES}")
     variants = TABLE[int(mask)][1]
     if len(variants) == 1:
         return np.zeros(len(pts), dtype=np.int64)
@@ -124,6 +134,10 @@ def choose_variant(mask: int, pts: np.ndarray) -> np.ndarray:
                 cn = np.cross(np.roll(E, -1, axis=-2) - E, np.roll(E, 1, axis=-2) - E)
                 ok &= (np.sum(cn * normal, -1) > 0).all(axis=(1, 2))
         score[:, v] = np.where(ok, np.min(a, axis=0) - 1e-6 * v, -np.inf)
+    if policy == "fewest_nodes":
+        lean = np.array([CENTRE not in np.ravel(q) and CENTRE not in np.ravel(t) for q, t in variants])
+        # angle scores are <= 90 deg: a valid lean variant outranks every variant with the centre
+        score = score + np.where(lean & np.isfinite(score), 180.0, 0.0)
     return np.argmax(score, axis=1)
 
 
@@ -147,15 +161,15 @@ def element_quality(P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return ang.min(-1), le.max(-1) / le.min(-1)
 
 
-def pattern_quality(corners: np.ndarray) -> dict[int, tuple[float, float]]:
+def pattern_quality(corners: np.ndarray, policy: str = "quality") -> dict[int, tuple[float, float]]:
     """{pattern id: (min angle [deg], max aspect ratio)} of each pattern on the parents with
     corners (…,4,2), worst over the parents and the four rotations, each leaf with the variant
-    :func:`choose_variant` picks for it."""
+    :func:`choose_variant` picks for it under ``policy``."""
     pts = local_points(np.asarray(corners, dtype=float).reshape(-1, 4, 2))
     out = {}
     for mask in range(16):
         pid, variants = TABLE[mask]
-        pick = choose_variant(mask, pts)
+        pick = choose_variant(mask, pts, policy)
         amin, asp = np.inf, 0.0
         for v, (q, t) in enumerate(variants):
             sel = pts[pick == v]

@@ -10,7 +10,7 @@ import time
 import numpy as np
 
 from solidshell.adapt import AdaptiveMesh, BackgroundMesh, boundary_area_report, circle_projector
-from solidshell.adapt.transition import PATTERN_NAMES, pattern_quality
+from solidshell.adapt.transition import PATTERN_NAMES, TRANSITION_POLICIES, pattern_quality
 from solidshell.meshing import build_mesh
 
 
@@ -65,15 +65,17 @@ def quality():
     sq = np.array([[0.0, 0], [1, 0], [1, 1], [0, 1]])
     m = build_mesh("square_on_square", "6x2x4", sheet=20, pedestal=10)
     trap = m.nodes[m.quads][:, :, :2]
-    qs, qt = pattern_quality(sq), pattern_quality(trap)
-    worst = {pid: min(range(len(trap)), key=lambda e: pattern_quality(trap[e:e + 1])[pid][0]) for pid in qt}
-    typical = {pid: float(np.median([pattern_quality(trap[e:e + 1])[pid][0] for e in range(len(trap))]))
-               for pid in qt}
-    print("| id | pattern | unit square | 6x2x4: worst parent and rotation | worst parent | 6x2x4: median over parents of the min angle |")
-    print("|---|---|---|---|---|---|")
-    for pid in sorted(qs):
-        print(f"| {pid} | {PATTERN_NAMES[pid]} | {qs[pid][0]:.1f} / {qs[pid][1]:.2f} | "
-              f"{qt[pid][0]:.1f} / {qt[pid][1]:.2f} | {worst[pid]} | {typical[pid]:.1f} |")
+    for policy in TRANSITION_POLICIES:
+        qs, qt = pattern_quality(sq, policy), pattern_quality(trap, policy)
+        per = [pattern_quality(trap[e:e + 1], policy) for e in range(len(trap))]
+        worst = {pid: min(range(len(trap)), key=lambda e: per[e][pid][0]) for pid in qt}
+        typical = {pid: float(np.median([q[pid][0] for q in per])) for pid in qt}
+        print(f"\nadapt.transitions = {policy!r}\n")
+        print("| id | pattern | unit square | 6x2x4: worst parent and rotation | worst parent | 6x2x4: median over parents of the min angle |")
+        print("|---|---|---|---|---|---|")
+        for pid in sorted(qs):
+            print(f"| {pid} | {PATTERN_NAMES[pid]} | {qs[pid][0]:.1f} / {qs[pid][1]:.2f} | "
+                  f"{qt[pid][0]:.1f} / {qt[pid][1]:.2f} | {worst[pid]} | {typical[pid]:.1f} |")
 
 
 def areas():

@@ -15,7 +15,7 @@ import numpy as np  # noqa: E402
 from matplotlib.patches import Polygon  # noqa: E402
 
 from solidshell.adapt import AdaptiveMesh, BackgroundMesh  # noqa: E402
-from solidshell.adapt.transition import PATTERN_NAMES, TABLE, choose_variant, element_quality, local_points  # noqa: E402
+from solidshell.adapt.transition import CENTRE, PATTERN_NAMES, TABLE, choose_variant, element_quality, local_points  # noqa: E402
 from solidshell.meshing import build_mesh  # noqa: E402
 
 OUT = Path(__file__).parent / "img"
@@ -50,21 +50,23 @@ def patterns():
     for j, (pid, v) in enumerate(alts):
         q, t = TABLE[CANON[pid]][1][v]
         draw(axes[1, j], sq, q, t, COLOURS[pid], numbers=True)
-        axes[1, j].set_title(f"{pid}: variant {v + 1}", fontsize=10)
+        lean = CENTRE not in np.ravel(q) and CENTRE not in np.ravel(t)
+        axes[1, j].set_title(f"{pid}: variant {v + 1}" + (" (no centre)" if lean else ""), fontsize=10)
     axes[0, 6].axis("off")
     axes[0, 6].text(0.0, 0.5, "refined edges get their\nmid-edge node (dots);\ntriangles in red;\n"
-                    "numbers: min angle\nof each element", fontsize=9, va="center")
+                    "numbers: min angle\nof each element;\n\"no centre\": the\nvariants adapt.transitions\n= fewest_nodes takes", fontsize=9, va="center",
+                    transform=axes[0, 6].transAxes)
     for j, (pid, mask) in enumerate(CANON.items()):
         # the rotation of each pattern whose chosen variant has the smallest angle on this parent
         best = None
         for mk in [mk for mk in range(16) if TABLE[mk][0] == pid]:
-            v = int(choose_variant(mk, tp[None])[0])
+            v = int(choose_variant(mk, tp[None], "quality")[0])
             q, t = TABLE[mk][1][v]
             a = min(element_quality(tp[c])[0].min() for c in (q, t) if len(c))
             if best is None or a < best[0]:
                 best = (a, q, t)
         draw(axes[2, j], tp, best[1], best[2], COLOURS[pid], numbers=True)
-        axes[2, j].set_title(f"{pid}: worst rotation", fontsize=9)
+        axes[2, j].set_title(f"{pid}: worst rotation (\"quality\")", fontsize=9)
     axes[2, 6].axis("off")
     for ax in axes.ravel():
         ax.autoscale_view()

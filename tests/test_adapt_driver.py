@@ -239,6 +239,12 @@ def test_a_checkpoint_without_a_later_adapt_key_restarts_with_its_default():
     drv._check_same_adapt(extra, "old.npz")
     with pytest.raises(InputError, match=r"adapt\.freeze_leaves 0 -> 5"):
         _driver({}, **RESTART, freeze_leaves=5)._check_same_adapt(extra, "old.npz")
+    # transitions was added with a new default ("fewest_nodes"); runs before it had "quality"
+    older = {k: v for k, v in old.items() if k != "transitions"}
+    extra = {_STATE_PREFIX + "settings": np.asarray(json.dumps(older, sort_keys=True))}
+    _driver({}, **RESTART, transitions="quality")._check_same_adapt(extra, "older.npz")
+    with pytest.raises(InputError, match=r"adapt\.transitions 'quality' -> 'fewest_nodes'"):
+        drv._check_same_adapt(extra, "older.npz")
 
 
 def test_new_node_settling_that_falls_short_falls_back_to_directors_only(monkeypatch):

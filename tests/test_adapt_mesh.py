@@ -201,7 +201,7 @@ def test_patterns_cover_every_mask_and_tile_the_square():
             used = set(np.concatenate([np.ravel(q), np.ravel(t)]).tolist())
             assert all(4 + k in used for k in range(4) if mask >> k & 1)
             assert not any(4 + k in used for k in range(4) if not mask >> k & 1)
-    quality = pattern_quality(sq)
+    quality = pattern_quality(sq, "quality")
     assert min(a for a, _ in quality.values()) >= 45.0 - 1e-9
     assert max(r for _, r in quality.values()) <= 2.0 + 1e-9
 
@@ -216,12 +216,12 @@ def test_fewest_nodes_policy_leaves_the_centre_out_of_patterns_one_and_four():
         uses_centre = CENTRE in np.ravel(q) or CENTRE in np.ravel(t)
         assert uses_centre == (pid in (2, 5)), mask
         if pid not in (1, 4):
-            assert choose_variant(mask, pts, "fewest_nodes")[0] == choose_variant(mask, pts)[0]
+            assert choose_variant(mask, pts, "fewest_nodes")[0] == choose_variant(mask, pts, "quality")[0]
     # on the unit square: one side -> a trapezoid and a right triangle with legs 1/2 and 1 (smallest
     # angle atan(1/2) = 26.57 deg, longest / shortest edge sqrt(5)); three sides -> two quads and a
     # corner triangle at 45 deg, as "quality"'s worst; exact geometry, so 1e-9 is round-off
     sq = pts[0, :4]
-    lean, best = pattern_quality(sq, "fewest_nodes"), pattern_quality(sq)
+    lean, best = pattern_quality(sq, "fewest_nodes"), pattern_quality(sq, "quality")
     assert lean[1] == pytest.approx((np.degrees(np.arctan(0.5)), np.sqrt(5.0)), abs=1e-9)
     assert lean[4] == pytest.approx((45.0, 2.0), abs=1e-9)
     assert {k: v for k, v in lean.items() if k not in (1, 4)} == {k: v for k, v in best.items() if k not in (1, 4)}

@@ -128,12 +128,13 @@ class BackgroundMesh:
     # ------------------------------------------------------------------ construction
     @classmethod
     def from_level0(cls, mesh: ShellMesh, levels: int = 3, curves=None,
-                    transitions: str = "quality") -> "BackgroundMesh":
+                    transitions: str | None = None) -> "BackgroundMesh":
         """All levels of ``mesh`` split ``levels`` times; ``curves`` places new boundary nodes on
         the true curve; ``transitions`` is the variant policy of the transition patterns
-        (transition.TRANSITION_POLICIES)."""
-        from .transition import TRANSITION_POLICIES
+        (transition.TRANSITION_POLICIES; None: transition.DEFAULT_TRANSITIONS)."""
+        from .transition import DEFAULT_TRANSITIONS, TRANSITION_POLICIES
 
+        transitions = DEFAULT_TRANSITIONS if transitions is None else transitions
         if transitions not in TRANSITION_POLICIES:
             raise InputError(f"adapt transitions must be one of {', '.join(TRANSITION_POLICIES)}, "
                              f"got {transitions!r}")

@@ -37,6 +37,8 @@ from ..solvers.blas import single_threaded_blas
 from ..solvers.explicit import Integrator, checkpoint, parse_settings, threads_for
 
 _STATE_PREFIX = "adapt_"
+#: adapt keys whose default changed when they were added: how runs before the key behaved
+_BEFORE_KEY = {"transitions": "quality"}
 _CHECK_STEPS = 100      # steps between two looks at the sheet's speed (adapt.travel)
 _PHASES = ("mark", "mesh", "problem", "transfer", "settle", "integrator")
 _REMESH_KEYS = ("t", "step", "splits", "merges", "nodes_in", "nodes_out", "active_nodes", "energy_jump",
@@ -141,9 +143,10 @@ class AdaptiveRun:
     def _check_same_adapt(self, extra, path) -> None:
         """A restart continues the run that wrote the checkpoint: its adaptive settings too."""
         now = json.loads(json.dumps(self._adapt_key()))
-        # a key the checkpoint lacks is one added since it was written: that run had its default
+        # a key the checkpoint lacks is one added since it was written: that run behaved as the
+        # key's first default, which is its default today unless _BEFORE_KEY says otherwise
         defaults = json.loads(json.dumps({k: v for k, v in type(self.adapt)().as_dict().items() if k in now}))
-        saved = {**defaults, **json.loads(str(extra.get(_STATE_PREFIX + "settings", "{}")))}
+        saved = {**defaults, **_BEFORE_KEY, **json.loads(str(extra.get(_STATE_PREFIX + "settings", "{}")))}
         diff = sorted(k for k in set(saved) | set(now) if saved.get(k) != now.get(k))
         if diff:
             raise InputError(f"restart file {path} was written with other adaptive settings: "
@@ -407,6 +410,7 @@ class AdaptiveRun:
             "adapt_coarse_membrane": self.adapt.coarse_membrane,
             "adapt_freeze_leaves": int(self.adapt.freeze_leaves),
             "adapt_freeze_after": float(self.adapt.freeze_after),
+            "adapt_transitions": self.adapt.transitions,
             "remesh_frozen_at": None if self.frozen is None else {"t": self.frozen[0], "step": self.frozen[1]},
             "settle_failures": int(self.settle_failures),
             "settle_new_node_fallbacks": int(self.new_node_fallbacks),

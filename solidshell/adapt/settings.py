@@ -14,7 +14,7 @@ from pydantic import Field, model_validator
 from ..settings import Finite, SettingsModel, parse
 from .background import MAX_LEVELS
 from .criteria import DEFAULT_CONST, DEFAULT_EPS, check_thresholds
-from .transition import TRANSITION_POLICIES
+from .transition import DEFAULT_TRANSITIONS, TRANSITION_POLICIES
 
 
 class AdaptSettings(SettingsModel):
@@ -62,11 +62,11 @@ class AdaptSettings(SettingsModel):
                 const 0.3, K = 10 after 0.45 s: 27,900 steps and DC +0.36 % against the uniform
                 mesh, where the paper's procedure at const 0.4 took 57,100 steps, +0.7 %)
     freeze_after : [s] simulated time before which ``freeze_leaves`` does not stop the passes
-    transitions : "quality" (the default: each transition patch takes its pattern's variant furthest
-                from degenerate, which on a square parent uses the centre node) or "fewest_nodes"
-                (patterns 1 and 4, one and three refined sides, take a variant without the centre
-                node wherever one is valid: one node and one element fewer per patch, at smaller
-                angles; transition.py, docs/adaptivity.md)
+    transitions : "fewest_nodes" (the default: transition patches of one and three refined sides,
+                patterns 1 and 4, take a variant without the centre node wherever one is valid, one
+                node and one element fewer each, at smaller angles) or "quality" (every patch takes
+                its pattern's variant furthest from degenerate, which on a square parent uses the
+                centre node; the only choice before 2026-12-02; transition.py, docs/adaptivity.md)
 
     The background mesh itself refuses a level count whose memory estimate exceeds half of the
     available memory (``background.estimate_background_bytes``), with the estimate.
@@ -87,7 +87,7 @@ class AdaptSettings(SettingsModel):
     coarse_membrane: Literal["scene", "ans"] = "scene"
     freeze_leaves: int = Field(0, ge=0)
     freeze_after: Finite = Field(0.0, ge=0.0)
-    transitions: Literal[TRANSITION_POLICIES] = "quality"
+    transitions: Literal[TRANSITION_POLICIES] = DEFAULT_TRANSITIONS
 
     @model_validator(mode="after")
     def _hysteresis(self):

@@ -226,6 +226,21 @@ def test_freeze_leaves_stops_the_passes_and_a_restart_stays_frozen(tmp_path):
     assert np.array_equal(res.result.U, out.result.U)
 
 
+@pytest.mark.parametrize("freeze_on, frozen", [
+    ("splits", {(3, 0): True, (5, 0): True, (6, 0): False, (3, 1): False, (0, 2): False}),
+    ("changes", {(3, 0): True, (3, 2): True, (0, 5): True, (3, 3): False, (6, 0): False})])
+def test_freeze_rule_counts_splits_or_all_changes(freeze_on, frozen):
+    """adapt.freeze_on: "splits" freezes at a pass of 1-K splits and no merge, "changes" at a pass of
+    1-K splits and merges together (K = 5 here); never before freeze_after."""
+    from types import SimpleNamespace
+
+    drv = _driver({}, **RESTART, freeze_leaves=5, freeze_after=0.5, freeze_on=freeze_on)
+    drv.integ = SimpleNamespace(state=SimpleNamespace(t=1.0))
+    assert {k: drv._freezes(*k) for k in frozen} == frozen
+    drv.integ.state.t = 0.5
+    assert not any(drv._freezes(*k) for k in frozen)
+
+
 def test_a_checkpoint_without_a_later_adapt_key_restarts_with_its_default():
     """A checkpoint written before an adapt key existed (e.g. freeze_leaves) ran with that key's
     default: it continues under the default and is refused under another value."""

@@ -266,10 +266,14 @@ class AdaptiveRun:
 
     def _freezes(self, n_split: int, n_merge_marked: int) -> bool:
         """adapt.freeze_leaves: past ``freeze_after``, a pass that would split 1-K leaves and merge
-        none stops the passes for the rest of the run (instead of being made)."""
+        none (``freeze_on = "splits"``), or change 1-K leaves in all (``"changes"``: splits plus
+        merges), stops the passes for the rest of the run (instead of being made)."""
         a = self.adapt
-        return (a.freeze_leaves > 0 and n_merge_marked == 0 and n_split <= a.freeze_leaves
-                and self.integ.state.t > a.freeze_after)
+        if a.freeze_leaves <= 0 or self.integ.state.t <= a.freeze_after:
+            return False
+        if a.freeze_on == "changes":
+            return n_split + n_merge_marked <= a.freeze_leaves
+        return n_merge_marked == 0 and n_split <= a.freeze_leaves
 
     def _held(self, parents):
         """The merges of Eq. (26) less those whose children a split made within the last
@@ -410,6 +414,7 @@ class AdaptiveRun:
             "adapt_coarse_membrane": self.adapt.coarse_membrane,
             "adapt_freeze_leaves": int(self.adapt.freeze_leaves),
             "adapt_freeze_after": float(self.adapt.freeze_after),
+            "adapt_freeze_on": self.adapt.freeze_on,
             "adapt_transitions": self.adapt.transitions,
             "remesh_frozen_at": None if self.frozen is None else {"t": self.frozen[0], "step": self.frozen[1]},
             "settle_failures": int(self.settle_failures),

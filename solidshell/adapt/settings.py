@@ -62,6 +62,10 @@ class AdaptSettings(SettingsModel):
                 const 0.3, K = 10 after 0.45 s: 27,900 steps and DC +0.36 % against the uniform
                 mesh, where the paper's procedure at const 0.4 took 57,100 steps, +0.7 %)
     freeze_after : [s] simulated time before which ``freeze_leaves`` does not stop the passes
+    freeze_on : what ``freeze_leaves`` counts in a pass: "splits" (the default: 1-K splits and no
+                merge) or "changes" (1-K splits and merges together: a mesh whose passes keep
+                splitting here and merging there, as square-on-disc's, never has a pass without a
+                merge; docs/adaptivity.md)
     transitions : "fewest_nodes" (the default: transition patches of one and three refined sides,
                 patterns 1 and 4, take a variant without the centre node wherever one is valid, one
                 node and one element fewer each, at smaller angles) or "quality" (every patch takes
@@ -87,6 +91,7 @@ class AdaptSettings(SettingsModel):
     coarse_membrane: Literal["scene", "ans"] = "scene"
     freeze_leaves: int = Field(0, ge=0)
     freeze_after: Finite = Field(0.0, ge=0.0)
+    freeze_on: Literal["splits", "changes"] = "splits"
     transitions: Literal[TRANSITION_POLICIES] = DEFAULT_TRANSITIONS
 
     @model_validator(mode="after")

@@ -70,7 +70,7 @@ class AdaptSettings(SettingsModel):
                 patterns 1 and 4, take a variant without the centre node wherever one is valid, one
                 node and one element fewer each, at smaller angles) or "quality" (every patch takes
                 its pattern's variant furthest from degenerate, which on a square parent uses the
-                centre node; the only choice before 2026-12-02; transition.py, docs/adaptivity.md)
+                centre node; transition.py, docs/adaptivity.md)
 
     The background mesh itself refuses a level count whose memory estimate exceeds half of the
     available memory (``background.estimate_background_bytes``), with the estimate.

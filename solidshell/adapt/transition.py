@@ -41,8 +41,7 @@ PATTERN_NAMES = {0: "plain", 1: "one side", 2: "two adjacent", 3: "two opposite"
 #: furthest from degenerate; "fewest_nodes" a variant without the centre node whenever one is
 #: valid (patterns 1 and 4: one node and one element fewer), the best of those
 TRANSITION_POLICIES = ("quality", "fewest_nodes")
-#: the default since 2026-12-02: on the paper's path of square-pedestal 0.50 of the uniform mesh's
-#: nodes against 0.53, the DC +0.02 % against +0.8 %, fewer remeshes (docs/adaptivity.md)
+#: fewer active nodes, and no loss in the drape coefficient, on the scenes measured (docs/adaptivity.md)
 DEFAULT_TRANSITIONS = "fewest_nodes"
 CENTRE = 8          # local index of the centre node
 

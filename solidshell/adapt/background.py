@@ -132,12 +132,9 @@ class BackgroundMesh:
         """All levels of ``mesh`` split ``levels`` times; ``curves`` places new boundary nodes on
         the true curve; ``transitions`` is the variant policy of the transition patterns
         (transition.TRANSITION_POLICIES; None: transition.DEFAULT_TRANSITIONS)."""
-        from .transition import DEFAULT_TRANSITIONS, TRANSITION_POLICIES
+        from .transition import DEFAULT_TRANSITIONS, check_policy
 
-        transitions = DEFAULT_TRANSITIONS if transitions is None else transitions
-        if transitions not in TRANSITION_POLICIES:
-            raise InputError(f"adapt transitions must be one of {', '.join(TRANSITION_POLICIES)}, "
-                             f"got {transitions!r}")
+        transitions = check_policy(DEFAULT_TRANSITIONS if transitions is None else transitions)
         if len(mesh.tris):
             raise InputError(f"adaptivity needs a level-0 mesh of quadrilaterals only; this one has "
                              f"{len(mesh.tris)} triangle(s) (only quadrilateral level-0 meshes are supported)")

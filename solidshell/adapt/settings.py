@@ -58,9 +58,7 @@ class AdaptSettings(SettingsModel):
                 split between 1 and K leaves and merge none is not made, and the mesh stays as it is
                 for the rest of the run.  Each pass kicks the sheet, and a relaxation reaches its
                 steady state only once they stop; pair it with a lower ``const``, since the late
-                splits carry the drape's last 2-3 % (docs/adaptivity.md: FIRE on square-pedestal,
-                const 0.3, K = 10 after 0.45 s: 27,900 steps and DC +0.36 % against the uniform
-                mesh, where the paper's procedure at const 0.4 took 57,100 steps, +0.7 %)
+                splits carry the drape's last few per cent (docs/adaptivity.md, the freeze tables)
     freeze_after : [s] simulated time before which ``freeze_leaves`` does not stop the passes
     freeze_on : what ``freeze_leaves`` counts in a pass: "splits" (the default: 1-K splits and no
                 merge) or "changes" (1-K splits and merges together: a mesh whose passes keep

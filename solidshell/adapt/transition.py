@@ -35,6 +35,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..errors import InputError
+
 PATTERN_NAMES = {0: "plain", 1: "one side", 2: "two adjacent", 3: "two opposite", 4: "three", 5: "four"}
 
 #: how a leaf picks among its pattern's variants (``adapt.transitions``): "quality" the variant
@@ -44,6 +46,13 @@ TRANSITION_POLICIES = ("quality", "fewest_nodes")
 #: fewer active nodes, and no loss in the drape coefficient, on the scenes measured (docs/adaptivity.md)
 DEFAULT_TRANSITIONS = "fewest_nodes"
 CENTRE = 8          # local index of the centre node
+
+
+def check_policy(policy: str) -> str:
+    """``policy`` when it is one of TRANSITION_POLICIES, else a one-line InputError."""
+    if policy not in TRANSITION_POLICIES:
+        raise InputError(f"adapt transitions must be one of {', '.join(TRANSITION_POLICIES)}, got {policy!r}")
+    return policy
 
 # variants of each canonical pattern: (quads, triangles); the first is the one drawn in the docs
 # and the one chosen on a square parent, the others serve distorted parents (see choose_variant)
@@ -116,8 +125,7 @@ def choose_variant(mask: int, pts: np.ndarray, policy: str = DEFAULT_TRANSITIONS
     1e-6 deg) go to the lower index, so a square parent always gets the first variant.  Policy
     "fewest_nodes": the same choice among the variants that leave the centre node out (patterns 1
     and 4 have them), and among all variants only where none of those is valid."""
-    if policy not in TRANSITION_POLICIES:
-        raise ValueError(f"transition policy {policy!r} is not one of {TRANSITION_POLICIES}")
+    check_policy(policy)
     variants = TABLE[int(mask)][1]
     if len(variants) == 1:
         return np.zeros(len(pts), dtype=np.int64)

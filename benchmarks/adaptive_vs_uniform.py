@@ -4,8 +4,9 @@ measured under the same machine load.
 
     python benchmarks/adaptive_vs_uniform.py [--cases square-pedestal ...] [--out benchmarks/out]
 
-Both runs use the same relaxation (kinetic damping, director masses x1e4 by default; any
-``--set solver.relax.KEY=VALUE`` applies to both).  Per case: the uniform mesh's node count, the
+Both runs use the same relaxation (kinetic damping, director masses x1e4 by default, or the
+relaxation of ``--set solver.relax.preset=NAME`` alone; any ``--set solver.relax.KEY=VALUE``
+applies to both).  Per case: the uniform mesh's node count, the
 adaptive run's maximum active nodes and their ratio (the paper: "only half"), drape coefficient,
 fold count, the most interpenetrated nodes at any sample, steps, wall time, the remeshing share and
 the energy balance.  Writes ``adaptive_vs_uniform.json`` / ``.md`` (rewritten after every run) and
@@ -92,7 +93,10 @@ def main(argv=None):
     out = Path(args.out)
     png = out / "adaptive_png"
     png.mkdir(parents=True, exist_ok=True)
-    over = {**RELAX, **parse_overrides(args.set)}
+    given = parse_overrides(args.set)
+    # keys given alongside a preset win over it: with RELAX beside a preset, "--set
+    # solver.relax.preset=paper" would keep kinetic damping and director masses (docs/adaptivity.md)
+    over = {**({} if "solver.relax.preset" in given else RELAX), **given}
     jpath = out / f"{args.tag}.json"
     results = json.loads(jpath.read_text()) if jpath.exists() else []
     for scene in args.cases:

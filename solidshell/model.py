@@ -398,41 +398,28 @@ class Model:
         return self.force_and_tangent(U)[1]
 
     # ------------------------------------------------------------- mass
-    def nodal_areas(self, weights=None) -> np.ndarray:
+    def nodal_areas(self) -> np.ndarray:
         """(N,) mid-surface area share of each node by the trapezoidal rule [length^2] (Section 4).
-        ``weights``: (n_elements,) factors on each element's shares (quads first, then triangles,
-        the mesh's order), for a selectively scaled mass.  The unweighted areas are computed once
-        per model (the gravity loads and the lumped mass both ask; every remesh of an adaptive run
-        builds a new model)."""
-        if weights is None and self._areas is not None:
-            return self._areas.copy()
-        A = np.zeros(self.n_nodes)
-        Xo, Xn = self.mesh.nodes, self.mesh.directors
-        off = 0
-        for b in self.blocks:
-            a = b.module.nodal_areas(Xo[b.conn], Xn[b.conn])
-            if weights is not None:
-                a = a * np.asarray(weights, float)[off:off + len(b.conn), None]
-            off += len(b.conn)
-            np.add.at(A, b.conn.ravel(), a.ravel())
-        if weights is None:
+        Computed once per model (the gravity loads and the lumped mass both ask; every remesh of an
+        adaptive run builds a new model)."""
+        if self._areas is None:
+            A = np.zeros(self.n_nodes)
+            Xo, Xn = self.mesh.nodes, self.mesh.directors
+            for b in self.blocks:
+                np.add.at(A, b.conn.ravel(), b.module.nodal_areas(Xo[b.conn], Xn[b.conn]).ravel())
             self._areas = A
-        return A.copy()
+        return self._areas.copy()
 
-    def lumped_mass(self, weights=None) -> np.ndarray:
+    def lumped_mass(self) -> np.ndarray:
         """(N,6) diagonal mass by the trapezoidal rule in-plane and through the thickness (Section 4):
-        mu*A_i on the U_o dofs and mu*h^2/4*A_i on the U_n dofs [mass].  ``weights``: (n_elements,)
-        factors on each element's mass (selective mass scaling, Problem.mass_weights)."""
-        if weights is not None:
-            return self._mass_of(self.nodal_areas(weights))
+        mu*A_i on the U_o dofs and mu*h^2/4*A_i on the U_n dofs [mass]."""
         if self._mass is None:
-            self._mass = self._mass_of(self.nodal_areas())
+            A = self.nodal_areas()
+            mu = self.material.mass_per_area
+            h = self.material.thickness
+            self._mass = np.column_stack([np.repeat(mu * A[:, None], 3, 1),
+                                          np.repeat(mu * h * h / 4.0 * A[:, None], 3, 1)])
         return self._mass.copy()
-
-    def _mass_of(self, A) -> np.ndarray:
-        mu = self.material.mass_per_area
-        h = self.material.thickness
-        return np.column_stack([np.repeat(mu * A[:, None], 3, 1), np.repeat(mu * h * h / 4.0 * A[:, None], 3, 1)])
 
     # ------------------------------------------------------------- diagnostics
     def bending_strain(self, U) -> np.ndarray:

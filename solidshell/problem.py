@@ -22,9 +22,6 @@ class Problem:
     prescribed : (N,6) prescribed values of the fixed dofs [length] (default zero: clamped)
     contact    : rigid contact bodies (solidshell.contact); empty means no contact search at all
     name       : label used in messages
-    mass_weights : (n_elements,) factors >= 1 on each element's share of the lumped mass (quads first,
-                 then triangles), selective mass scaling for a relaxation (adapt.step_level); None: 1.
-                 The loads (the weight) stay as they are
     """
 
     model: Any
@@ -33,7 +30,6 @@ class Problem:
     prescribed: np.ndarray | None = None
     contact: list = field(default_factory=list)
     name: str = "problem"
-    mass_weights: np.ndarray | None = None
 
     def __post_init__(self):
         n = self.model.n_nodes
@@ -43,11 +39,6 @@ class Problem:
             self.prescribed = np.zeros((n, 6))
         else:
             self.prescribed = np.asarray(self.prescribed, dtype=float).reshape(n, 6)
-        if self.mass_weights is not None:
-            w = self.mass_weights = np.asarray(self.mass_weights, dtype=float).ravel()
-            n_el = getattr(getattr(self.model, "mesh", None), "n_elements", len(w))
-            if len(w) != n_el or not np.all(np.isfinite(w)) or np.any(w <= 0.0):
-                raise ValueError(f"mass_weights must be {n_el} finite positive factors, one per element")
 
     @property
     def free(self) -> np.ndarray:

@@ -620,9 +620,6 @@ def adapt_settings(scene: Scene, kind: str):
     if kind not in ("explicit", "relax"):
         raise InputError(f"adaptive subdivision runs inside a dynamic run (--solver explicit or relax, "
                          f"paper §5.5); the {kind} solver is not adaptive")
-    if adapt.step_level is not None and kind != "relax":
-        raise InputError(f"{scene.source}: adapt.step_level scales masses, which changes the motion: it is for "
-                         f"relaxation runs (--solver relax) only, not {kind}")
     return adapt
 
 

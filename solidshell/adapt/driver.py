@@ -30,7 +30,6 @@ from ..problem import SolveResult, no_progress
 from .background import BackgroundMesh
 from .criteria import leaf_bending_strain, level_side_lengths, mark
 from .forest import ActiveMesh, AdaptiveMesh
-from .massscale import level_length, step_weights
 from .settings import AdaptSettings
 from .settle import DirectorSettler
 from .transfer import to_new_mesh
@@ -80,7 +79,6 @@ class AdaptiveRun:
                                              adapt.transitions)
         self.L = level_side_lengths(self.bg)
         self._h_fine = float(np.min(self.L[-1]))   # smallest finest-level side [length]
-        self._h_step = None if adapt.step_level is None else level_length(self.bg, adapt.step_level)
         self.forest = AdaptiveMesh(self.bg)
         self.segments: list[Segment] = []
         self.history = []          # (t, active nodes, elements) after every mesh change and at the start
@@ -99,17 +97,11 @@ class AdaptiveRun:
     # ------------------------------------------------------------------ start / restart
     def _problem(self, act: ActiveMesh):
         """The scene's problem on an active mesh; with ``coarse_membrane = "ans"`` the quads below
-        the finest level (transition patches included) get the assumed membrane strains; with
-        ``step_level`` the elements finer than that level get its step by their masses
-        (massscale.py)."""
+        the finest level (transition patches included) get the assumed membrane strains."""
         if self.adapt.coarse_membrane == "scene":
-            problem = self.make_problem(act.mesh)
-        else:
-            nq = len(act.mesh.quads)
-            problem = self.make_problem(act.mesh, coarse_quads=act.elem_leaf[:nq, 0] < self.bg.levels)
-        if self._h_step is not None:
-            problem.mass_weights = step_weights(act.mesh, self._h_step)
-        return problem
+            return self.make_problem(act.mesh)
+        nq = len(act.mesh.quads)
+        return self.make_problem(act.mesh, coarse_quads=act.elem_leaf[:nq, 0] < self.bg.levels)
 
     def start(self) -> None:
         act = self.forest.active_mesh()
@@ -424,7 +416,6 @@ class AdaptiveRun:
             "adapt_freeze_after": float(self.adapt.freeze_after),
             "adapt_freeze_on": self.adapt.freeze_on,
             "adapt_transitions": self.adapt.transitions,
-            "adapt_step_level": self.adapt.step_level,
             "remesh_frozen_at": None if self.frozen is None else {"t": self.frozen[0], "step": self.frozen[1]},
             "settle_failures": int(self.settle_failures),
             "settle_new_node_fallbacks": int(self.new_node_fallbacks),

@@ -69,14 +69,6 @@ class AdaptSettings(SettingsModel):
                 node and one element fewer each, at smaller angles) or "quality" (every patch takes
                 its pattern's variant furthest from degenerate, which on a square parent uses the
                 centre node; transition.py, docs/adaptivity.md)
-    step_level : None (the default) or k < levels: selective mass scaling in a relaxation.  Every
-                element smaller than the smallest quad of level k (size: area over longest side)
-                gets its lumped mass scaled by (that size / its size)^2, so the critical step is
-                about a uniform level-k mesh's, not the finest level's.  The paper's premise (§5:
-                the step of its solid-shell elements is set by the thickness, not the element's
-                size) holds for the mesh's finer levels then too.  Relaxation runs only: the added
-                mass changes the path to the static state, not the state's equations; refused for
-                explicit dynamics, whose motion it would change
 
     The background mesh itself refuses a level count whose memory estimate exceeds half of the
     available memory (``background.estimate_background_bytes``), with the estimate.
@@ -99,14 +91,10 @@ class AdaptSettings(SettingsModel):
     freeze_after: Finite = Field(0.0, ge=0.0)
     freeze_on: Literal["splits", "changes"] = "splits"
     transitions: Literal[TRANSITION_POLICIES] = DEFAULT_TRANSITIONS
-    step_level: int | None = Field(None, ge=0)
 
     @model_validator(mode="after")
     def _hysteresis(self):
         check_thresholds(self.const, self.eps)       # the criteria's own rule: 0 < eps < const
-        if self.step_level is not None and self.step_level >= self.levels:
-            raise ValueError(f"step_level {self.step_level} must be below levels ({self.levels}): "
-                             f"it names the level whose critical step the finer ones keep")
         return self
 
 

@@ -27,7 +27,7 @@ from numba import get_num_threads, njit, prange
 from ...assembly import scatter_add_vec
 from ...elements import core, lanes, lanes_ans, lanes_tri, quad4, tri3
 from ...elements.core import _FM
-from .kernels import coef, dof_power
+from .kernels import dof_power
 
 
 CHUNKS = 4
@@ -130,7 +130,7 @@ def update(F, P, C, has_C, R, Dn1, D, Dp, cF, cD, cDp, fixed, presc, Mf, inv2dt)
         if has_C:
             r += C[i]
         R[i] = r
-        x = cF[i] * r + coef(cD, i) * D[i] + coef(cDp, i) * Dp[i]
+        x = cF[i] * r + cD * D[i] + cDp * Dp[i]
         if fixed[i]:
             x = presc[i]
         Dn1[i] = x

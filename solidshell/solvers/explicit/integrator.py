@@ -34,11 +34,10 @@ STATUSES = ("running", "done", "steady", "diverged", "nonfinite", "failed", "wal
 """The status words of advance() and info["status"]."""
 
 
-def scaled_mass(model, scaling: float = 1.0, mode: str = "uniform", weights=None) -> np.ndarray:
+def scaled_mass(model, scaling: float = 1.0, mode: str = "uniform") -> np.ndarray:
     """(N,6) lumped mass after mass scaling (Section 4.2): "uniform" multiplies every mass by
-    ``scaling``; "director" only the U_n masses.  ``weights``: per-element factors on top
-    (Problem.mass_weights, selective scaling)."""
-    M = np.asarray(model.lumped_mass() if weights is None else model.lumped_mass(weights), dtype=float).copy()
+    ``scaling``; "director" only the U_n masses."""
+    M = np.asarray(model.lumped_mass(), dtype=float).copy()
     if mode == "uniform":
         M *= scaling
     elif mode == "director":
@@ -84,8 +83,7 @@ class Integrator:
         self.damper_rewrites = bool(getattr(self.damper, "rewrites_step", False))
         self.damper_power = bool(getattr(self.damper, "wants_power", False))
         self.step_power = None   # (P, v.M.v, R.M^-1.R) of this step when the fused pass formed them
-        weights = getattr(problem, "mass_weights", None)
-        self.M = M = scaled_mass(self.model, s.mass_scaling, s.mass_scaling_mode, weights)
+        self.M = M = scaled_mass(self.model, s.mass_scaling, s.mass_scaling_mode)
         self.free_mask = ~problem.fixed
         if np.any(M[self.free_mask] <= 0.0):
             raise InputError(f"{int(np.sum(M[self.free_mask] <= 0))} free dof(s) have zero mass: the explicit "
@@ -110,7 +108,6 @@ class Integrator:
         self.Mf = M.ravel()
         self.invM = np.zeros_like(self.Mf)
         self.invM[self.free_idx] = 1.0 / self.Mf[self.free_idx]
-        self._damped_by_unweighted_mass(weights)
         self.Pn = norm(self.P[self.free_idx])
         self.alpha = self.damper.alpha0(self)   # the viscous alpha [1/s] of Eq. (23) at the start
         # the preallocated element/node passes for the library's Model (fused.py), also the force
@@ -120,34 +117,6 @@ class Integrator:
         self.force_fn = self._fused_force if self.fused is not None else self.model.internal_force
         shaping = {k: v for k, v in s.as_dict().items() if k not in RESTART_NEUTRAL}
         self.fingerprint = checkpoint.fingerprint(problem, shaping, M)
-
-    def _damped_by_unweighted_mass(self, weights) -> None:
-        """Selective mass scaling (Problem.mass_weights) adds inertia, not damping: C = alpha M_0 with
-        M_0 the mass without the weights, so a weighted dof has alpha M_0 / M of Eq. (23)'s alpha and
-        the slow, overdamped creep of a relaxation (rate K / C) is the unweighted mesh's.
-        ``damp_ratio``: 1.0, or M_0 / M per dof; ``damp_idx``, ``damp_dM``: the weighted free dofs
-        and their M_0 - M, for the dissipation's books."""
-        self.damp_ratio, self.damp_idx, self.damp_dM = 1.0, None, None
-        if weights is None:
-            return
-        M0 = scaled_mass(self.model, self.s.mass_scaling, self.s.mass_scaling_mode).ravel()
-        ratio = np.ones_like(M0)
-        ratio[self.free_idx] = M0[self.free_idx] / self.Mf[self.free_idx]
-        self.damp_ratio = ratio
-        self.damp_idx = self.free_idx[ratio[self.free_idx] < 1.0]
-        self.damp_dM = (M0 - self.Mf)[self.damp_idx]
-
-    def _dof_alpha(self):
-        """Eq. (23)'s alpha [1/s]: one number, or per dof with weighted masses (the damper's alpha
-        times M_0 / M)."""
-        return self.alpha if self.damp_idx is None or self.alpha == 0.0 else self.alpha * self.damp_ratio
-
-    def _damped_vMv(self, vMv, Dn1, Dp) -> float:
-        """v_n.(C / alpha).v_n of a step, C the damping matrix: v.M.v less the weights' extra mass."""
-        if self.damp_idx is None:
-            return vMv
-        w = (Dn1[self.damp_idx] - Dp[self.damp_idx]) * (0.5 / self.state.dt)
-        return vMv + float(np.add.reduce(self.damp_dM * w * w))
 
     def _fused_force(self, U):
         """Internal force (6N,) at U (N,6) by the fused lane kernel (a new array)."""
@@ -188,7 +157,7 @@ class Integrator:
         anchors0 = np.full((self.n_fric, self.N, 3), np.nan)
         C0, Ec0, _ = self.forces.contact_energy(D0, anchors0)
         Ek0 = 0.5 * dot(self.Mf * V0, V0)
-        A0 = self.invM * (self.P - F0 + C0) - self._dof_alpha() * V0
+        A0 = self.invM * (self.P - F0 + C0) - self.alpha * V0
         A0[self.fixed_idx] = 0.0
         Dm = D0 - dt * V0 + 0.5 * dt * dt * A0
         Dm[self.fixed_idx] = self.presc
@@ -268,7 +237,7 @@ class Integrator:
 
     def _set_step(self, dt) -> None:
         self.state.dt = dt
-        self.cF, self.cD, self.cDp = coefficients(self.invM, dt, self._dof_alpha())
+        self.cF, self.cD, self.cDp = coefficients(self.invM, dt, self.alpha)
         if hasattr(self, "snaps"):
             self.end_step, self.snap_steps = self._schedule()
 
@@ -412,8 +381,7 @@ class Integrator:
     def _work(self, n, vMv, f, Dn1, Dp) -> None:
         """Damping dissipation (trapezoidal in time) and contact work of step n."""
         st = self.state
-        self._vCv = vCv = self._damped_vMv(vMv, Dn1, Dp)
-        dd = self.alpha * st.dt * vCv
+        dd = self.alpha * st.dt * vMv
         if n == 0 and self.fresh:
             dd *= 0.5  # trapezoidal rule: the first and last samples weigh half
         st.damp_sum += dd
@@ -427,7 +395,7 @@ class Integrator:
         st.ekin_max = max(st.ekin_max, Ek)
         Wext = ledger.external_work(st, self.P, D)
         # the trapezoidal sum up to t_n: the n-th term weighs half (at n = 0 too: E_damp(0) = 0)
-        Edamp = st.damp_sum - 0.5 * self.alpha * st.dt * self._vCv
+        Edamp = st.damp_sum - 0.5 * self.alpha * st.dt * vMv
         Ecn = f["Ec"] if self.bodies else 0.0
         if self.quasi:
             n_int, qf = self.forces.interp_and_branches(D)

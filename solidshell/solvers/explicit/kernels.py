@@ -10,8 +10,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, types
-from numba.extending import overload
+from numba import njit
 
 
 def dot(a, b) -> float:
@@ -24,20 +23,6 @@ def norm(a) -> float:
     return math.sqrt(float(np.add.reduce(a * a)))
 
 
-def coef(c, i):
-    """Eq. (23)'s coefficient of dof i: ``c`` itself when one number serves every dof, ``c[i]`` when
-    it is per dof (damping by unweighted masses, Problem.mass_weights).  Compiled per type, so
-    the one-number step runs the same code as before the per-dof form existed."""
-    return c if np.ndim(c) == 0 else c[i]
-
-
-@overload(coef)
-def _coef(c, i):
-    if isinstance(c, types.Array):
-        return lambda c, i: c[i]
-    return lambda c, i: c
-
-
 @njit(cache=True)
 def central_step(Dn1, D, Dp, R, cF, cD, cDp, fixed_idx, presc, Mf, inv2dt):
     """Eq. (23) for every dof, D_n+1 = cF R + cD D_n + cDp D_n-1 (the same operation order as the
@@ -46,7 +31,7 @@ def central_step(Dn1, D, Dp, R, cF, cD, cDp, fixed_idx, presc, Mf, inv2dt):
     per step (25 % of a 1600-quad step once the force kernel got fast)."""
     n = D.size
     for i in range(n):
-        Dn1[i] = cF[i] * R[i] + coef(cD, i) * D[i] + coef(cDp, i) * Dp[i]
+        Dn1[i] = cF[i] * R[i] + cD * D[i] + cDp * Dp[i]
     for k in range(fixed_idx.size):
         Dn1[fixed_idx[k]] = presc[k]
     vMv = 0.0
@@ -70,10 +55,9 @@ def dof_power(r, d, dp, invm, m, inv_dt, half_dt):
     return r * v, m * v * v, invm * r * r
 
 
-def coefficients(invM, dt: float, alpha):
+def coefficients(invM, dt: float, alpha: float):
     """(cF, cD, cDp) of Eq. (23) with lumped inverse mass invM (zero on fixed dofs), step dt [s] and
-    Rayleigh alpha [1/s], one number or one per dof (then cD, cDp are per dof too):
-    D_n+1 = cF (P - F + C) + cD D_n + cDp D_n-1."""
+    Rayleigh alpha [1/s]: D_n+1 = cF (P - F + C) + cD D_n + cDp D_n-1."""
     lhs = 1.0 / dt**2 + alpha / (2.0 * dt)
     return (invM / lhs,                                   # multiplies (P - F + C)
             (2.0 / dt**2) / lhs,                          # multiplies D_n

@@ -354,7 +354,7 @@ def analyse(scene: Scene, mesh, U, model=None) -> dict:
     """Drape measures (analysis.drape_summary: drape coefficient, folds, outline) of the state U
     (N,6) on ``mesh`` for scenes with a pedestal or a sphere; the strip's tip position; with
     ``model``, the interpenetrated nodes (Section 4.3) for all.  The measures a run's summary
-    holds, for a state computed elsewhere (verification/lsp_states.py).  ``scene``: a Scene or
+    holds, for a state computed elsewhere (verification/drape_states.py).  ``scene``: a Scene or
     anything scenes.load takes."""
     scene = load(scene)
     out = {}

@@ -518,10 +518,10 @@ def _same_leaves(a: dict, b: dict) -> bool:
 def _outside_bodies(problem, X, D, Dp, idx) -> int:
     """Move the nodes ``idx`` that lie inside a contact body (closer to it than its offset) onto its
     offset surface, along its normal, on both time levels alike (their velocity kept), in place;
-    returns how many moved.  Contact acts at the nodes only, so a body can pass through a large
-    element between its nodes (a level-0 quad of the sphere scene, 1.9 cm wide, draped over the
-    5 cm sphere), and the nodes inserted there land inside it: at 1.2 cm deep, the penalty force
-    of the first step booked 1273 gf cm and the run went non-finite (docs/adaptivity.md)."""
+    returns how many moved.  Contact acts at the nodes only, so a body can stand through a large
+    element between its nodes, and the nodes a split inserts there land inside it, where the first
+    step's penalty forces throw them out (docs/adaptivity.md, "Inserted nodes inside a contact
+    body")."""
     if not len(idx) or not problem.contact:
         return 0
     U, Up = D.reshape(-1, 6), Dp.reshape(-1, 6)

@@ -193,6 +193,22 @@ def test_restart_of_an_adaptive_run_is_bit_for_bit(tmp_path):
         _driver({"restart": str(ck), "alpha": 1.0}, **RESTART).run()
 
 
+def test_a_checkpoint_carries_the_remeshing_counters(tmp_path):
+    """The summary's settle_failures, settle_new_node_fallbacks and remesh_nodes_pushed_out count over
+    the whole run, so a restart continues them from the checkpoint."""
+    part = _driver({}, **RESTART)
+    part.start()
+    part.integ.advance(part.adapt.every)
+    part.settle_failures, part.new_node_fallbacks, part.pushed_out = 1, 2, 3
+    ck = tmp_path / "counters.npz"
+    checkpoint.save(ck, part.integ.state, part._checkpoint_arrays())
+    again = _driver({"restart": str(ck)}, **RESTART)
+    again.restart(ck)
+    assert again._counters() == (1, 2, 3)
+    info = again.summary_info()
+    assert (info["settle_failures"], info["settle_new_node_fallbacks"], info["remesh_nodes_pushed_out"]) == (1, 2, 3)
+
+
 def test_freeze_leaves_stops_the_passes_and_a_restart_stays_frozen(tmp_path):
     """adapt.freeze_leaves: past freeze_after, the first pass that would change the mesh (K = 10**6:
     any number of leaves) is not made, and no pass follows.  With freeze_after just past the first

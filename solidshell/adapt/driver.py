@@ -130,6 +130,8 @@ class AdaptiveRun:
         phases = np.asarray(extra.get(_STATE_PREFIX + "phase_seconds", np.zeros(len(_PHASES))), dtype=float)
         self.phase_seconds = dict(zip(_PHASES, map(float, phases)))
         frozen = np.asarray(extra.get(_STATE_PREFIX + "frozen", np.zeros(0)), dtype=float)
+        counters = np.asarray(extra.get(_STATE_PREFIX + "counters", np.zeros(3)), dtype=np.int64)
+        self.settle_failures, self.new_node_fallbacks, self.pushed_out = map(int, counters)
         self.frozen = (float(frozen[0]), int(frozen[1])) if frozen.size == 2 else None
         self.forest = AdaptiveMesh.from_state_arrays(self.bg, self.segments[-1].leaves)
         act = self.segments[-1].active
@@ -161,6 +163,10 @@ class AdaptiveRun:
             self.history.append((float(st.t), int(act.mesh.n_nodes), int(act.mesh.n_elements)))
         integ.checkpoint_extra = self._checkpoint_arrays
 
+    def _counters(self):
+        """The run's remeshing counters a checkpoint carries (the summary's settle and push-out counts)."""
+        return self.settle_failures, self.new_node_fallbacks, self.pushed_out
+
     def _checkpoint_arrays(self) -> dict:
         """The segments that kept frames lie on (and the current one), each with its leaf state."""
         frames = self.integ.state
@@ -175,6 +181,7 @@ class AdaptiveRun:
                _STATE_PREFIX + "phase_seconds": np.array([self.phase_seconds[k] for k in _PHASES]),
                _STATE_PREFIX + "settings": np.asarray(json.dumps(self._adapt_key(), sort_keys=True)),
                _STATE_PREFIX + "frozen": np.array(self.frozen if self.frozen is not None else [], dtype=float),
+               _STATE_PREFIX + "counters": np.array(self._counters(), dtype=np.int64),
                **{f"{_STATE_PREFIX}born_{l}": b.copy() for l, b in enumerate(self.born)}}
         for j, i in enumerate(keep):
             out.update({f"{_STATE_PREFIX}s{j}_{k}": v for k, v in self.segments[i].leaves.items()})

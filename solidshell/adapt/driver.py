@@ -373,6 +373,8 @@ class AdaptiveRun:
         def both(nodes=None):
             settler = DirectorSettler(problem.model, problem.loads, problem.fixed, nodes, region)
             D_s, rep = settler(D, max_iter=_SETTLE_ITER_NEW if nodes is not None else _SETTLE_ITER)
+            if nodes is not None:   # the directors' rate only: the new nodes keep their interpolated step
+                settler = DirectorSettler(problem.model, problem.loads, problem.fixed, None, region)
             return D_s, D_s - settler.quasi_static_step(D_s, D - Dp), int(not rep.converged)
 
         if self._settle_new_nodes and len(inserted):

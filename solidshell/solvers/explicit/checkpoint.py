@@ -19,7 +19,7 @@ from ...errors import InputError
 from ...io import atomic_path
 from .state import FIELDS, State
 
-VERSION = 2
+VERSION = 3
 _EXTRA = "extra_"
 _FP = "fp_"
 

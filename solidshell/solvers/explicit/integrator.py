@@ -168,7 +168,7 @@ class Integrator:
             dt_initial=dt, mode=(lim.mode if lim.mode is not None else np.zeros(6 * self.N)), rechecks=0,
             reductions=0, dtc_min=lim.dt_crit, D0=D0, Ek0=Ek0, Es0=Es0, Ec0=Ec0, E_init=Ek0 + Es0,
             closed_change=0.0, w_ext_closed=0.0, remesh_energy_jump=0.0, segments=0, close_E=Ek0 + Es0 + Ec0,
-            close_W=0.0, damp_sum=0.0, ekin_max=Ek0, balance_err=0.0, contact_work=0.0, w_int=0.0,
+            close_W=0.0, close_PD=dot(self.P, D0), damp_sum=0.0, ekin_max=Ek0, balance_err=0.0, contact_work=0.0, w_int=0.0,
             w_int_prev=0.0, es_prev=Es0, qflags=qf0, q_jump=0.0, q_samples=0, q_corners=0,
             q_F=(F0.copy() if quasi else np.zeros(0)), q_D=(D0.copy() if quasi else np.zeros(0)),
             anchors=anchors0, fric_work=0.0, max_slip=0, max_interp=mi0, t_max_interp=0.0, max_contact=0,
@@ -516,14 +516,16 @@ class Integrator:
             self._read_books()
 
     def _read_books(self) -> None:
-        """The energies now (close_E = E_kin + E_strain + E_contact) and the run's external work, the
-        end readings of the ledger segment should the next advance happen on another mesh."""
+        """The energies now (close_E = E_kin + E_strain + E_contact), the run's external work and the
+        loads' P.D (minus their potential), the end readings of the ledger segment should the next
+        advance happen on another mesh."""
         try:
             e = self.energies()
         except (FloatingPointError, ZeroDivisionError, SolverError, ValueError):
             return
         self.state.close_E = e["kinetic_central"] + e["strain"] + e["contact"]
         self.state.close_W = e["external_work"]
+        self.state.close_PD = dot(self.P, self.state.D)
 
     def energies(self) -> dict:
         """Energies at the current state D_n: kinetic 1/2 v.M.v with the half-step velocity
@@ -645,7 +647,7 @@ class Integrator:
         ledger.close_segment(st)
         st.D0 = st.D.copy()   # the new segment's external work starts here
         e = self.energies()
-        ledger.open_segment(st, e["kinetic_central"], e["strain"], e["contact"], st.D)
+        ledger.open_segment(st, e["kinetic_central"], e["strain"], e["contact"], st.D, dot(self.P, st.D))
         F, Es = self.forces.internal(st.D, True)
         st.es_prev, st.w_int_prev = Es, st.w_int
         st.q_F = F.copy() if self.quasi else np.zeros(0)

@@ -12,7 +12,7 @@ scale = max(|W_ext|, max E_kin, initial energy, |dE_strain|, floor).  A run is a
 *segments* (one per mesh): the references (subscript 0, and D_0 of W_ext) belong to the current
 segment; C (``closed_change``) is the energy change E_end - E_0 of the closed segments and W_ext
 includes their work, so the balance reads the whole run across a mesh change, whose own energy change
-(E_after - E_before) is booked apart as ``remesh_energy_jump``.
+(E_after - E_before, with the loads' potential -P.D) is booked apart as ``remesh_energy_jump``.
 """
 
 from __future__ import annotations
@@ -68,10 +68,13 @@ def close_segment(st) -> None:
     st.w_ext_closed = st.close_W
 
 
-def open_segment(st, Ek0, Es0, Ec0, D0) -> None:
-    """Start a segment at the current state: references at it, the energy jump since the last
-    reading (close_E, the same state on the previous mesh) booked as a remesh jump."""
+def open_segment(st, Ek0, Es0, Ec0, D0, PD) -> None:
+    """Start a segment at the current state: references at it, and the change of the mechanical
+    energy E_kin + E_strain + E_contact - P.D since the last reading (close_E and close_PD, the same
+    state on the previous mesh) booked as a remesh jump.  The loads' potential -P.D is in it because
+    a remesh moves nodes (a settled new node sags under its load) and lumps the loads anew; the
+    run's W_ext does not see either (it sums P.dD within segments)."""
     E_after = Ek0 + Es0 + Ec0
-    st.remesh_energy_jump += E_after - st.close_E
+    st.remesh_energy_jump += (E_after - st.close_E) - (PD - st.close_PD)
     st.Ek0, st.Es0, st.Ec0, st.D0 = Ek0, Es0, Ec0, D0.copy()
     st.segments += 1

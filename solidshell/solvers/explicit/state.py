@@ -22,6 +22,7 @@ FIELDS = {
     # energy ledger: the current segment's references, totals carried across segments
     "D0": "a", "Ek0": "f", "Es0": "f", "Ec0": "f", "E_init": "f", "closed_change": "f",
     "w_ext_closed": "f", "remesh_energy_jump": "f", "segments": "i", "close_E": "f", "close_W": "f",
+    "close_PD": "f",
     "damp_sum": "f", "ekin_max": "f", "balance_err": "f", "contact_work": "f",
     # Eq. (24) jumps (zero / empty unless thickness_strain = "quasi")
     "w_int": "f", "w_int_prev": "f", "es_prev": "f", "qflags": "a", "q_jump": "f", "q_samples": "i",

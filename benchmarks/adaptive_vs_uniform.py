@@ -10,7 +10,7 @@ applies to both).  Per case: the uniform mesh's node count, the
 adaptive run's maximum active nodes and their ratio (the paper: "only half"), drape coefficient,
 fold count, the most interpenetrated nodes at any sample, steps, wall time, the remeshing share and
 the energy balance.  Writes ``adaptive_vs_uniform.json`` / ``.md`` (rewritten after every run) and
-copies each run's pictures to ``<out>/adaptive_png/``; run folders go to ``runs/bench-adaptive/``.
+copies each run's pictures to ``<out>/adaptive_png/``; run folders go to ``runs/bench-adaptive/<tag>/``.
 """
 
 from __future__ import annotations
@@ -106,7 +106,7 @@ def main(argv=None):
         for variant, mesh, adaptive in (("uniform", uni, False), ("adaptive", lvl0, True)):
             if variant == "uniform" and args.skip_uniform:
                 continue
-            folder = Path("runs/bench-adaptive") / f"{scene}-{variant}"
+            folder = Path("runs/bench-adaptive") / args.tag / f"{scene}-{variant}"   # runs side by side apart
             rec[variant] = one(scene, mesh, adaptive, over, folder, args.max_wall)
             for p in folder.glob("*.png"):
                 shutil.copy(p, png / f"{scene}-{variant}-{p.name}")

@@ -1,8 +1,10 @@
 """Pictures for docs/adaptivity.md: the hybrid macro-transition patterns (Section 5.3, Fig. 16b)
-and an adapted mesh holding all of them.
+and an adapted mesh holding all of them; and frames of adaptive runs' series side by side.
 
     PYTHONPATH=. python docs/adaptivity_figures.py      -> docs/img/transition_patterns.png,
                                                            docs/img/adapted_mesh.png
+    PYTHONPATH=. python docs/adaptivity_figures.py --series OUT.png "LABEL=RUN_DIR" ... --times 1.1 1.3 2
+                                                        -> OUT.png: a row per run, a column per time
 """
 
 from pathlib import Path
@@ -96,7 +98,43 @@ def adapted():
     fig.savefig(OUT / "adapted_mesh.png", dpi=110)
 
 
+def series_frames(out: Path, runs: dict, times) -> None:
+    """The frames of each run folder's ``series.pvd`` nearest to ``times`` [s]: a row per run (label ->
+    folder), the deformed sheet seen from above with its mesh lines, the node count in each title."""
+    import re
+
+    import meshio
+    from matplotlib.collections import PolyCollection
+
+    fig, axes = plt.subplots(len(runs), len(times), figsize=(2.6 * len(times), 2.8 * len(runs)), squeeze=False)
+    for row, (label, folder) in zip(axes, runs.items()):
+        folder = Path(folder)
+        steps = re.findall(r'timestep="([^"]+)"[^>]*file="([^"]+)"', (folder / "series.pvd").read_text())
+        ts = np.array([float(t) for t, _ in steps])
+        for ax, t in zip(row, times):
+            k = int(np.argmin(abs(ts - t)))
+            m = meshio.read(folder / steps[k][1])
+            X = m.points + m.point_data["displacement"]
+            polys = [X[c, :2] for block in m.cells for c in block.data]
+            ax.add_collection(PolyCollection(polys, facecolor="#dbe6f5", edgecolor="k", linewidths=0.12))
+            ax.autoscale_view()
+            ax.set_aspect("equal")
+            ax.axis("off")
+            ax.set_title(f"{label}\nt = {ts[k]:.2f} s, {len(X)} nodes", fontsize=7.5)
+    fig.tight_layout()
+    fig.savefig(out, dpi=110)
+
+
 if __name__ == "__main__":
-    OUT.mkdir(exist_ok=True)
-    patterns()
-    adapted()
+    import argparse
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--series", metavar="OUT.png", help="frames of run folders instead (LABEL=DIR ...)")
+    ap.add_argument("runs", nargs="*", help="LABEL=RUN_DIR, with --series")
+    ap.add_argument("--times", type=float, nargs="+", default=[1.1, 1.3, 1.5, 2.0, 4.0, 8.0])
+    a = ap.parse_args()
+    if a.series:
+        series_frames(Path(a.series), dict(r.split("=", 1) for r in a.runs), a.times)
+    else:
+        OUT.mkdir(exist_ok=True)
+        patterns()
+        adapted()

@@ -20,8 +20,13 @@ in where the folds lie).
 
     python -m verification.drape_states --scene large-square-pedestal   # ~3 min on 2 cores
     python -m verification.drape_states --scene square-on-disc          # ~4 min
+    python -m verification.drape_states --scene square-on-disc --path paper   # ~8 min
 
-Writes verification/out/<report>.{json,md} (``CASES[scene]["report"]``).
+``--path paper``: the adaptive run takes the §6 table's paper-path settings (:data:`PAPER`, with the
+case's ``paper_const``) instead of the case's own, and the paper's uniform mesh is relaxed on the same
+path too and solved statically from its final state (step 5): both relaxations stop at t = 40 s
+before their steady state, so each final state is shown to lie by a stable equilibrium.  Writes verification/out/<report>.{json,md}
+(``CASES[scene]["report"]``, with ``_paper`` appended for that path).
 """
 
 from __future__ import annotations
@@ -37,6 +42,10 @@ OUT = Path(__file__).resolve().parent / "out"
 KINETIC = {"solver.relax.damping": "kinetic", "solver.relax.mass_scaling": 1e4,
            "solver.relax.mass_scaling_mode": "director", "solver.relax.t_max": 8.0}
 """benchmarks/adaptive_vs_uniform.py's relaxation (kinetic damping, director masses x1e4)"""
+PAPER = {"solver.relax.preset": "paper", "solver.relax.t_max": 40.0, "adapt.coarse_membrane": "ans",
+         "adapt.freeze_leaves": 10, "adapt.freeze_after": 6.0, "adapt.freeze_on": "changes"}
+"""the §6 table's paper-path settings (docs/adaptivity.md: Rayleigh alpha 5 1/s, all masses x100, to
+t = 40 s; the freeze after 6 s), less ``adapt.const``"""
 CASES = {
     # FIRE with director masses x100 and const 0.4: the §6 rows of docs/adaptivity.md that first
     # showed the two states
@@ -44,13 +53,13 @@ CASES = {
         report="lsp_states", meshes=("45x15x4", "48x16x4"),
         adaptive={"solver.relax.damping": "fire", "solver.relax.mass_scaling": 100.0,
                   "solver.relax.mass_scaling_mode": "director", "adapt.coarse_membrane": "ans",
-                  "adapt.const": 0.4}),
+                  "adapt.const": 0.4}, paper_const=0.4),
     # the freeze that lets this scene settle (docs/adaptivity.md, the freeze_on = "changes"
     # table): 3427 nodes, DC -3.5 % against the uniform relaxation
     "square-on-disc": dict(
         report="sod_states", meshes=("30x240", "32x256"),
         adaptive={**KINETIC, "adapt.coarse_membrane": "ans", "adapt.const": 0.6, "adapt.freeze_leaves": 10,
-                  "adapt.freeze_after": 1.5, "adapt.freeze_on": "changes"}),
+                  "adapt.freeze_after": 1.5, "adapt.freeze_on": "changes"}, paper_const=0.6),
 }
 QUIET = {"output.pictures": [], "output.snapshots": []}
 
@@ -76,12 +85,14 @@ def _static_from(scene, problem, mesh, mesh_name, U0, label):
     return _row(label, mesh_name, U, U0, res, analyse(scene, mesh, U, problem.model), time.perf_counter() - t)
 
 
-def main(scene: str = "large-square-pedestal") -> dict:
+def main(scene: str = "large-square-pedestal", path: str = "case") -> dict:
     from solidshell import run_scene
     from solidshell.runner import build_problem
     from solidshell.solvers.sequence import prolong
 
     case = CASES[scene]
+    if path == "paper":
+        case = {**case, "report": case["report"] + "_paper", "adaptive": {**PAPER, "adapt.const": case["paper_const"]}}
     meshes = case["meshes"]
     rows, flat, problems = [], {}, {}
 
@@ -113,6 +124,17 @@ def main(scene: str = "large-square-pedestal") -> dict:
         mesh = flat[d][0]
         emit(_static_from(scene, problems[d], mesh, d, prolong(ad.mesh, U_ad, mesh),
                           "from the adaptive relaxation's state"))
+    if path == "paper":
+        d = meshes[0]
+        un = run_scene(scene, mesh=d, solver="relax", out_dir=None, progress=False,
+                       overrides={**QUIET, **{k: v for k, v in PAPER.items() if not k.startswith("adapt.")}})
+        s = un.summary
+        emit(dict(state="uniform relaxation (final)", mesh=d, converged=s["converged"], steps=s.get("steps"),
+                  drape_coefficient=s.get("drape_coefficient"), fold_count=s.get("fold_count"),
+                  fold_angles_deg=s.get("fold_angles_deg"), interpenetrated_nodes=s.get("interpenetrated_nodes"),
+                  max_interpenetrated_nodes=s.get("max_interpenetrated_nodes"), wall_s=s.get("wall_time_s")))
+        emit(_static_from(scene, problems[d], flat[d][0], d, np.asarray(un.U, float),
+                          "from the uniform relaxation's state"))
     _write(scene, case, rows)
     return {"rows": rows}
 
@@ -144,4 +166,7 @@ def _write(scene, case, rows) -> None:
 if __name__ == "__main__":
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--scene", choices=sorted(CASES), default="large-square-pedestal")
-    main(ap.parse_args().scene)
+    ap.add_argument("--path", choices=("case", "paper"), default="case",
+                    help="the adaptive run's settings: the case's own, or the §6 table's paper path")
+    a = ap.parse_args()
+    main(a.scene, a.path)

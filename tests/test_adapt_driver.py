@@ -462,7 +462,9 @@ def test_every_new_mesh_gets_its_own_critical_step():
     when the finest level changed) went non-finite 18 steps later (step 1018).  Each remesh now
     estimates the step of its mesh: the run stays finite past it with dt below every estimate."""
     out = run_scene("square-pedestal", solver="relax", adaptive=True, out_dir=None, progress=False,
-                    overrides={"solver.relax.t_max": 0.1, "output.pictures": [], "output.snapshots": []})
+                    overrides={"solver.relax.t_max": 0.1, "output.pictures": [], "output.snapshots": [],
+                               # the adaptive defaults, not the scene's §6 table (its coarse "ans")
+                               "adapt.const": 0.5, "adapt.coarse_membrane": "scene"})
     s = out.summary
     assert s["finite"] and s["t_final"] >= 0.1 - 1e-9, s["message"]
     assert s["remesh_count"] >= 3

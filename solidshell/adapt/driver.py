@@ -360,14 +360,17 @@ class AdaptiveRun:
 
     def _settle(self, problem, D, Dp, new: ActiveMesh, inserted):
         """D_n's directors put at equilibrium with its positions (settle.py), and D_n-1 one
-        quasi-static step behind: the settled dofs' velocity becomes the rate at which their
-        equilibrium follows the held dofs' transferred velocity, which drops the director
+        quasi-static step behind: the directors' velocity becomes the rate at which their
+        equilibrium follows the transferred velocity of every position, which drops the director
         oscillation the previous remeshes' out-of-balance forces left in the velocity (keeping that
         velocity is not enough, and settling D_n-1 apart leaves the two settlings' residual errors
         in the velocity: docs/adaptivity.md).  With ``adapt.settle_new_nodes`` the inserted nodes'
-        positions settle too (from their DK placement, the old nodes held); where that settling
-        falls short of its three digits (large new elements sag far from their DK placement), the
-        directors alone are settled instead and ``new_node_fallbacks`` counts it."""
+        positions settle too (from their DK placement, the old nodes held), but keep their
+        interpolated velocity: the quasi-static rate of a position, -K_SS^-1 K_SH v, is unbounded
+        where K_SS nearly loses definiteness (a hoop-compressed sheet near buckling: 70 cm/s for a
+        sheet moving at 4, docs/adaptivity.md).  Where that settling falls short of its three digits
+        (large new elements sag far from their DK placement), the directors alone are settled
+        instead and ``new_node_fallbacks`` counts it."""
         region = _changed_nodes(self.active, new) if self.adapt.settle_scope == "changed" else None
 
         def both(nodes=None):

@@ -15,8 +15,9 @@ few Newton steps on the director block K_nn of the tangent (Eq. 9), each backtra
 reach that minimum.  The driver settles D_n, and gives the settled dofs of D_n-1 the quasi-static rate
 (:meth:`DirectorSettler.quasi_static_step`): the director velocity becomes the rate of the
 quasi-static director, so the fast director oscillation is removed and the slow rotation with the
-sheet is kept.  Positions and every translational dof are untouched (but those of the inserted
-nodes, when asked), so DK's placement of the new nodes (§5.4) stands.
+sheet is kept.  Positions and every translational dof are untouched (but the inserted nodes'
+positions, when asked, whose velocity the driver keeps interpolated), so DK's placement of the new
+nodes (§5.4) stands.
 """
 
 from __future__ import annotations

@@ -20,13 +20,14 @@ in where the folds lie).
 
     python -m verification.drape_states --scene large-square-pedestal   # ~3 min on 2 cores
     python -m verification.drape_states --scene square-on-disc          # ~4 min
-    python -m verification.drape_states --scene square-on-disc --path paper   # ~8 min
+    python -m verification.drape_states --scene square-on-disc --path paper   # ~25 min
 
-``--path paper``: the adaptive run takes the §6 table's paper-path settings (:data:`PAPER`, with the
-case's ``paper_const``) instead of the case's own, and the paper's uniform mesh is relaxed on the same
-path too and solved statically from its final state (step 5): both relaxations stop at t = 40 s
-before their steady state, so each final state is shown to lie by a stable equilibrium.  Writes verification/out/<report>.{json,md}
-(``CASES[scene]["report"]``, with ``_paper`` appended for that path).
+``--path paper``: the adaptive run takes the paper's relaxation to t = 40 s (:data:`PAPER`) with the
+scene's own [adapt] table (the §6 settings) instead of the case's settings, and the paper's uniform
+mesh is relaxed on the same path too and solved statically from its final state: both relaxations
+stop at t = 40 s before their steady state, so each final state is shown to lie by a stable
+equilibrium.  Writes verification/out/<report>.{json,md} (``CASES[scene]["report"]``, with
+``_paper`` appended for that path).
 """
 
 from __future__ import annotations
@@ -42,10 +43,9 @@ OUT = Path(__file__).resolve().parent / "out"
 KINETIC = {"solver.relax.damping": "kinetic", "solver.relax.mass_scaling": 1e4,
            "solver.relax.mass_scaling_mode": "director", "solver.relax.t_max": 8.0}
 """benchmarks/adaptive_vs_uniform.py's relaxation (kinetic damping, director masses x1e4)"""
-PAPER = {"solver.relax.preset": "paper", "solver.relax.t_max": 40.0, "adapt.coarse_membrane": "ans",
-         "adapt.freeze_leaves": 10, "adapt.freeze_after": 6.0, "adapt.freeze_on": "changes"}
-"""the §6 table's paper-path settings (docs/adaptivity.md: Rayleigh alpha 5 1/s, all masses x100, to
-t = 40 s; the freeze after 6 s), less ``adapt.const``"""
+PAPER = {"solver.relax.preset": "paper", "solver.relax.t_max": 40.0}
+"""the §6 table's path (docs/adaptivity.md: Rayleigh alpha 5 1/s, all masses x100, to t = 40 s); its
+adaptive settings are the scenes' [adapt] tables"""
 CASES = {
     # FIRE with director masses x100 and const 0.4: the §6 rows of docs/adaptivity.md that first
     # showed the two states
@@ -53,13 +53,13 @@ CASES = {
         report="lsp_states", meshes=("45x15x4", "48x16x4"),
         adaptive={"solver.relax.damping": "fire", "solver.relax.mass_scaling": 100.0,
                   "solver.relax.mass_scaling_mode": "director", "adapt.coarse_membrane": "ans",
-                  "adapt.const": 0.4}, paper_const=0.4),
+                  "adapt.const": 0.4}),
     # the freeze that lets this scene settle (docs/adaptivity.md, the freeze_on = "changes"
     # table): 3427 nodes, DC -3.5 % against the uniform relaxation
     "square-on-disc": dict(
         report="sod_states", meshes=("30x240", "32x256"),
         adaptive={**KINETIC, "adapt.coarse_membrane": "ans", "adapt.const": 0.6, "adapt.freeze_leaves": 10,
-                  "adapt.freeze_after": 1.5, "adapt.freeze_on": "changes"}, paper_const=0.6),
+                  "adapt.freeze_after": 1.5, "adapt.freeze_on": "changes"}),
 }
 QUIET = {"output.pictures": [], "output.snapshots": []}
 
@@ -92,7 +92,7 @@ def main(scene: str = "large-square-pedestal", path: str = "case") -> dict:
 
     case = CASES[scene]
     if path == "paper":
-        case = {**case, "report": case["report"] + "_paper", "adaptive": {**PAPER, "adapt.const": case["paper_const"]}}
+        case = {**case, "report": case["report"] + "_paper", "adaptive": PAPER}
     meshes = case["meshes"]
     rows, flat, problems = [], {}, {}
 
@@ -126,8 +126,7 @@ def main(scene: str = "large-square-pedestal", path: str = "case") -> dict:
                           "from the adaptive relaxation's state"))
     if path == "paper":
         d = meshes[0]
-        un = run_scene(scene, mesh=d, solver="relax", out_dir=None, progress=False,
-                       overrides={**QUIET, **{k: v for k, v in PAPER.items() if not k.startswith("adapt.")}})
+        un = run_scene(scene, mesh=d, solver="relax", out_dir=None, progress=False, overrides={**QUIET, **PAPER})
         s = un.summary
         emit(dict(state="uniform relaxation (final)", mesh=d, converged=s["converged"], steps=s.get("steps"),
                   drape_coefficient=s.get("drape_coefficient"), fold_count=s.get("fold_count"),

@@ -101,7 +101,7 @@ def adapted():
 def series_frames(out: Path, runs: dict, times) -> None:
     """The frames of each run folder's ``series.pvd`` nearest to ``times`` [s]: a row per run (label ->
     folder), the deformed sheet seen from above with its mesh lines, the node count in each title."""
-    import re
+    import xml.etree.ElementTree as ET
 
     import meshio
     from matplotlib.collections import PolyCollection
@@ -109,8 +109,8 @@ def series_frames(out: Path, runs: dict, times) -> None:
     fig, axes = plt.subplots(len(runs), len(times), figsize=(2.6 * len(times), 2.8 * len(runs)), squeeze=False)
     for row, (label, folder) in zip(axes, runs.items()):
         folder = Path(folder)
-        steps = re.findall(r'timestep="([^"]+)"[^>]*file="([^"]+)"', (folder / "series.pvd").read_text())
-        ts = np.array([float(t) for t, _ in steps])
+        steps = [(float(d.get("timestep")), d.get("file")) for d in ET.parse(folder / "series.pvd").iter("DataSet")]
+        ts = np.array([t for t, _ in steps])
         for ax, t in zip(row, times):
             k = int(np.argmin(abs(ts - t)))
             m = meshio.read(folder / steps[k][1])

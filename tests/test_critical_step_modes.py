@@ -13,16 +13,14 @@ from solidshell import Fabric, ShellMesh
 from solidshell.model import Model
 from solidshell.solvers.explicit import scaled_mass, stepcontrol
 from solidshell.solvers.explicit.settings import parse_settings
+from solidshell.verify.common import rect_grid
 
 WOOL = Fabric.wool()
 
 
 def grid(n, size=10.0):
-    x, y = np.meshgrid(np.linspace(0, size, n + 1), np.linspace(0, size, n + 1))
-    a = (np.arange(n)[None, :] + (n + 1) * np.arange(n)[:, None]).ravel()
-    q = np.column_stack([a, a + 1, a + n + 2, a + n + 1])
-    return ShellMesh(np.column_stack([x.ravel(), y.ravel(), np.zeros(x.size)]), quads=q,
-                     directors=np.tile([0.0, 0.0, 1.0], ((n + 1) ** 2, 1)))
+    nodes, quads = rect_grid(n, n, size, size)
+    return ShellMesh(nodes, quads=quads, directors=np.tile([0.0, 0.0, 1.0], (len(nodes), 1)))
 
 
 def omega_max(n, **relax):

@@ -75,6 +75,14 @@ def _row(label, mesh_name, U, U_start, res, analysed, wall):
                 min_tangent_eigenvalue=info.get("min_tangent_eigenvalue"), moved_cm=moved, wall_s=wall)
 
 
+def _relaxed_row(label, mesh_name, s, wall):
+    """The row of a relaxation's final state from its run summary ``s``."""
+    return dict(state=label, mesh=mesh_name, converged=s["converged"], steps=s.get("steps"),
+                drape_coefficient=s.get("drape_coefficient"), fold_count=s.get("fold_count"),
+                fold_angles_deg=s.get("fold_angles_deg"), interpenetrated_nodes=s.get("interpenetrated_nodes"),
+                max_interpenetrated_nodes=s.get("max_interpenetrated_nodes"), wall_s=wall)
+
+
 def _static_from(scene, problem, mesh, mesh_name, U0, label):
     from solidshell.runner import analyse
     from solidshell.solvers import static
@@ -113,11 +121,8 @@ def main(scene: str = "large-square-pedestal", path: str = "case") -> dict:
     ad = run_scene(scene, solver="relax", adaptive=True, out_dir=None, progress=False,
                    overrides={**QUIET, **case["adaptive"]})
     s = ad.summary
-    emit(dict(state="adaptive relaxation (final)", mesh=f"{s['max_active_nodes']} nodes at most, "
-              f"{ad.mesh.n_nodes} at the end", converged=s["converged"], steps=s.get("steps"),
-              drape_coefficient=s.get("drape_coefficient"), fold_count=s.get("fold_count"),
-              fold_angles_deg=s.get("fold_angles_deg"), interpenetrated_nodes=s.get("interpenetrated_nodes"),
-              max_interpenetrated_nodes=s.get("max_interpenetrated_nodes"), wall_s=time.perf_counter() - t))
+    emit(_relaxed_row("adaptive relaxation (final)", f"{s['max_active_nodes']} nodes at most, "
+                      f"{ad.mesh.n_nodes} at the end", s, time.perf_counter() - t))
     U_ad = np.asarray(ad.U, float)
     emit(_static_from(scene, ad.problem, ad.mesh, "adaptive (final)", U_ad, "from the adaptive relaxation's state"))
     for d in meshes:
@@ -127,11 +132,7 @@ def main(scene: str = "large-square-pedestal", path: str = "case") -> dict:
     if path == "paper":
         d = meshes[0]
         un = run_scene(scene, mesh=d, solver="relax", out_dir=None, progress=False, overrides={**QUIET, **PAPER})
-        s = un.summary
-        emit(dict(state="uniform relaxation (final)", mesh=d, converged=s["converged"], steps=s.get("steps"),
-                  drape_coefficient=s.get("drape_coefficient"), fold_count=s.get("fold_count"),
-                  fold_angles_deg=s.get("fold_angles_deg"), interpenetrated_nodes=s.get("interpenetrated_nodes"),
-                  max_interpenetrated_nodes=s.get("max_interpenetrated_nodes"), wall_s=s.get("wall_time_s")))
+        emit(_relaxed_row("uniform relaxation (final)", d, un.summary, un.summary.get("wall_time_s")))
         emit(_static_from(scene, problems[d], flat[d][0], d, np.asarray(un.U, float),
                           "from the uniform relaxation's state"))
     _write(scene, case, rows)

@@ -11,7 +11,10 @@ only when both states are shown to be stable equilibria.  For one scene this stu
 3. relaxes the scene adaptively with the case's §6 settings and solves statically from its final
    state on its final mesh, with the same per-quad membranes (``RunOutput.problem``);
 4. prolongs that adaptive state onto each uniform mesh and solves from there: a state of the
-   uniform mesh too when it stays near the adaptive one.
+   uniform mesh too when it stays near the adaptive one;
+5. ``--ladder``: prolongs it onto the case's ladder of uniform meshes, coarse to fine, and solves
+   from there, and solves it on its own mesh with the scene's membrane on every quad: the DC of one
+   state against the mesh size, the yardstick for "DC within 1 %" (docs/adaptivity.md).
 
 Each static state is reported with the solver's verdict: the free-dof tangent's positive
 definiteness and smallest eigenvalue [gf/cm] (a stable equilibrium has both), how far the state
@@ -21,6 +24,7 @@ in where the folds lie).
     python -m verification.drape_states --scene large-square-pedestal   # ~3 min on 2 cores
     python -m verification.drape_states --scene square-on-disc          # ~4 min
     python -m verification.drape_states --scene square-on-disc --path paper   # ~25 min
+    python -m verification.drape_states --scene square-on-disc --path paper --ladder   # ~+1 min
 
 ``--path paper``: the adaptive run takes the paper's relaxation to t = 40 s (:data:`PAPER`) with the
 scene's own [adapt] table (the §6 settings) instead of the case's settings, and the paper's uniform
@@ -57,7 +61,7 @@ CASES = {
     # the freeze that lets this scene settle (docs/adaptivity.md, the freeze_on = "changes"
     # table): 3427 nodes, DC -3.5 % against the uniform relaxation
     "square-on-disc": dict(
-        report="sod_states", meshes=("30x240", "32x256"),
+        report="sod_states", meshes=("30x240", "32x256"), ladder=("8x64", "16x128", "24x192"),
         adaptive={**KINETIC, "adapt.coarse_membrane": "ans", "adapt.const": 0.6, "adapt.freeze_leaves": 10,
                   "adapt.freeze_after": 1.5, "adapt.freeze_on": "changes"}),
 }
@@ -93,9 +97,10 @@ def _static_from(scene, problem, mesh, mesh_name, U0, label):
     return _row(label, mesh_name, U, U0, res, analyse(scene, mesh, U, problem.model), time.perf_counter() - t)
 
 
-def main(scene: str = "large-square-pedestal", path: str = "case") -> dict:
+def main(scene: str = "large-square-pedestal", path: str = "case", ladder: bool = False) -> dict:
     from solidshell import run_scene
-    from solidshell.runner import build_problem
+    from solidshell.runner import build_problem, build_scene_mesh
+    from solidshell.scenes import load
     from solidshell.solvers.sequence import prolong
 
     case = CASES[scene]
@@ -129,13 +134,21 @@ def main(scene: str = "large-square-pedestal", path: str = "case") -> dict:
         mesh = flat[d][0]
         emit(_static_from(scene, problems[d], mesh, d, prolong(ad.mesh, U_ad, mesh),
                           "from the adaptive relaxation's state"))
+    if ladder:
+        emit(_static_from(scene, build_problem(scene, ad.mesh), ad.mesh, "adaptive (final), scene membrane",
+                          U_ad, "from the adaptive relaxation's state"))
+        for d in case.get("ladder", ()):
+            mesh = build_scene_mesh(load(scene), d, allow_large=True)[0]
+            emit(_static_from(scene, build_problem(scene, mesh), mesh, d, prolong(ad.mesh, U_ad, mesh),
+                              "from the adaptive relaxation's state (ladder)"))
     if path == "paper":
         d = meshes[0]
         un = run_scene(scene, mesh=d, solver="relax", out_dir=None, progress=False, overrides={**QUIET, **PAPER})
         emit(_relaxed_row("uniform relaxation (final)", d, un.summary, un.summary.get("wall_time_s")))
         emit(_static_from(scene, problems[d], flat[d][0], d, np.asarray(un.U, float),
                           "from the uniform relaxation's state"))
-    _write(scene, case, rows)
+    flags = (" --path paper" if path == "paper" else "") + (" --ladder" if ladder else "")
+    _write(scene, case, rows, f"--scene {scene}{flags}")
     return {"rows": rows}
 
 
@@ -144,11 +157,11 @@ def _angles(r) -> str:
     return "–" if not a else " ".join(f"{x:.0f}" for x in a)
 
 
-def _write(scene, case, rows) -> None:
+def _write(scene, case, rows, args) -> None:
     from verification.cases import cell, load_average, utc_now, write_report
 
     lines = [f"# {scene}: static states and the adaptive relaxation's ({utc_now()}, load {load_average()})", "",
-             f"Written by `python -m verification.drape_states --scene {scene}` (module docstring); the "
+             f"Written by `python -m verification.drape_states {args}` (module docstring); the "
              f"adaptive run's settings: `{json.dumps(case['adaptive'])}`.", "",
              "| mesh | start | iterations | DC | folds | fold angles [deg] | interp. nodes | positive definite "
              "| smallest eigenvalue [gf/cm] | moved [cm] |",
@@ -168,5 +181,7 @@ if __name__ == "__main__":
     ap.add_argument("--scene", choices=sorted(CASES), default="large-square-pedestal")
     ap.add_argument("--path", choices=("case", "paper"), default="case",
                     help="the adaptive run's settings: the case's own, or the §6 table's paper path")
+    ap.add_argument("--ladder", action="store_true",
+                    help="also solve the adaptive state on the case's ladder of uniform meshes (step 5)")
     a = ap.parse_args()
-    main(a.scene, a.path)
+    main(a.scene, a.path, a.ladder)

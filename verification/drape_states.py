@@ -12,9 +12,10 @@ only when both states are shown to be stable equilibria.  For one scene this stu
    state on its final mesh, with the same per-quad membranes (``RunOutput.problem``);
 4. prolongs that adaptive state onto each uniform mesh and solves from there: a state of the
    uniform mesh too when it stays near the adaptive one;
-5. ``--ladder``: prolongs it onto the case's ladder of uniform meshes, coarse to fine, and solves
-   from there, and solves it on its own mesh with the scene's membrane on every quad: the DC of one
-   state against the mesh size, the yardstick for "DC within 1 %" (docs/adaptivity.md).
+5. ``--ladder``, instead of 1-4: relaxes adaptively (3), solves from its final state on its own mesh
+   with its own and with the scene's membrane on every quad, and prolongs that state onto the
+   case's ladder of uniform meshes, coarse to fine, and solves there: the DC of one state against
+   the mesh size, the yardstick for "DC within 1 %" (docs/adaptivity.md).
 
 Each static state is reported with the solver's verdict: the free-dof tangent's positive
 definiteness and smallest eigenvalue [gf/cm] (a stable equilibrium has both), how far the state
@@ -24,14 +25,14 @@ in where the folds lie).
     python -m verification.drape_states --scene large-square-pedestal   # ~3 min on 2 cores
     python -m verification.drape_states --scene square-on-disc          # ~4 min
     python -m verification.drape_states --scene square-on-disc --path paper   # ~25 min
-    python -m verification.drape_states --scene square-on-disc --path paper --ladder   # ~+1 min
+    python -m verification.drape_states --scene square-on-disc --path paper --ladder   # ~5 min
 
 ``--path paper``: the adaptive run takes the paper's relaxation to t = 40 s (:data:`PAPER`) with the
 scene's own [adapt] table (the §6 settings) instead of the case's settings, and the paper's uniform
 mesh is relaxed on the same path too and solved statically from its final state: both relaxations
 stop at t = 40 s before their steady state, so each final state is shown to lie by a stable
 equilibrium.  Writes verification/out/<report>.{json,md} (``CASES[scene]["report"]``, with
-``_paper`` appended for that path).
+``_paper`` appended for that path and ``_ladder`` for step 5).
 """
 
 from __future__ import annotations
@@ -61,7 +62,7 @@ CASES = {
     # the freeze that lets this scene settle (docs/adaptivity.md, the freeze_on = "changes"
     # table): 3427 nodes, DC -3.5 % against the uniform relaxation
     "square-on-disc": dict(
-        report="sod_states", meshes=("30x240", "32x256"), ladder=("8x64", "16x128", "24x192"),
+        report="sod_states", meshes=("30x240", "32x256"), ladder=("8x64", "16x128", "24x192", "32x256"),
         adaptive={**KINETIC, "adapt.coarse_membrane": "ans", "adapt.const": 0.6, "adapt.freeze_leaves": 10,
                   "adapt.freeze_after": 1.5, "adapt.freeze_on": "changes"}),
 }
@@ -98,21 +99,44 @@ def _static_from(scene, problem, mesh, mesh_name, U0, label):
 
 
 def main(scene: str = "large-square-pedestal", path: str = "case", ladder: bool = False) -> dict:
-    from solidshell import run_scene
-    from solidshell.runner import build_problem, build_scene_mesh
-    from solidshell.scenes import load
-    from solidshell.solvers.sequence import prolong
-
     case = CASES[scene]
+    if ladder and "ladder" not in case:
+        raise SystemExit(f"--ladder: scene {scene} has no ladder of meshes (CASES)")
     if path == "paper":
         case = {**case, "report": case["report"] + "_paper", "adaptive": PAPER}
-    meshes = case["meshes"]
-    rows, flat, problems = [], {}, {}
+    rows = []
 
     def emit(row):
         rows.append(row)
         print(json.dumps(row), flush=True)
 
+    (_ladder if ladder else _states)(scene, path, case, emit)
+    flags = (" --path paper" if path == "paper" else "") + (" --ladder" if ladder else "")
+    _write(scene, case["report"] + ("_ladder" if ladder else ""), case["adaptive"], rows, f"--scene {scene}{flags}")
+    return {"rows": rows}
+
+
+def _adaptive(scene, case, emit):
+    """The adaptive relaxation with the case's settings (step 3): its RunOutput, its row emitted."""
+    from solidshell import run_scene
+
+    t = time.perf_counter()
+    ad = run_scene(scene, solver="relax", adaptive=True, out_dir=None, progress=False,
+                   overrides={**QUIET, **case["adaptive"]})
+    s = ad.summary
+    emit(_relaxed_row("adaptive relaxation (final)", f"{s['max_active_nodes']} nodes at most, "
+                      f"{ad.mesh.n_nodes} at the end", s, time.perf_counter() - t))
+    return ad
+
+
+def _states(scene, path, case, emit):
+    """Steps 1-4 (module docstring)."""
+    from solidshell import run_scene
+    from solidshell.runner import build_problem
+    from solidshell.solvers.sequence import prolong
+
+    meshes = case["meshes"]
+    flat, problems = {}, {}
     for d in meshes:
         out = run_scene(scene, mesh=d, solver="static", out_dir=None, progress=False, overrides=QUIET)
         flat[d] = (out.mesh, np.asarray(out.U, float))
@@ -122,34 +146,37 @@ def main(scene: str = "large-square-pedestal", path: str = "case", ladder: bool 
         mesh = flat[d][0]
         emit(_static_from(scene, problems[d], mesh, d, prolong(flat[src][0], flat[src][1], mesh),
                           f"from the {src} equilibrium"))
-    t = time.perf_counter()
-    ad = run_scene(scene, solver="relax", adaptive=True, out_dir=None, progress=False,
-                   overrides={**QUIET, **case["adaptive"]})
-    s = ad.summary
-    emit(_relaxed_row("adaptive relaxation (final)", f"{s['max_active_nodes']} nodes at most, "
-                      f"{ad.mesh.n_nodes} at the end", s, time.perf_counter() - t))
+    ad = _adaptive(scene, case, emit)
     U_ad = np.asarray(ad.U, float)
     emit(_static_from(scene, ad.problem, ad.mesh, "adaptive (final)", U_ad, "from the adaptive relaxation's state"))
     for d in meshes:
         mesh = flat[d][0]
         emit(_static_from(scene, problems[d], mesh, d, prolong(ad.mesh, U_ad, mesh),
                           "from the adaptive relaxation's state"))
-    if ladder:
-        emit(_static_from(scene, build_problem(scene, ad.mesh), ad.mesh, "adaptive (final), scene membrane",
-                          U_ad, "from the adaptive relaxation's state"))
-        for d in case.get("ladder", ()):
-            mesh = build_scene_mesh(load(scene), d, allow_large=True)[0]
-            emit(_static_from(scene, build_problem(scene, mesh), mesh, d, prolong(ad.mesh, U_ad, mesh),
-                              "from the adaptive relaxation's state (ladder)"))
     if path == "paper":
         d = meshes[0]
         un = run_scene(scene, mesh=d, solver="relax", out_dir=None, progress=False, overrides={**QUIET, **PAPER})
         emit(_relaxed_row("uniform relaxation (final)", d, un.summary, un.summary.get("wall_time_s")))
         emit(_static_from(scene, problems[d], flat[d][0], d, np.asarray(un.U, float),
                           "from the uniform relaxation's state"))
-    flags = (" --path paper" if path == "paper" else "") + (" --ladder" if ladder else "")
-    _write(scene, case, rows, f"--scene {scene}{flags}")
-    return {"rows": rows}
+
+
+def _ladder(scene, path, case, emit):
+    """Step 5 (module docstring): the adaptive relaxation's state on its own mesh with its own and
+    with the scene's membranes, then on the ladder of uniform meshes."""
+    from solidshell.runner import build_problem, build_scene_mesh
+    from solidshell.scenes import load
+    from solidshell.solvers.sequence import prolong
+
+    ad = _adaptive(scene, case, emit)
+    U_ad = np.asarray(ad.U, float)
+    emit(_static_from(scene, ad.problem, ad.mesh, "adaptive (final)", U_ad, "from the adaptive relaxation's state"))
+    emit(_static_from(scene, build_problem(scene, ad.mesh), ad.mesh, "adaptive (final), scene membrane",
+                      U_ad, "from the adaptive relaxation's state"))
+    for d in case["ladder"]:
+        mesh = build_scene_mesh(load(scene), d, allow_large=True)[0]
+        emit(_static_from(scene, build_problem(scene, mesh), mesh, d, prolong(ad.mesh, U_ad, mesh),
+                          "from the adaptive relaxation's state"))
 
 
 def _angles(r) -> str:
@@ -157,12 +184,12 @@ def _angles(r) -> str:
     return "–" if not a else " ".join(f"{x:.0f}" for x in a)
 
 
-def _write(scene, case, rows, args) -> None:
+def _write(scene, report, adaptive, rows, args) -> None:
     from verification.cases import cell, load_average, utc_now, write_report
 
     lines = [f"# {scene}: static states and the adaptive relaxation's ({utc_now()}, load {load_average()})", "",
              f"Written by `python -m verification.drape_states {args}` (module docstring); the "
-             f"adaptive run's settings: `{json.dumps(case['adaptive'])}`.", "",
+             f"adaptive run's settings: `{json.dumps(adaptive)}`.", "",
              "| mesh | start | iterations | DC | folds | fold angles [deg] | interp. nodes | positive definite "
              "| smallest eigenvalue [gf/cm] | moved [cm] |",
              "|---|---|---|---|---|---|---|---|---|---|"]
@@ -173,7 +200,7 @@ def _write(scene, case, rows, args) -> None:
                                          cell(r.get("positive_definite")),
                                          cell(r.get("min_tangent_eigenvalue"), ".2e"),
                                          cell(r.get("moved_cm"), ".3f")]) + " |")
-    write_report(OUT, case["report"], "\n".join(lines) + "\n", {"scene": scene, "rows": rows})
+    write_report(OUT, report, "\n".join(lines) + "\n", {"scene": scene, "rows": rows})
 
 
 if __name__ == "__main__":
@@ -182,6 +209,6 @@ if __name__ == "__main__":
     ap.add_argument("--path", choices=("case", "paper"), default="case",
                     help="the adaptive run's settings: the case's own, or the §6 table's paper path")
     ap.add_argument("--ladder", action="store_true",
-                    help="also solve the adaptive state on the case's ladder of uniform meshes (step 5)")
+                    help="instead of steps 1-4, the adaptive state on the case's ladder of uniform meshes (step 5)")
     a = ap.parse_args()
     main(a.scene, a.path, a.ladder)

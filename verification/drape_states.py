@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 import time
 from pathlib import Path
 
@@ -101,7 +102,8 @@ def _static_from(scene, problem, mesh, mesh_name, U0, label):
 def main(scene: str = "large-square-pedestal", path: str = "case", ladder: bool = False) -> dict:
     case = CASES[scene]
     if ladder and "ladder" not in case:
-        raise SystemExit(f"--ladder: scene {scene} has no ladder of meshes (CASES)")
+        print(f"--ladder: scene {scene} has no ladder of meshes (CASES)", file=sys.stderr)
+        raise SystemExit(2)
     if path == "paper":
         case = {**case, "report": case["report"] + "_paper", "adaptive": PAPER}
     rows = []

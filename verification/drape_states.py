@@ -112,14 +112,18 @@ def main(scene: str = "large-square-pedestal", path: str = "case", ladder: bool 
         rows.append(row)
         print(json.dumps(row), flush=True)
 
-    (_ladder if ladder else _states)(scene, path, case, emit)
+    if ladder:
+        _ladder(scene, case, emit)
+    else:
+        _states(scene, path, case, emit)
     flags = (" --path paper" if path == "paper" else "") + (" --ladder" if ladder else "")
     _write(scene, case["report"] + ("_ladder" if ladder else ""), case["adaptive"], rows, f"--scene {scene}{flags}")
     return {"rows": rows}
 
 
 def _adaptive(scene, case, emit):
-    """The adaptive relaxation with the case's settings (step 3): its RunOutput, its row emitted."""
+    """Step 3 (module docstring): the adaptive relaxation with the case's settings and the static
+    solve from its final state on its own mesh, both rows emitted; returns (RunOutput, final U)."""
     from solidshell import run_scene
 
     t = time.perf_counter()
@@ -128,7 +132,9 @@ def _adaptive(scene, case, emit):
     s = ad.summary
     emit(_relaxed_row("adaptive relaxation (final)", f"{s['max_active_nodes']} nodes at most, "
                       f"{ad.mesh.n_nodes} at the end", s, time.perf_counter() - t))
-    return ad
+    U_ad = np.asarray(ad.U, float)
+    emit(_static_from(scene, ad.problem, ad.mesh, "adaptive (final)", U_ad, "from the adaptive relaxation's state"))
+    return ad, U_ad
 
 
 def _states(scene, path, case, emit):
@@ -148,9 +154,7 @@ def _states(scene, path, case, emit):
         mesh = flat[d][0]
         emit(_static_from(scene, problems[d], mesh, d, prolong(flat[src][0], flat[src][1], mesh),
                           f"from the {src} equilibrium"))
-    ad = _adaptive(scene, case, emit)
-    U_ad = np.asarray(ad.U, float)
-    emit(_static_from(scene, ad.problem, ad.mesh, "adaptive (final)", U_ad, "from the adaptive relaxation's state"))
+    ad, U_ad = _adaptive(scene, case, emit)
     for d in meshes:
         mesh = flat[d][0]
         emit(_static_from(scene, problems[d], mesh, d, prolong(ad.mesh, U_ad, mesh),
@@ -163,16 +167,14 @@ def _states(scene, path, case, emit):
                           "from the uniform relaxation's state"))
 
 
-def _ladder(scene, path, case, emit):
-    """Step 5 (module docstring): the adaptive relaxation's state on its own mesh with its own and
-    with the scene's membranes, then on the ladder of uniform meshes."""
+def _ladder(scene, case, emit):
+    """Step 5 (module docstring): step 3, the same state on its own mesh with the scene's membrane,
+    then on the ladder of uniform meshes."""
     from solidshell.runner import build_problem, build_scene_mesh
     from solidshell.scenes import load
     from solidshell.solvers.sequence import prolong
 
-    ad = _adaptive(scene, case, emit)
-    U_ad = np.asarray(ad.U, float)
-    emit(_static_from(scene, ad.problem, ad.mesh, "adaptive (final)", U_ad, "from the adaptive relaxation's state"))
+    ad, U_ad = _adaptive(scene, case, emit)
     emit(_static_from(scene, build_problem(scene, ad.mesh), ad.mesh, "adaptive (final), scene membrane",
                       U_ad, "from the adaptive relaxation's state"))
     for d in case["ladder"]:

@@ -479,7 +479,8 @@ def _run(sc, kind, mesh_arg, out_dir, cb, settings, timings, t_start, overrides=
     adaptive_run = None
     if adapt is not None:       # builds the background mesh: its checks (quads only, memory) come now
         adaptive_run = _adaptive_run(sc, mesh, solver_s, adapt, kind, cb)
-        mesh_name = f"{mesh_name} adaptive ({adapt.levels} levels)"
+        guard = f" + {adapt.guard_levels} guard" if adapt.guard_levels else ""
+        mesh_name = f"{mesh_name} adaptive ({adapt.levels}{guard} levels)"
     timings["mesh"] = time.perf_counter() - t
     if folder is not None and folder.foreign:
         warnings.append(f"output folder {folder.path} holds {len(folder.foreign)} file(s) solidshell did "

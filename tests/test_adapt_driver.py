@@ -546,6 +546,62 @@ def test_rows_in_is_row_membership(base):
     assert _rows_in(rows[:0], table).shape == (0,) and not _rows_in(rows, table[:0]).any()
 
 
+# ----------------------------------------------------------------------------- 4b. interpenetration guard
+# levels 1 + 1 guard level; guard 0.9999 splits the falling sheet's corners, where n_p . d_p dips to
+# ~0.9998 while it swings (at ~1e-4 below 1 the dip is the directors' lag, not a fold: a strict
+# threshold makes the guard act on this small, fast run)
+GUARD = dict(RESTART, levels=1, guard_levels=1, guard_alignment=0.9999)
+
+
+def test_the_guard_alone_reaches_its_level_and_never_merges_what_it_made():
+    """Eq. (25) stops at ``levels``: with the guard off the run never goes past level 1 on the same
+    2-level background.  With it on, leaves split by the guard reach level 2, and every leaf it made
+    is still split at the end (its parent is no leaf), though this run merges other leaves."""
+    off = _driver({}, **{**GUARD, "guard_alignment": -1.0})
+    off.run()
+    assert off.summary_info()["max_level_reached"] == 1 and off.summary_info()["guard_splits"] == 0
+    on = _driver({}, **GUARD)
+    on.run()
+    info = on.summary_info()
+    assert info["max_level_reached"] == 2 and info["guard_splits"] > 0
+    assert info["adapt_guard_alignment"] == 0.9999 and info["adapt_guard_levels"] == 1
+    assert sum(r["merges"] for r in on.remeshes) > 0
+    made = 0
+    for l in range(1, on.bg.levels + 1):
+        parents = np.flatnonzero(on.by_guard[l]) // 4
+        made += len(parents)
+        assert not on.forest.leaf[l - 1][parents].any()
+    assert made == 4 * info["guard_splits"]
+
+
+def test_past_a_freeze_the_guard_still_splits_and_nothing_merges(tmp_path):
+    """freeze_leaves stops Eq. (25)-(26)'s passes at the first pass after freeze_after (K = 10**6: any
+    change); the guard's passes go on, splits only, each of them the guard's.  A checkpoint carries
+    the guard's leaves and count, and a restart from it ends bit for bit where the run did."""
+    frz = dict(GUARD, freeze_leaves=10**6, freeze_after=1e-9)
+    run = _driver({}, **frz)
+    out = run.run()
+    assert run.frozen is not None
+    after = [r for r in run.remeshes if r["step"] > run.frozen[1]]
+    assert after and all(r["merges"] == 0 for r in after)
+    assert sum(r["splits"] for r in after) == run.guard_splits
+
+    part = _driver({}, **frz)
+    part.start()
+    while part.integ.state.step < after[0]["step"] + part.adapt.every:
+        with threads_for(part.integ, part.settings.threads):
+            assert part.integ.advance(part.adapt.every) == "running"
+        if part.frozen is None or part._guarded:
+            part._adapt_pass()
+    ck = tmp_path / "guard.npz"
+    checkpoint.save(ck, part.integ.state, part._checkpoint_arrays())
+    again = _driver({"restart": str(ck)}, **frz)
+    res = again.run()
+    assert again.guard_splits == run.guard_splits and again.remeshes == run.remeshes
+    assert all(np.array_equal(a, b) for a, b in zip(again.by_guard, run.by_guard))
+    assert np.array_equal(res.result.U, out.result.U)
+
+
 # ----------------------------------------------------------------------------- 5. bad input
 def _triangle_scene(tmp_path) -> Path:
     """A user scene whose mesh file is a 2x2 square of triangles (no node sets needed)."""
@@ -570,6 +626,11 @@ BAD = {   # name: (scene, run_scene kwargs, CLI args, words the one-line message
                    ["--mesh", LEVEL0, "--set", "adapt.const=0.1", "--set", "adapt.eps=0.2"], ["eps", "const"]),
     "levels=12": (SCENE, dict(mesh="40x40", overrides={"adapt.levels": 12}),
                   ["--mesh", "40x40", "--set", "adapt.levels=12"], ["levels = 12", "GiB", "1600"]),
+    "guard levels": (SCENE, dict(mesh=LEVEL0, overrides={"adapt.levels": 10, "adapt.guard_levels": 3}),
+                     ["--mesh", LEVEL0, "--set", "adapt.levels=10", "--set", "adapt.guard_levels=3"],
+                     ["guard_levels", "13", "12"]),
+    "guard threshold": (SCENE, dict(mesh=LEVEL0, overrides={"adapt.guard_alignment": 1.0}),
+                        ["--mesh", LEVEL0, "--set", "adapt.guard_alignment=1"], ["guard_alignment"]),
     "unknown key": (SCENE, dict(mesh=LEVEL0, overrides={"adapt.colour": 1}),
                     ["--mesh", LEVEL0, "--set", "adapt.colour=1"], ["colour"]),
 }

@@ -446,3 +446,38 @@ def test_leaf_bending_strain_is_the_max_over_a_leafs_elements():
     leaves, eb = C.leaf_bending_strain([0.1, 0.5, 0.7, 0.2, 0.4], elem_leaf)
     assert leaves.tolist() == [[0, 2], [1, 3]]
     assert eb.tolist() == [0.5, 0.7]
+
+
+def test_leaf_alignment_is_the_min_over_a_leafs_elements():
+    elem_leaf = np.array([[1, 3], [0, 2], [1, 3], [1, 3], [0, 2]])
+    leaves, nd = C.leaf_alignment([0.9, 0.5, -0.2, 0.7, 0.95], elem_leaf)
+    assert leaves.tolist() == [[0, 2], [1, 3]]
+    assert nd.tolist() == [0.5, -0.2]
+
+
+def test_guard_splits_below_its_threshold_and_keeps_low_siblings_apart():
+    """criteria.guard: a leaf whose lowest n_p . d_p is below the threshold g splits, up to max_level,
+    whatever Eq. (25) said; four siblings merge only when each reads at least cos(acos(g) / 2) (the
+    parent's angle halved: 0.9487 for g = 0.8); g = -1 changes nothing.  Thresholds are the exact
+    cut points +- 1e-3, far above round-off and far below the values' spacing."""
+    _, L = _two_level_L()
+    g = 0.8
+    half = np.cos(0.5 * np.arccos(g))
+    leaves = np.array([[0, 0], [1, 4], [1, 5], [1, 6], [1, 7], [2, 0], [2, 1], [2, 2], [2, 3]])
+    eb = np.zeros(len(leaves))                               # flat: Eq. (26) merges both parents
+    m = C.mark(eb, leaves, L, const=0.5, eps=0.2)
+    assert m.merge.tolist() == [[0, 1], [1, 0]] and not m.split.any()
+    nd = np.array([g - 1e-3, g + 1e-3, 1.0, 1.0, half - 1e-3, 1.0, 1.0, half + 1e-3, 0.5])
+    out = C.guard(m, nd, leaves, g, max_level=2)
+    assert out.split.tolist() == [True, False, False, False, False, False, False, False, False]
+    # (0,1)'s child (1,7) reads below cos(acos(g)/2): vetoed; (1,0)'s child (2,3) reads 0.5 < g:
+    # below max_level it would split -- at max_level 2 it cannot, and its merge is vetoed too
+    assert out.merge.tolist() == []
+    nd[8] = 1.0
+    out = C.guard(m, nd, leaves, g, max_level=2)
+    assert out.merge.tolist() == [[1, 0]]
+    assert C.guard(m, nd, leaves, g, max_level=0).split.sum() == 0        # capped at level 0
+    off = C.guard(m, np.full(len(leaves), -1.0), leaves, C.GUARD_OFF, max_level=2)
+    assert off is m
+    with pytest.raises(ValueError):
+        C.guard(m, nd, leaves, 1.0, max_level=2)

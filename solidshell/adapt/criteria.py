@@ -37,11 +37,13 @@ import numpy as np
 
 from ..errors import InputError
 
-__all__ = ["DEFAULT_CONST", "DEFAULT_EPS", "check_thresholds", "side_lengths",
-           "level_side_lengths", "leaf_bending_strain", "Marks", "mark"]
+__all__ = ["DEFAULT_CONST", "DEFAULT_EPS", "GUARD_OFF", "check_thresholds", "side_lengths",
+           "level_side_lengths", "leaf_bending_strain", "leaf_alignment", "Marks", "mark", "guard"]
 
 DEFAULT_CONST = 0.5
 DEFAULT_EPS = 0.2
+GUARD_OFF = -1.0
+"""The interpenetration guard's threshold that turns it off: n_p . d_p >= -1 everywhere."""
 
 
 def check_thresholds(const: float, eps: float) -> tuple[float, float]:
@@ -77,13 +79,24 @@ def leaf_bending_strain(eps_b_elem, elem_leaf):
     eps_b_elem : (n_elements,) e.g. ``Model.bending_strain(U)`` on the active mesh
     elem_leaf : (n_elements, 2) the (level, index) leaf of each element
     Returns (leaves (n_leaf,2) sorted by level then index, eps_b_leaf (n_leaf,))."""
-    eb = np.asarray(eps_b_elem, float)
+    return _per_leaf(eps_b_elem, elem_leaf, np.maximum, -np.inf)
+
+
+def leaf_alignment(nd_elem, elem_leaf):
+    """Per-leaf lowest corner alignment n_p . d_p (Section 4.3; ``Model.interpenetration`` reduced
+    over each element's corners), for :func:`guard`.  Same arguments and leaf order as
+    :func:`leaf_bending_strain`."""
+    return _per_leaf(nd_elem, elem_leaf, np.minimum, np.inf)
+
+
+def _per_leaf(values, elem_leaf, ufunc, start):
+    v = np.asarray(values, float)
     el = np.asarray(elem_leaf, dtype=np.int64)
-    if el.shape != (len(eb), 2):
-        raise ValueError(f"elem_leaf has shape {el.shape}, expected ({len(eb)}, 2)")
+    if el.shape != (len(v), 2):
+        raise ValueError(f"elem_leaf has shape {el.shape}, expected ({len(v)}, 2)")
     leaves, inv = _unique_items(el)
-    out = np.full(len(leaves), -np.inf)
-    np.maximum.at(out, inv, eb)
+    out = np.full(len(leaves), start)
+    ufunc.at(out, inv, v)
     return leaves, out
 
 
@@ -95,11 +108,16 @@ def _unique_items(items) -> tuple[np.ndarray, np.ndarray]:
     """np.unique(items, axis=0, return_inverse=True) for (K,2) (level, index) pairs (rows sorted
     by level then index), by the 1-d key level * 2^40 + index: np.unique over rows sorts a
     structured view, ~10x slower (0.4 s of the paper path's remeshing)."""
+    keys, inv = np.unique(_keys(items), return_inverse=True)
+    return np.column_stack([keys >> _INDEX_BITS, keys & ((1 << _INDEX_BITS) - 1)]), inv.ravel()
+
+
+def _keys(items) -> np.ndarray:
+    """(K,) int64 key level * 2^40 + index of each (level, index) pair."""
     it = np.asarray(items, dtype=np.int64).reshape(-1, 2)
     if it.size and (it.min() < 0 or it[:, 1].max() >= 1 << _INDEX_BITS):
         raise ValueError("element (level, index) pairs out of range")
-    keys, inv = np.unique((it[:, 0] << _INDEX_BITS) | it[:, 1], return_inverse=True)
-    return np.column_stack([keys >> _INDEX_BITS, keys & ((1 << _INDEX_BITS) - 1)]), inv.ravel()
+    return (it[:, 0] << _INDEX_BITS) | it[:, 1]
 
 
 @dataclass(frozen=True)
@@ -147,3 +165,37 @@ def mark(eps_b_leaf, leaves, L, const: float = DEFAULT_CONST, eps: float = DEFAU
     n_children = np.bincount(inv, minlength=len(uniq))
     n_ok = np.bincount(inv, weights=ok, minlength=len(uniq))
     return Marks(split, uniq[(n_children == 4) & (n_ok == 4)])
+
+
+def guard(marks: Marks, nd_leaf, leaves, threshold: float, max_level: int) -> Marks:
+    """The interpenetration guard (``adapt.guard_alignment``) on top of Eqs. (25)-(26).
+
+    Section 4.3 flags a corner whose deformed normal n_p and director d_p point apart, n_p . d_p < 0:
+    the top and bottom surfaces cross there.  It happens where a fold turns the sheet through more
+    than an element can follow (the crease of a folded-shut corner "ear"), well before Eq. (25)'s
+    per-element angle says so on a mesh capped at its finest curvature level.  The guard splits a
+    leaf whose lowest corner alignment falls below ``threshold`` (up to ``max_level``), and vetoes
+    the merge of four siblings unless each has n_p . d_p >= cos(acos(threshold) / 2): halving a
+    leaf about halves the angle between a corner's normal and its director, so this is Eq. (26)'s
+    hysteresis in the same measure (a parent would be back at the threshold).
+
+    marks : Eq. (25)-(26)'s marks of the same leaves
+    nd_leaf : (n_leaf,) lowest n_p . d_p per leaf (``leaf_alignment``)
+    threshold : in [-1, 1); GUARD_OFF (-1) returns ``marks`` unchanged
+    """
+    g = float(threshold)
+    if not -1.0 <= g < 1.0:
+        raise ValueError(f"guard threshold {threshold!r} must lie in [-1, 1)")
+    if g <= GUARD_OFF:
+        return marks
+    nd = np.asarray(nd_leaf, float)
+    lv = np.asarray(leaves, dtype=np.int64)
+    if lv.shape != (len(nd), 2):
+        raise ValueError(f"leaves has shape {lv.shape}, expected ({len(nd)}, 2)")
+    split = np.asarray(marks.split, bool) | ((nd < g) & (lv[:, 0] < int(max_level)))
+    merge = np.asarray(marks.merge, dtype=np.int64).reshape(-1, 2)
+    if len(merge):
+        keep_above = np.cos(0.5 * np.arccos(g))
+        low = lv[(lv[:, 0] >= 1) & (nd < keep_above)]
+        merge = merge[~np.isin(_keys(merge), _keys(np.stack([low[:, 0] - 1, low[:, 1] // 4], axis=1)))]
+    return Marks(split, merge)

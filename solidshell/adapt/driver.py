@@ -28,7 +28,7 @@ import numpy as np
 from ..errors import InputError
 from ..problem import SolveResult, no_progress
 from .background import BackgroundMesh
-from .criteria import leaf_bending_strain, level_side_lengths, mark
+from .criteria import GUARD_OFF, Marks, guard, leaf_alignment, leaf_bending_strain, level_side_lengths, mark
 from .forest import ActiveMesh, AdaptiveMesh
 from .settings import AdaptSettings
 from .settle import DirectorSettler
@@ -75,10 +75,10 @@ class AdaptiveRun:
                  curves=None, progress=no_progress, restart=None):
         self.make_problem, self.cls, self.settings, self.adapt = make_problem, integrator_cls, settings, adapt
         self.relax, self.progress = relax, _monotone(progress or no_progress)
-        self.bg = BackgroundMesh.from_level0(level0, adapt.levels, curves if adapt.project_boundary else None,
+        self.bg = BackgroundMesh.from_level0(level0, adapt.total_levels, curves if adapt.project_boundary else None,
                                              adapt.transitions)
         self.L = level_side_lengths(self.bg)
-        self._h_fine = float(np.min(self.L[-1]))   # smallest finest-level side [length]
+        self._h_fine = float(np.min(self.L[adapt.levels]))   # smallest side of Eq. (25)'s finest level
         self.forest = AdaptiveMesh(self.bg)
         self.segments: list[Segment] = []
         self.history = []          # (t, active nodes, elements) after every mesh change and at the start
@@ -88,10 +88,14 @@ class AdaptiveRun:
         # per level: the step at which each element was made a leaf by a split (-1: never), for
         # adapt.merge_hold
         self.born = [np.full(self.bg.n_elements(l), -1, dtype=np.int64) for l in range(self.bg.levels + 1)]
+        # per level: leaves made by a split the guard alone asked for (adapt.guard_alignment), never
+        # merged again: a fold's n_p . d_p need not recover on the finer mesh (docs/adaptivity.md)
+        self.by_guard = [np.zeros(self.bg.n_elements(l), dtype=bool) for l in range(self.bg.levels + 1)]
         self.settle_failures = 0   # director settlings whose residual did not fall by three digits
         self.new_node_fallbacks = 0   # remeshes whose new-node settling fell short (directors only)
         self.pushed_out = 0        # inserted nodes placed inside a contact body and moved to its surface
         self.frozen = None         # (t, step) at which adapt.freeze_leaves stopped the passes
+        self.guard_splits = 0      # leaves split by adapt.guard_alignment alone
         self.integ = None
         self.restart_path = restart
 
@@ -102,7 +106,7 @@ class AdaptiveRun:
         if self.adapt.coarse_membrane == "scene":
             return self.make_problem(act.mesh)
         nq = len(act.mesh.quads)
-        return self.make_problem(act.mesh, coarse_quads=act.elem_leaf[:nq, 0] < self.bg.levels)
+        return self.make_problem(act.mesh, coarse_quads=act.elem_leaf[:nq, 0] < self.adapt.levels)
 
     def start(self) -> None:
         act = self.forest.active_mesh()
@@ -127,12 +131,15 @@ class AdaptiveRun:
         self.remesh_seconds = float(extra[_STATE_PREFIX + "remesh_seconds"])
         for l, b in enumerate(self.born):
             b[:] = np.asarray(extra.get(f"{_STATE_PREFIX}born_{l}", b), dtype=np.int64)
+        for l, g in enumerate(self.by_guard):
+            g[:] = np.asarray(extra.get(f"{_STATE_PREFIX}guard_{l}", g), dtype=bool)
         phases = np.asarray(extra.get(_STATE_PREFIX + "phase_seconds", np.zeros(len(_PHASES))), dtype=float)
         self.phase_seconds = dict(zip(_PHASES, map(float, phases)))
         frozen = np.asarray(extra.get(_STATE_PREFIX + "frozen", np.zeros(0)), dtype=float)
         counters = np.asarray(extra.get(_STATE_PREFIX + "counters", np.zeros(3)), dtype=np.int64)
         self.settle_failures, self.new_node_fallbacks, self.pushed_out = map(int, counters)
         self.frozen = (float(frozen[0]), int(frozen[1])) if frozen.size == 2 else None
+        self.guard_splits = int(np.asarray(extra.get(_STATE_PREFIX + "guard_splits", 0)))
         self.forest = AdaptiveMesh.from_state_arrays(self.bg, self.segments[-1].leaves)
         act = self.segments[-1].active
         self._check_same_adapt(extra, path)
@@ -182,7 +189,9 @@ class AdaptiveRun:
                _STATE_PREFIX + "settings": np.asarray(json.dumps(self._adapt_key(), sort_keys=True)),
                _STATE_PREFIX + "frozen": np.array(self.frozen if self.frozen is not None else [], dtype=float),
                _STATE_PREFIX + "counters": np.array(self._counters(), dtype=np.int64),
-               **{f"{_STATE_PREFIX}born_{l}": b.copy() for l, b in enumerate(self.born)}}
+               _STATE_PREFIX + "guard_splits": np.asarray(self.guard_splits, dtype=np.int64),
+               **{f"{_STATE_PREFIX}born_{l}": b.copy() for l, b in enumerate(self.born)},
+               **{f"{_STATE_PREFIX}guard_{l}": g.copy() for l, g in enumerate(self.by_guard)}}
         for j, i in enumerate(keep):
             out.update({f"{_STATE_PREFIX}s{j}_{k}": v for k, v in self.segments[i].leaves.items()})
         return out
@@ -201,7 +210,7 @@ class AdaptiveRun:
                 status = self.integ.advance(check - self.integ.state.step % check)
                 if status != "running":
                     break
-                if self.frozen is None and self._pass_due():
+                if (self.frozen is None or self._guarded) and self._pass_due():
                     t0 = time.perf_counter()
                     self._adapt_pass()
                     self.remesh_seconds += time.perf_counter() - t0
@@ -240,23 +249,40 @@ class AdaptiveRun:
         finally:
             self.phase_seconds[phase] += time.perf_counter() - t0
 
+    @property
+    def _guarded(self) -> bool:
+        return self.adapt.guard_alignment > GUARD_OFF
+
     def _marks(self):
+        """Eqs. (25)-(26) up to ``adapt.levels`` (none past a freeze), then the guard up to the
+        background's finest level."""
         st = self.integ.state
+        model = self.integ.model
         U = st.D.reshape(-1, 6)
-        eb = self.integ.model.bending_strain(U)
+        eb = model.bending_strain(U)
         leaves, eb_leaf = leaf_bending_strain(eb, self.active.elem_leaf)
-        return mark(eb_leaf, leaves, self.L, self.adapt.const, self.adapt.eps, max_level=self.bg.levels), leaves
+        if self.frozen is None:
+            marks = mark(eb_leaf, leaves, self.L, self.adapt.const, self.adapt.eps, max_level=self.adapt.levels)
+        else:
+            marks = Marks(np.zeros(len(leaves), dtype=bool), np.zeros((0, 2), dtype=np.int64))
+        if not self._guarded:
+            return marks, leaves, np.zeros(len(leaves), dtype=bool)
+        nd = np.concatenate([c.min(axis=1) for c in model.interpenetration(U)])
+        _, nd_leaf = leaf_alignment(nd, self.active.elem_leaf)
+        guarded = guard(marks, nd_leaf, leaves, self.adapt.guard_alignment, self.bg.levels)
+        return guarded, leaves, guarded.split & ~marks.split
 
     def _adapt_pass(self) -> None:
-        """Steps d-f: mark, split/merge, and when the mesh changed continue on the new one."""
+        """Steps d-f: mark, split/merge, and when the mesh changed continue on the new one (past a
+        freeze: the guard's splits only)."""
         with self._timed("mark"):
-            marks, leaves = self._marks()
+            marks, leaves, guard_only = self._marks()
         merge = self._held(marks.merge)
         n_split = int(np.count_nonzero(marks.split))
         n_merge = len(merge)
         if not n_split and not n_merge:
             return
-        if self._freezes(n_split, len(marks.merge)):
+        if self.frozen is None and self._freezes(n_split, len(marks.merge)):
             st = self.integ.state
             self.frozen = (float(st.t), int(st.step))
             return
@@ -266,11 +292,12 @@ class AdaptiveRun:
                 self.forest.merge(merge)
             if n_split:
                 self.forest.split(leaves[marks.split])
-                self._note_births(before)
+                self._note_births(before, leaves[guard_only])
             new = self.forest.active_mesh()
         if np.array_equal(new.nodes, self.active.nodes) and _same_leaves(before, self.forest.state_arrays()):
             return
         self._switch(new, n_split, n_merge)
+        self.guard_splits += int(np.count_nonzero(guard_only))
 
     def _freezes(self, n_split: int, n_merge_marked: int) -> bool:
         """adapt.freeze_leaves: past ``freeze_after``, a pass that would split 1-K leaves and merge
@@ -285,9 +312,9 @@ class AdaptiveRun:
 
     def _held(self, parents):
         """The merges of Eq. (26) less those whose children a split made within the last
-        ``merge_hold * every`` steps."""
+        ``merge_hold * every`` steps, and those whose children the guard made."""
         hold = self.adapt.merge_hold * self.adapt.every
-        if not hold or not len(parents):
+        if not len(parents) or not (hold or self._guarded):
             return parents
         parents = np.asarray(parents, dtype=np.int64).reshape(-1, 2)
         step = self.integ.state.step
@@ -296,16 +323,20 @@ class AdaptiveRun:
             sel = np.flatnonzero(parents[:, 0] == l)
             kids = 4 * parents[sel, 1][:, None] + np.arange(4)
             born = self.born[l + 1][kids]
-            keep[sel] = ~((born >= 0) & (born > step - hold)).any(axis=1)
+            keep[sel] = ~(((born >= 0) & (born > step - hold)) | self.by_guard[l + 1][kids]).any(axis=1)
         return parents[keep]
 
-    def _note_births(self, before: dict) -> None:
-        """Record the step at which each leaf made by this pass's splits appeared."""
+    def _note_births(self, before: dict, by_guard) -> None:
+        """Record the step at which each leaf made by this pass's splits appeared, and which of them
+        the guard alone asked for (the children of the (level, index) parents ``by_guard``)."""
         step = self.integ.state.step
         for l in range(1, self.bg.levels + 1):
             was_leaf_parent = np.asarray(before[f"leaf_{l - 1}"], dtype=bool)
             made = self.forest.leaf[l] & np.repeat(was_leaf_parent, 4)   # children of a parent split now
             self.born[l][made] = step
+        by_guard = np.asarray(by_guard, dtype=np.int64).reshape(-1, 2)
+        for l in np.unique(by_guard[:, 0]):
+            self.by_guard[l + 1][(4 * by_guard[by_guard[:, 0] == l, 1][:, None] + np.arange(4)).ravel()] = True
 
     def _switch(self, new: ActiveMesh, n_split: int, n_merge: int) -> None:
         old, integ = self.active, self.integ
@@ -432,6 +463,9 @@ class AdaptiveRun:
             "adapt_freeze_after": float(self.adapt.freeze_after),
             "adapt_freeze_on": self.adapt.freeze_on,
             "adapt_transitions": self.adapt.transitions,
+            "adapt_guard_alignment": float(self.adapt.guard_alignment),
+            "adapt_guard_levels": int(self.adapt.guard_levels),
+            "guard_splits": int(self.guard_splits),
             "remesh_frozen_at": None if self.frozen is None else {"t": self.frozen[0], "step": self.frozen[1]},
             "settle_failures": int(self.settle_failures),
             "settle_new_node_fallbacks": int(self.new_node_fallbacks),

@@ -13,7 +13,7 @@ from pydantic import Field, model_validator
 
 from ..settings import Finite, SettingsModel, parse
 from .background import MAX_LEVELS
-from .criteria import DEFAULT_CONST, DEFAULT_EPS, check_thresholds
+from .criteria import DEFAULT_CONST, DEFAULT_EPS, GUARD_OFF, check_thresholds
 from .transition import DEFAULT_TRANSITIONS, TRANSITION_POLICIES
 
 
@@ -69,6 +69,15 @@ class AdaptSettings(SettingsModel):
                 node and one element fewer each, at smaller angles) or "quality" (every patch takes
                 its pattern's variant furthest from degenerate, which on a square parent uses the
                 centre node; transition.py, docs/adaptivity.md)
+    guard_alignment : the interpenetration guard: split a leaf where a corner's n_p . d_p (Section 4.3:
+                negative where the sheet passes through itself) falls below this value, whatever
+                Eq. (25) says, and keep four siblings apart until each reads cos(acos(value) / 2)
+                or more (criteria.guard).  Its passes go on past a freeze (splits only).  -1 (the
+                default) turns it off; 0.8 (37 degrees between a corner's normal and its director)
+                catches large-square-pedestal's folding ears (docs/adaptivity.md)
+    guard_levels : levels beyond ``levels`` that only the guard may split into (the background mesh
+                has levels + guard_levels); Eq. (25), the full membrane of ``coarse_membrane`` and
+                the pass schedule's finest side keep to ``levels``
 
     The background mesh itself refuses a level count whose memory estimate exceeds half of the
     available memory (``background.estimate_background_bytes``), with the estimate.
@@ -91,11 +100,24 @@ class AdaptSettings(SettingsModel):
     freeze_after: Finite = Field(0.0, ge=0.0)
     freeze_on: Literal["splits", "changes"] = "splits"
     transitions: Literal[TRANSITION_POLICIES] = DEFAULT_TRANSITIONS
+    guard_alignment: Finite = Field(GUARD_OFF, ge=GUARD_OFF, lt=1.0)
+    guard_levels: int = Field(0, ge=0, le=MAX_LEVELS)
 
     @model_validator(mode="after")
     def _hysteresis(self):
         check_thresholds(self.const, self.eps)       # the criteria's own rule: 0 < eps < const
         return self
+
+    @model_validator(mode="after")
+    def _total_levels(self):
+        if self.levels + self.guard_levels > MAX_LEVELS:
+            raise ValueError(f"levels + guard_levels = {self.levels + self.guard_levels} exceeds {MAX_LEVELS}")
+        return self
+
+    @property
+    def total_levels(self) -> int:
+        """Levels of the background mesh: Eq. (25)'s and the guard's."""
+        return self.levels + self.guard_levels
 
 
 def parse_adapt(table: dict | None, where: str = "adapt") -> AdaptSettings:

@@ -89,7 +89,10 @@ def main(argv=None):
     ap.add_argument("--tag", default="adaptive_vs_uniform")
     ap.add_argument("--max-wall", type=float, default=1800.0, help="wall-time cap of each run [s]")
     ap.add_argument("--skip-uniform", action="store_true", help="adaptive runs only")
+    ap.add_argument("--uniform", metavar="MESH", help="the uniform mesh instead of the case's (one case only)")
     args = ap.parse_args(argv)
+    if args.uniform and len(args.cases) != 1:
+        ap.error("--uniform needs exactly one case")
     out = Path(args.out)
     png = out / "adaptive_png"
     png.mkdir(parents=True, exist_ok=True)
@@ -101,6 +104,7 @@ def main(argv=None):
     results = json.loads(jpath.read_text()) if jpath.exists() else []
     for scene in args.cases:
         uni, lvl0 = CASES[scene]
+        uni = args.uniform or uni
         rec = {"scene": scene, "uniform_mesh": uni, "level0_mesh": lvl0, "overrides": over,
                "load_before": load(), "uniform": None, "adaptive": None}
         for variant, mesh, adaptive in (("uniform", uni, False), ("adaptive", lvl0, True)):

@@ -56,7 +56,8 @@ CASES = {
     # FIRE with director masses x100 and const 0.4: the §6 rows of docs/adaptivity.md that first
     # showed the two states
     "large-square-pedestal": dict(
-        report="lsp_states", meshes=("45x15x4", "48x16x4"), ladder=("24x8x4", "45x15x4", "48x16x4", "90x30x4"),
+        report="lsp_states", meshes=("45x15x4", "48x16x4"),
+        ladder=("45x15x4", "48x16x4", "90x30x4", "96x32x4", "135x45x4"),
         adaptive={"solver.relax.damping": "fire", "solver.relax.mass_scaling": 100.0,
                   "solver.relax.mass_scaling_mode": "director", "adapt.coarse_membrane": "ans",
                   "adapt.const": 0.4}),

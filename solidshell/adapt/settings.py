@@ -74,7 +74,9 @@ class AdaptSettings(SettingsModel):
                 Eq. (25) says, and keep four siblings apart until each reads cos(acos(value) / 2)
                 or more (criteria.guard).  Its passes go on past a freeze (splits only).  -1 (the
                 default) turns it off; 0.8 (37 degrees between a corner's normal and its director)
-                catches large-square-pedestal's folding ears (docs/adaptivity.md)
+                with one guard level keeps large-square-pedestal's folding ears free of
+                interpenetration at three levels, in another state than finer meshes reach
+                (docs/adaptivity.md; the scene's table takes four levels instead)
     guard_levels : levels beyond ``levels`` that only the guard may split into (the background mesh
                 has levels + guard_levels); Eq. (25), the full membrane of ``coarse_membrane`` and
                 the pass schedule's finest side keep to ``levels``

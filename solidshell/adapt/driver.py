@@ -95,7 +95,6 @@ class AdaptiveRun:
         self.new_node_fallbacks = 0   # remeshes whose new-node settling fell short (directors only)
         self.pushed_out = 0        # inserted nodes placed inside a contact body and moved to its surface
         self.frozen = None         # (t, step) at which adapt.freeze_leaves stopped the passes
-        self.guard_splits = 0      # leaves split by adapt.guard_alignment alone
         self.integ = None
         self.restart_path = restart
 
@@ -139,7 +138,6 @@ class AdaptiveRun:
         counters = np.asarray(extra.get(_STATE_PREFIX + "counters", np.zeros(3)), dtype=np.int64)
         self.settle_failures, self.new_node_fallbacks, self.pushed_out = map(int, counters)
         self.frozen = (float(frozen[0]), int(frozen[1])) if frozen.size == 2 else None
-        self.guard_splits = int(np.asarray(extra.get(_STATE_PREFIX + "guard_splits", 0)))
         self.forest = AdaptiveMesh.from_state_arrays(self.bg, self.segments[-1].leaves)
         act = self.segments[-1].active
         self._check_same_adapt(extra, path)
@@ -189,7 +187,6 @@ class AdaptiveRun:
                _STATE_PREFIX + "settings": np.asarray(json.dumps(self._adapt_key(), sort_keys=True)),
                _STATE_PREFIX + "frozen": np.array(self.frozen if self.frozen is not None else [], dtype=float),
                _STATE_PREFIX + "counters": np.array(self._counters(), dtype=np.int64),
-               _STATE_PREFIX + "guard_splits": np.asarray(self.guard_splits, dtype=np.int64),
                **{f"{_STATE_PREFIX}born_{l}": b.copy() for l, b in enumerate(self.born)},
                **{f"{_STATE_PREFIX}guard_{l}": g.copy() for l, g in enumerate(self.by_guard)}}
         for j, i in enumerate(keep):
@@ -253,6 +250,12 @@ class AdaptiveRun:
     def _guarded(self) -> bool:
         return self.adapt.guard_alignment > GUARD_OFF
 
+    @property
+    def guard_splits(self) -> int:
+        """Leaves split by adapt.guard_alignment alone: each made four ``by_guard`` children, and
+        those are never merged."""
+        return sum(int(np.count_nonzero(g)) for g in self.by_guard) // 4
+
     def _marks(self):
         """Eqs. (25)-(26) up to ``adapt.levels`` (none past a freeze), then the guard up to the
         background's finest level."""
@@ -297,7 +300,6 @@ class AdaptiveRun:
         if np.array_equal(new.nodes, self.active.nodes) and _same_leaves(before, self.forest.state_arrays()):
             return
         self._switch(new, n_split, n_merge)
-        self.guard_splits += int(np.count_nonzero(guard_only))
 
     def _freezes(self, n_split: int, n_merge_marked: int) -> bool:
         """adapt.freeze_leaves: past ``freeze_after``, a pass that would split 1-K leaves and merge
@@ -336,7 +338,8 @@ class AdaptiveRun:
             self.born[l][made] = step
         by_guard = np.asarray(by_guard, dtype=np.int64).reshape(-1, 2)
         for l in np.unique(by_guard[:, 0]):
-            self.by_guard[l + 1][(4 * by_guard[by_guard[:, 0] == l, 1][:, None] + np.arange(4)).ravel()] = True
+            parents = by_guard[by_guard[:, 0] == l, 1]
+            self.by_guard[l + 1][(4 * parents[:, None] + np.arange(4)).ravel()] = True
 
     def _switch(self, new: ActiveMesh, n_split: int, n_merge: int) -> None:
         old, integ = self.active, self.integ

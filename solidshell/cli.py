@@ -36,6 +36,7 @@ import sys
 import tomllib
 
 from .errors import InputError, IOFailure, SolverError
+from .solvers import KINDS
 
 EXIT_OK, EXIT_NOT_CONVERGED, EXIT_INPUT, EXIT_IO, EXIT_INTERRUPTED = 0, 1, 2, 3, 130
 
@@ -88,7 +89,7 @@ def _parser() -> argparse.ArgumentParser:
     r = sub.add_parser("run", help="run a scene and write the results")
     r.add_argument("scene", help="scene name or path of a .toml scene file")
     r.add_argument("--mesh", metavar="DENSITY", help="mesh density, e.g. 24x8x4 (default: the scene's)")
-    r.add_argument("--solver", choices=["static", "explicit", "relax"],
+    r.add_argument("--solver", choices=list(KINDS),
                    help="solver (default: the scene's [solver] kind)")
     r.add_argument("--set", metavar="KEY=VALUE", action="append", default=[],
                    help="override a scene key, e.g. solver.static.c=2e-3 (repeatable)")
@@ -221,7 +222,7 @@ def _cmd_sweep(args) -> int:
     from .sweep.engine import require_dask
 
     require_dask()                      # before the sweep is parsed: the one thing to install first
-    from .sweep.engine import run_sweep
+    from .sweep.engine import describe, run_sweep
     from .sweep.report import sweep_group, write_report
 
     spec = load_spec(args.sweep)
@@ -235,16 +236,21 @@ def _cmd_sweep(args) -> int:
                     retries=args.retries, progress=not args.no_progress, group=group, limit=args.limit)
     rep = write_report(spec, out, group)
     print(f"sweep {spec.name}: {res.recorded} run(s) recorded now, {res.skipped} before, "
-          f"{len(res.failed)} without a result, {res.total} in all; {res.wall_time_s:.1f} s")
+          f"{len(res.failed)} failed now, {len(res.failed_before)} before, {res.total} in all; "
+          f"{res.wall_time_s:.1f} s")
     for key, why in res.failed:
-        _say(f"solidshell: run {key} has no result: {why}")
+        _say(f"solidshell: {describe(spec, key)} failed: {why}")
+    for key, why in res.failed_before:
+        _say(f"solidshell: {describe(spec, key)} failed in an earlier invocation: {why}")
     freq = ", ".join(f"{k} folds {v:.0%}" for k, v in rep["fold_frequencies"].items())
     print(f"  {len(rep['states'])} state(s) under {rep['group']}" + (f"; {freq}" if freq else "")
           + (f"; {rep['unsettled']} unsettled" if rep["unsettled"] else ""))
     print(f"  wrote {out}/: ledger/ (Parquet), " + ", ".join(Path(f).name for f in rep["files"]))
     if res.interrupted:
         return EXIT_INTERRUPTED
-    return EXIT_NOT_CONVERGED if res.failed or res.recorded + res.skipped < res.total else EXIT_OK
+    # 1: a run failed (now or before: its error row stays in the ledger), or runs are missing (--limit)
+    incomplete = res.recorded + len(res.failed) + res.skipped < res.total
+    return EXIT_NOT_CONVERGED if res.failed or res.failed_before or incomplete else EXIT_OK
 def _cmd_figures(args) -> int:
     try:
         from paper_figures.registry import make_figures, module_name

@@ -110,6 +110,7 @@ from pathlib import Path
 from typing import Any
 
 from .errors import InputError
+from .solvers import KINDS
 
 SCENE_DIR = Path(__file__).with_name("scenes")
 
@@ -124,7 +125,6 @@ RECIPE_PARAMS = {
 }
 DENSITY_FACTORS = {"strip": 2, "square_on_square": 3, "disc_on_disc": 2, "square_on_disc": 2, "square": 2}
 
-SOLVER_KINDS = ("static", "explicit", "relax")
 PICTURES = ("top", "iso", "side", "side_yz")
 FABRIC_FIELDS = ("tensile_warp", "tensile_weft", "shear", "bending_warp", "bending_weft", "torsion",
                  "weight", "thickness", "warp_angle", "poisson", "transverse_shear", "thickness_modulus")
@@ -489,12 +489,12 @@ class Scene:
 
         # solver --------------------------------------------------------------------
         sv = _table(ctx, "solver", data.get("solver", {}))
-        _unknown(ctx, "solver", sv, {"kind", *SOLVER_KINDS})
+        _unknown(ctx, "solver", sv, {"kind", *KINDS})
         kind = _str(ctx, "solver.kind", sv.get("kind", "static"))
-        if kind not in SOLVER_KINDS:
-            raise ctx.err("solver.kind", f"unknown solver {kind!r} (known: {', '.join(SOLVER_KINDS)})")
+        if kind not in KINDS:
+            raise ctx.err("solver.kind", f"unknown solver {kind!r} (known: {', '.join(KINDS)})")
         solver = {"kind": kind}
-        for k in SOLVER_KINDS:
+        for k in KINDS:
             t = _table(ctx, f"solver.{k}", sv.get(k, {}))
             for kk, vv in t.items():
                 _setting(ctx, f"solver.{k}.{kk}", vv)

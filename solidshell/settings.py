@@ -5,8 +5,7 @@ the solver that reads them; :func:`parse` turns a plain dict (a scene file's ``[
 table merged with ``--set`` overrides) into that model or raises one :class:`InputError` line that
 names the offending key, what it got and what it accepts.  Unknown keys are refused by name.
 
-:func:`validate` is the registry the runner calls before it writes a file: it knows which model
-belongs to which solver kind.
+Which model belongs to which solver kind is the solver registry's (``solidshell.solvers.KINDS``).
 """
 
 from __future__ import annotations
@@ -20,9 +19,7 @@ from pydantic import AfterValidator, BaseModel, ConfigDict, ValidationError
 
 from .errors import InputError
 
-__all__ = ["SettingsModel", "parse", "validate", "Finite", "StateArray", "SOLVER_KINDS"]
-
-SOLVER_KINDS = ("static", "explicit", "relax")
+__all__ = ["SettingsModel", "parse", "Finite", "StateArray"]
 
 
 def _finite(x: float) -> float:
@@ -96,22 +93,3 @@ def parse(model: type[SettingsModel], settings: dict | None, where: str = "setti
         return model.model_validate(dict(settings or {}))
     except ValidationError as exc:
         raise InputError(_one_line(exc, where, model)) from None
-
-
-def model_for(kind: str) -> type[SettingsModel]:
-    """The settings model of a solver kind (imported on demand: the solvers pull in numba)."""
-    if kind == "static":
-        from .solvers.static_settings import StaticSettings
-        return StaticSettings
-    if kind == "explicit":
-        from .solvers.explicit.settings import ExplicitSettings
-        return ExplicitSettings
-    if kind == "relax":
-        from .solvers.explicit.settings import RelaxSettings
-        return RelaxSettings
-    raise InputError(f"unknown solver {kind!r}; choose one of: {', '.join(SOLVER_KINDS)}")
-
-
-def validate(kind: str, settings: dict | None, where: str | None = None) -> Any:
-    """Check a solver kind's settings before any work; returns the parsed settings model."""
-    return parse(model_for(kind), settings, where or f"solver.{kind}")

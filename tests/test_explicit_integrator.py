@@ -14,7 +14,7 @@ from solidshell import Fabric, InputError, IsotropicShell
 from solidshell.model import Model
 from solidshell.problem import Problem
 from solidshell.units import G0
-from solidshell.settings import validate
+from solidshell.solvers import validate
 from solidshell.solvers import explicit
 from solidshell.solvers.explicit import Integrator, checkpoint
 from test_explicit import ISO, cantilever, incline, plate

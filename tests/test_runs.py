@@ -98,7 +98,7 @@ def settings_double(monkeypatch):
     """A small settings schema in place of the real solvers' (a test double, until the merge)."""
     from pydantic import Field
 
-    from solidshell import settings
+    from solidshell import settings, solvers
 
     class Double(settings.SettingsModel):
         tol: settings.Finite = Field(1e-8, gt=0)
@@ -106,7 +106,7 @@ def settings_double(monkeypatch):
         load_factors: list[float] | None = None
         c: float = 1e-3
 
-    monkeypatch.setattr(settings, "model_for", lambda kind: Double)
+    monkeypatch.setattr(solvers, "settings_model", lambda kind: Double)
     return Double
 
 

@@ -12,7 +12,7 @@ from solidshell.material import IsotropicShell
 from solidshell.meshing import build_mesh
 from solidshell.model import Model
 from solidshell.problem import Problem
-from solidshell.settings import validate
+from solidshell.solvers import validate
 from solidshell.solvers.static import run, solve_static
 from solidshell.units import GF_IN_N
 

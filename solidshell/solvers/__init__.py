@@ -1,27 +1,70 @@
-"""Solvers by name.  Each entry is a function ``fn(problem, settings, progress) -> SolveResult``
-(see solidshell.problem); ``settings`` is the scene's [solver] table with user overrides applied.
-Modules are imported only when their solver is asked for, so a static run never loads the explicit
-integrator and vice versa."""
+"""The solver registry: every solver kind by name, with its run function and its settings model.
+
+``KINDS`` is the one list of solver kinds: the CLI's ``--solver`` choices, the scene schema's
+``solver.kind`` and ``[solver.KIND]`` tables, the runner and the sweep spec all read it.  Each kind's
+run function is ``fn(problem, settings, progress) -> SolveResult`` (solidshell.problem) and its
+settings model a ``solidshell.settings.SettingsModel``; both are imported only when that kind is
+asked for, so a static run never loads the explicit integrator and importing this module loads
+neither (numba stays unloaded until a solver runs).
+"""
 
 from __future__ import annotations
 
 import importlib
+from dataclasses import dataclass
 
 from ..errors import InputError
 
-_ENTRIES = {
-    "static": ("solidshell.solvers.static", "run"),
-    "explicit": ("solidshell.solvers.explicit", "run"),
-    "relax": ("solidshell.solvers.explicit", "run_relax"),
-}
+__all__ = ["Kind", "KINDS", "kind", "get", "settings_model", "validate"]
 
-NAMES = tuple(_ENTRIES)
+
+@dataclass(frozen=True)
+class Kind:
+    """A solver kind: where its run function and its settings model live ("module:attribute")."""
+
+    name: str
+    run: str
+    settings: str
+
+    @staticmethod
+    def _attr(ref: str):
+        mod, attr = ref.split(":")
+        return getattr(importlib.import_module(mod), attr)
+
+    def run_function(self):
+        return self._attr(self.run)
+
+    def settings_model(self):
+        return self._attr(self.settings)
+
+
+KINDS: dict[str, Kind] = {k.name: k for k in (
+    Kind("static", "solidshell.solvers.static:run", "solidshell.solvers.static_settings:StaticSettings"),
+    Kind("explicit", "solidshell.solvers.explicit:run", "solidshell.solvers.explicit.settings:ExplicitSettings"),
+    Kind("relax", "solidshell.solvers.explicit:run_relax", "solidshell.solvers.explicit.settings:RelaxSettings"),
+)}
+
+
+def kind(name: str) -> Kind:
+    """The registered kind ``name``; InputError (one line naming the choices) if there is none."""
+    try:
+        return KINDS[name]
+    except KeyError:
+        raise InputError(f"unknown solver {name!r}; choose one of: {', '.join(KINDS)}") from None
 
 
 def get(name: str):
-    """The solver function registered under ``name`` (static | explicit | relax)."""
-    try:
-        mod, fn = _ENTRIES[name]
-    except KeyError:
-        raise InputError(f"unknown solver {name!r}; choose one of: {', '.join(_ENTRIES)}") from None
-    return getattr(importlib.import_module(mod), fn)
+    """The run function of solver kind ``name``."""
+    return kind(name).run_function()
+
+
+def settings_model(name: str):
+    """The settings model (a SettingsModel subclass) of solver kind ``name``."""
+    return kind(name).settings_model()
+
+
+def validate(name: str, settings: dict | None, where: str | None = None):
+    """Check a solver kind's settings before any work; returns the parsed settings model."""
+    from ..settings import parse
+
+    return parse(settings_model(name), settings, where or f"solver.{name}")

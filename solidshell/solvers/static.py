@@ -1304,18 +1304,9 @@ def _solve_static(model, fixed, loads, load_factors, method, prescribed, *, tol,
 def _other_solver_keys() -> set:
     """Setting names of the other registered solvers (explicit, relax): ``run`` ignores them so that
     one settings dict can serve several solvers."""
-    keys = set()
-    try:
-        from ..settings import model_for
-        for kind in ("explicit", "relax"):
-            keys |= set(model_for(kind).model_fields)
-    except Exception:  # noqa: BLE001 - their schema may not exist yet: fall back to their key lists
-        try:
-            from .explicit import _RELAX_KEYS, _RUN_KEYS
-            keys = set(_RUN_KEYS) | set(_RELAX_KEYS)
-        except Exception:  # noqa: BLE001
-            pass
-    return keys
+    from . import KINDS
+
+    return {k for name, kind in KINDS.items() if name != "static" for k in kind.settings_model().model_fields}
 
 
 def run(problem, settings: dict | None = None, progress=None) -> SolveResult:

@@ -1,7 +1,7 @@
 """Typed settings of the static solver (``[solver.static]`` of a scene, ``--set solver.static.KEY``).
 
 Every setting of :func:`solidshell.solvers.static.solve_static` that a scene can set, with its type,
-range and default (the defaults are the solver's own).  ``solidshell.settings.model_for("static")``
+range and default (the defaults are the solver's own).  ``solidshell.solvers.settings_model("static")``
 returns :class:`StaticSettings`; the static ``run`` parses its settings with it, so a bad value is one
 InputError line naming the key before any work starts.
 """

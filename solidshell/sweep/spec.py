@@ -68,6 +68,7 @@ from typing import Any, Literal, Optional
 import numpy as np
 from pydantic import Field
 
+from .. import solvers
 from ..errors import InputError
 from ..settings import Finite, SettingsModel, parse
 
@@ -318,8 +319,7 @@ def check_runs(spec: SweepSpec) -> None:
         try:
             sc = base.with_overrides(r.overrides)
             kind = r.solver or sc.solver["kind"]
-            if kind not in ("static", "explicit", "relax"):
-                raise InputError(f"solver must be static, explicit or relax, got {kind!r}")
+            solvers.kind(kind)      # the registry's one-line error for an unknown kind
             if r.mesh is not None:
                 check_density(r.mesh, sc.recipe, "mesh")
             check_solver_settings(kind, sc.solver_settings(kind))

@@ -2,7 +2,7 @@
 
 Issue #5: on the paper's frictionless sphere the 30 x 30 cm cloth slides off once its folds break
 the symmetry, so the relaxation never reaches a steady state.  The scene now has friction = 0.3
-(``solidshell/scenes/sphere.toml``: the paper is silent; a middle value for wool on a smooth solid).
+(``solidshell/scenes/paper/sphere.toml``: the paper is silent; a middle value for wool on a smooth solid).
 This study runs, one case at a time (a shared 2-core machine), the sphere scene to its steady state
 and records for each case: steps, dt, critical dt, simulated and wall time, fold count, drape
 coefficient about the sphere axis, the max number of interpenetrated nodes (n_p.d_p < 0, Sec. 4.3;

@@ -1,6 +1,6 @@
 """Scenes: a drape problem described as data, in a TOML file a user can write.
 
-The paper's scenes ship as package data (``solidshell/scenes/*.toml``) and load by name
+The paper's scenes ship as package data (``solidshell/scenes/paper/*.toml``) and load by name
 (:func:`load`, :func:`available`); a user's own scene loads by path.  Every unknown key, every
 value of the wrong type and every missing required key is an :class:`~solidshell.errors.InputError`
 that names the key and the file.  All quantities are in the paper's units: cm, gf, s (degrees for
@@ -109,10 +109,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from .errors import InputError
-from .solvers import KINDS
+from ..errors import InputError
+from ..solvers import KINDS
 
-SCENE_DIR = Path(__file__).with_name("scenes")
+SCENE_DIR = Path(__file__).with_name("paper")
 
 # Parameters of the built-in meshing recipes (the contract of solidshell.meshing), and how many
 # factors their density strings have.  Used when meshing.RECIPES cannot tell us.
@@ -231,7 +231,7 @@ def _recipe_params(recipe: str):
     The names come from solidshell.meshing.RECIPES when it is importable, else from the contract
     table; a scene file must give every parameter of the contract table (self-documenting)."""
     try:
-        from . import meshing  # lazy: meshing imports gmsh only when it meshes
+        from .. import meshing  # lazy: meshing imports gmsh only when it meshes
         recipes = getattr(meshing, "RECIPES", {})
     except ImportError:
         recipes = {}
@@ -249,7 +249,7 @@ def _density_fields(recipe: str | None) -> int | None:
     if recipe is None:
         return None
     try:
-        from . import meshing
+        from .. import meshing
         r = meshing.RECIPES.get(recipe)
         if r is not None and getattr(r, "n_fields", 0):
             return int(r.n_fields)
@@ -520,13 +520,13 @@ class Scene:
         # adaptivity (§5): the table is checked here, so a bad value fails before any work ----------
         adapt = dict(_table(ctx, "adapt", data.get("adapt", {})))
         if adapt:
-            from .adapt.settings import parse_adapt
+            from ..adapt.settings import parse_adapt
             parse_adapt(adapt, f"{source}: adapt")
 
         # perturbation of the starting state (solidshell.perturbation), checked here too ------------
         perturbation = dict(_table(ctx, "perturbation", data.get("perturbation", {})))
         if perturbation:
-            from .perturbation import parse_perturbation
+            from ..perturbation import parse_perturbation
             perturbation = parse_perturbation(perturbation, f"{source}: perturbation").as_dict()
 
         return cls(name=name, title=title, paper_section=section, description=description,
@@ -658,7 +658,7 @@ def _setting(ctx, key, v):
 
 
 def _make_material(material: dict):
-    from .material import Fabric, IsotropicShell
+    from ..material import Fabric, IsotropicShell
 
     if "isotropic" in material:
         return IsotropicShell(**material["isotropic"])
@@ -667,7 +667,7 @@ def _make_material(material: dict):
 
 
 def _wool(**kw):
-    from .material import Fabric
+    from ..material import Fabric
     return Fabric.wool(**kw)
 
 

@@ -24,7 +24,7 @@ from .ledger import Ledger
 from .spec import SweepSpec
 from .task import make_task, run_task
 
-__all__ = ["run_sweep", "SweepResult", "require_dask", "INSTALL_HINT"]
+__all__ = ["run_sweep", "SweepResult", "require_dask", "describe", "INSTALL_HINT"]
 
 INSTALL_HINT = "pip install 'solidshell[sweep]'  (or: pip install 'dask[distributed]' pyarrow)"
 
@@ -47,9 +47,12 @@ class SweepResult:
 
     out: Path
     total: int                     # runs in the sweep
-    skipped: int                   # already in the ledger when it started
-    recorded: int                  # recorded by this invocation
-    failed: list = field(default_factory=list)    # (key, one-line reason) of runs without a result
+    skipped: int                   # already in the ledger when it started (with a result or failed)
+    recorded: int                  # results (status "done") recorded by this invocation
+    failed: list = field(default_factory=list)    # (key, one-line reason) of this invocation's runs
+    #                                without a result: refused/stopped (an "error" row, recorded so a
+    #                                resumed sweep does not repeat it) or lost (a task that kept raising)
+    failed_before: list = field(default_factory=list)   # (key, reason) of skipped runs whose row is an error
     interrupted: bool = False
     wall_time_s: float = 0.0
     workers: int = 0
@@ -104,6 +107,16 @@ class _Progress:
             self.bar.close()
 
 
+def describe(spec: SweepSpec, key: str) -> str:
+    """``run <index> (<its varied settings>) [key <key>]``: which entry of the sweep a key is."""
+    run = next((r for r in spec.runs if r.key == key), None)
+    if run is None:
+        return f"run [key {key}]"
+    varied = {k: v for k, v in run.inputs().items() if k in spec.axes}
+    what = ", ".join(f"{k}={v}" for k, v in varied.items())[:120]
+    return f"run {run.index}" + (f" ({what})" if what else "") + f" [key {key}]"
+
+
 def _label(row) -> str:
     if row.get("status") != "done":
         return f"{row['key']}: error"
@@ -142,8 +155,9 @@ def run_sweep(spec: SweepSpec, out, *, scheduler: str | None = None, workers: in
     todo = [r for r in spec.runs if r.key not in done]
     if limit is not None:
         todo = todo[:limit]
-    res = SweepResult(out=Path(out), total=spec.n_runs, skipped=len(done & {r.key for r in spec.runs}),
-                      recorded=0)
+    keys = {r.key for r in spec.runs}
+    res = SweepResult(out=Path(out), total=spec.n_runs, skipped=len(done & keys), recorded=0,
+                      failed_before=[(k, why) for k, why in ledger.errors() if k in keys])
     if not todo:
         return res
     t0 = time.perf_counter()
@@ -168,7 +182,10 @@ def run_sweep(spec: SweepSpec, out, *, scheduler: str | None = None, workers: in
                 res.failed.append((key, " ".join(f"{type(e).__name__}: {e}".split())[:300]))
                 bar.update(f"{key}: FAILED")
                 continue
-            if ledger.append(row):
+            if row.get("status") != "done":         # refused or stopped: recorded, but not a result
+                res.failed.append((row["key"], row.get("error") or f"status {row.get('status')!r}"))
+                ledger.append(row)
+            elif ledger.append(row):
                 res.recorded += 1
             bar.update(_label(row))
     except KeyboardInterrupt:

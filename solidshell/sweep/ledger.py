@@ -145,6 +145,22 @@ class Ledger:
             return set()
         return {p.stem for p in self.dir.glob("*.parquet")}
 
+    def errors(self) -> list:
+        """(key, one-line reason) of the recorded runs without a result (status other than "done"),
+        in key order; only the key, status and error columns are read."""
+        import pyarrow.parquet as pq
+
+        if not self.dir.is_dir():
+            return []
+        out = []
+        for p in sorted(self.dir.glob("*.parquet")):
+            t = pq.read_table(p, columns=[c for c in ("key", "status", "error")
+                                          if c in pq.read_schema(p).names])
+            for r in t.to_pylist():
+                if r.get("status") != "done":
+                    out.append((r.get("key", p.stem), r.get("error") or f"status {r.get('status')!r}"))
+        return out
+
     def append(self, row: dict) -> bool:
         """Record one run's row; False (nothing written) when its key is already recorded."""
         import pyarrow.parquet as pq

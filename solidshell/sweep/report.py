@@ -62,8 +62,10 @@ def write_report(spec: SweepSpec, out, group: str | None = None) -> dict:
     freq = {}
     for st in states:
         freq[st.fold_count] = freq.get(st.fold_count, 0) + st.count
+    n_failed = sum(1 for r in rows if r.get("status") != "done")
     lines = [f"# Sweep {spec.name}", "", spec.description, "",
-             f"{total} of {spec.n_runs} runs recorded; {len(states)} distinct state(s) under symmetry {group} "
+             f"{total} of {spec.n_runs} runs recorded, {n_failed} of them failed (no result); "
+             f"{len(states)} distinct state(s) under symmetry {group} "
              f"(dc_tol {c.dc_tol}, boundary_tol {c.boundary_tol}); {len(unsettled)} run(s) unsettled "
              f"(not converged or failed).", "",
              "| state | folds | runs | frequency | DC mean (min-max) | stable | self-penetrating | representative |",

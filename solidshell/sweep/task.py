@@ -5,8 +5,9 @@ The task runs ``solidshell.runner.run_scene`` in the worker's process, writes th
 It limits the process to ``threads`` threads (numba's kernels and BLAS) so that N single-threaded
 workers use N cores, which is what the speed-up of a sweep rests on.
 
-A run refused by its own checks (InputError) or stopped by its solver (SolverError) is a result:
-its row says ``status = "error"`` with the one-line reason, and a resumed sweep does not repeat it.
+A run refused by its own checks (InputError) or stopped by its solver (SolverError) is recorded
+but counted as failed: its row says ``status = "error"`` with the one-line reason, a resumed sweep
+does not repeat it, and ``solidshell sweep`` names it and exits 1.
 Anything else (a bug, a lost worker) propagates, and Dask retries the task.
 """
 

@@ -61,8 +61,20 @@ def line(r: Record) -> str:
     return f"{r.name:<58} {fmt_value(r.value):>13} {fmt_value(r.reference_value):>13} {err:>10} {tol:>8}  {res}{extra}"
 
 
+def _error_record(name: str, note: str, why: str) -> Record:
+    return Record(name=f"{name}/error", reference="-", source="-", quantity="-", value=None,
+                  reference_value=None, error=None, tolerance=None, passed=False, wall_time_s=0.0,
+                  status="error", note=note, why=why)
+
+
+def failed(r: Record) -> bool:
+    """A record that fails the run: status failed or error, or a False verdict whatever its status."""
+    return r.status in ("failed", "error") or r.passed is False
+
+
 def run_checks(checks, quick: bool = False, log=print) -> dict:
-    """Run the checks; a check that raises becomes one "error" record (the run goes on)."""
+    """Run the checks; a check that raises, or returns no record, becomes one "error" record (the
+    run goes on, and the run's ``failed`` count, hence ``solidshell verify``'s exit status, says so)."""
     ctx = Context(quick=quick, log=log)
     records, per_check = [], []
     t_all = time.perf_counter()
@@ -73,10 +85,12 @@ def run_checks(checks, quick: bool = False, log=print) -> dict:
         try:
             recs = list(c.fn(ctx))
         except Exception as exc:  # noqa: BLE001 - a broken check is a failed check, not a crash
-            recs = [Record(name=f"{c.name}/error", reference="-", source="-", quantity="-", value=None,
-                           reference_value=None, error=None, tolerance=None, passed=False, wall_time_s=0.0,
-                           status="error", note=f"{type(exc).__name__}: {exc}",
-                           why=traceback.format_exc(limit=3).strip().splitlines()[-1])]
+            fr = traceback.extract_tb(exc.__traceback__)[-1]
+            recs = [_error_record(c.name, " ".join(f"{type(exc).__name__}: {exc}".split()),
+                                  f"{type(exc).__name__} raised at {Path(fr.filename).name}:{fr.lineno} in {fr.name}")]
+        else:
+            if not recs:            # a check that measured nothing has verified nothing
+                recs = [_error_record(c.name, "the check returned no records", "a check returns >= 1 record")]
         wall = time.perf_counter() - t0
         for r in recs:
             r.check, r.topic = c.name, c.topic
@@ -85,10 +99,10 @@ def run_checks(checks, quick: bool = False, log=print) -> dict:
             f["check"] = c.name
         records += recs
         per_check.append({"name": c.name, "topic": c.topic, "summary": c.summary, "wall_time_s": wall,
-                          "records": len(recs), "failed": sum(r.status in ("failed", "error") for r in recs),
+                          "records": len(recs), "failed": sum(failed(r) for r in recs),
                           "skipped": sum(r.status == "skipped" for r in recs)})
     total = time.perf_counter() - t_all
-    n_fail = sum(r.status in ("failed", "error") for r in records)
+    n_fail = sum(failed(r) for r in records)
     n_skip = sum(r.status == "skipped" for r in records)
     log(f"{len(records)} records from {len(checks)} checks: {len(records) - n_fail - n_skip} passed, "
         f"{n_fail} failed, {n_skip} skipped; {total:.1f} s")

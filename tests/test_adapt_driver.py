@@ -9,6 +9,7 @@ measured values quoted in the tests are from this file's runs (2-core machine, D
 
 from __future__ import annotations
 
+import re
 import subprocess
 import sys
 import xml.etree.ElementTree as ET
@@ -638,7 +639,7 @@ def test_bad_adaptive_input_one_line_before_any_file(case, tmp_path):
     if scene is None:
         scene = str(_triangle_scene(tmp_path))
     out = tmp_path / "out"
-    with pytest.raises(InputError) as e:
+    with pytest.raises(InputError, match=re.escape(words[0])) as e:
         run_scene(scene, out_dir=out, progress=False, adaptive=True, **kw)
     msg = str(e.value)
     assert "\n" not in msg and all(w in msg for w in words), msg

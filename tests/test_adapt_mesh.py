@@ -120,7 +120,7 @@ def test_background_nodes_labels_and_sets():
     assert bg.from_label("1-3-1") == (2, 4 * (4 * 1 + 2) + 0)
     for l, e in [(0, 1), (3, 127), (3, 77), (1, 5)]:
         assert bg.from_label(bg.label(l, e)) == (l, e)
-    with pytest.raises(InputError):
+    with pytest.raises(InputError, match="bad element label '0-5' for 2 level-0 elements and 3 levels"):
         bg.from_label("0-5")
     # node sets: the left edge x = 0 keeps all its 9 finest nodes, the single corner node stays alone
     assert np.allclose(bg.Xo[bg.node_sets["left"], 0], 0.0) and len(bg.node_sets["left"]) == 9

@@ -382,11 +382,17 @@ def test_bending_strain_of_a_cylindrical_bend_is_its_curvature():
 
 
 def test_thresholds_refused():
-    for const, eps in [(0.2, 0.2), (0.1, 0.2), (0.0, -0.1), (-1.0, 0.5), (0.5, 0.0),
-                       (float("nan"), 0.1), (0.5, float("inf")), ("a", 0.1)]:
-        with pytest.raises(InputError):
+    for const, eps, words in [(0.2, 0.2, r"eps = 0\.2 must be less than const = 0\.2 \(Eq\. 26\)"),
+                              (0.1, 0.2, r"eps = 0\.2 must be less than const = 0\.1 \(Eq\. 26\)"),
+                              (0.0, -0.1, r"const = 0\.0: must be a positive number \(Eq\. 25\)"),
+                              (-1.0, 0.5, r"const = -1\.0: must be a positive number"),
+                              (0.5, 0.0, r"eps = 0\.0: must be a positive number \(Eq\. 26\)"),
+                              (float("nan"), 0.1, r"const = nan: must be a positive number"),
+                              (0.5, float("inf"), r"eps = inf: must be a positive number"),
+                              ("a", 0.1, r"const = 'a', eps = 0\.1: numbers expected")]:
+        with pytest.raises(InputError, match=words):
             C.check_thresholds(const, eps)
-        with pytest.raises(InputError):
+        with pytest.raises(InputError, match=words):
             C.mark([1.0], [[0, 0]], [np.ones(1)], const=const, eps=eps)
     assert C.check_thresholds(C.DEFAULT_CONST, C.DEFAULT_EPS) == (0.5, 0.2)
     with pytest.raises(InputError, match="eps"):
@@ -479,5 +485,5 @@ def test_guard_splits_below_its_threshold_and_keeps_low_siblings_apart():
     assert C.guard(m, nd, leaves, g, max_level=0).split.sum() == 0        # capped at level 0
     off = C.guard(m, np.full(len(leaves), -1.0), leaves, C.GUARD_OFF, max_level=2)
     assert off is m
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match=r"guard threshold 1\.0 must lie in \[-1, 1\)"):
         C.guard(m, nd, leaves, 1.0, max_level=2)

@@ -148,7 +148,7 @@ def test_projected_boundary_and_dc_of_deformed_annulus():
 
 def test_drape_coefficient_formula():
     assert drape_coefficient(300.0, 400.0, 100.0) == pytest.approx(200 / 300)
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match=r"sheet area \(1\.0\) must exceed the pedestal area \(2\.0\)"):
         drape_coefficient(1.0, 1.0, 2.0)
 
 

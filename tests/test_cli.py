@@ -161,7 +161,7 @@ def test_version_and_help(capsys):
     from solidshell.cli import main
 
     for argv, needles in ((["--version"], ["solidshell 0."]), (["run", "--help"], ["--set", "--solver", "--mesh"])):
-        with pytest.raises(SystemExit) as e:
+        with pytest.raises(SystemExit, match="^0$") as e:       # argparse exits 0 after printing
             main(argv)
         assert e.value.code == 0
         out = capsys.readouterr().out

@@ -126,9 +126,9 @@ def test_contact_forces_sum_and_stiffness_rules():
     np.testing.assert_allclose(k, 0.1 * m * 1e4)
     assert contact_critical_time_step(k, m) == pytest.approx(2.0 / math.sqrt(1e3))
     assert combined_critical_time_step(100.0, k, m) == pytest.approx(0.02 / math.sqrt(1.1))
-    with pytest.raises(InputError):
+    with pytest.raises(InputError, match=r"either radius \(cylinder\) or half_widths \(box\), not both"):
         Pedestal((0, 0, 0), radius=1.0, half_widths=(1, 1))
-    with pytest.raises(InputError):
+    with pytest.raises(InputError, match="sphere radius must be positive, got -1.0"):
         Sphere((0, 0, 0), -1.0)
 
 

@@ -170,7 +170,7 @@ def test_mass_scaling_modes(strip):
     r_dir = dire.info["critical_time_step"] / base.info["critical_time_step"]
     assert r_uni == pytest.approx(10.0, rel=1e-5)   # omega^2 scales exactly as 1/s
     assert 1.5 < r_dir <= 10.0 * (1 + 1e-6)          # director scaling gains, at most sqrt(s)
-    with pytest.raises(InputError):
+    with pytest.raises(InputError, match="mass_scaling_mode = 'nodes': Input should be 'uniform' or 'director'"):
         explicit.run(strip, {"t_end": 1e-4, "mass_scaling_mode": "nodes"})
 
 
@@ -284,10 +284,10 @@ def _interrupted_then_resumed(prob, s, ck, every, frac, before_resume=None):
 
     def interrupt(f, text):
         if frac < f < 1.0:
-            raise Stop
+            raise Stop("interrupted by the progress callback")
 
     cks = {"checkpoint": ck, **({"checkpoint_every": every} if every else {"checkpoint_wall": 1e-9})}
-    with pytest.raises(Stop):
+    with pytest.raises(Stop, match="interrupted by the progress callback"):
         explicit.run(prob, {**s, **cks}, progress=interrupt)
     if before_resume is not None:
         before_resume()
@@ -310,7 +310,7 @@ def test_checkpoint_restart_bit_for_bit(tmp_path, every):
     for k in ("energy_balance_error", "final_kinetic_energy", "damping_dissipation", "steps"):
         assert resumed.info[k] == full.info[k], k
     # a checkpoint of another run is refused
-    with pytest.raises(InputError):
+    with pytest.raises(InputError, match=r"does not match this run: .*setting alpha"):
         explicit.run(prob, {**s, "alpha": 1.0, "restart": ck})
 
 
@@ -432,10 +432,10 @@ def test_recheck_shortens_the_step_when_the_state_stiffens(tmp_path):
 
     def interrupt(frac, text):
         if 0.6 < frac < 1.0:
-            raise Stop
+            raise Stop("interrupted by the progress callback")
 
     s2 = {**s, "recheck_every": 10, "checkpoint": ck, "checkpoint_every": 15}
-    with pytest.raises(Stop):
+    with pytest.raises(Stop, match="interrupted by the progress callback"):
         explicit.run(prob, s2, progress=interrupt)
     again = explicit.run(prob, {**s2, "restart": ck})
     assert again.info["restarted_from_step"] > 0
@@ -504,9 +504,9 @@ def test_snapshots_and_frames(strip):
     assert len(iv) == 4 and np.all(np.diff(t) > 0) and np.all((iv >= k - 1e-15) & (iv < k + dt)), (iv, dt)
     assert np.all([np.isfinite(U).all() for _, U in r.frames])
     # a relaxation keeps a time series by default (every 0.05 s); frame_interval = 0 turns it off
-    with pytest.raises(InputError):
+    with pytest.raises(InputError, match=r"frame_interval = -1\.0: Input should be greater than or equal to 0"):
         explicit.run(strip, {"t_end": 0.01, "frame_interval": -1.0})
-    with pytest.raises(InputError):
+    with pytest.raises(InputError, match=r"snapshots\.0 = -1\.0: Input should be greater than or equal to 0"):
         explicit.run(strip, {"t_end": 0.01, "snapshots": [-1.0]})
     with pytest.raises(InputError, match="unknown explicit setting"):
         explicit.run(strip, {"t_end": 0.01, "tend": 1.0})

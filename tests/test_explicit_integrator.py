@@ -170,9 +170,9 @@ def relax_whole_and_restarted(prob, s, ck):
 
     def stop(frac, text):
         if 0.5 < frac < 1.0:
-            raise Stop
+            raise Stop("stopped by the progress callback")
 
-    with pytest.raises(Stop):
+    with pytest.raises(Stop, match="stopped by the progress callback"):
         explicit.run_relax(prob, {**s, **cks}, progress=stop)
     return full, explicit.run_relax(prob, {**s, **cks, "restart": ck})
 

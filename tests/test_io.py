@@ -19,7 +19,7 @@ def _leftovers(d):
 
 def test_atomic_write_exception_leaves_nothing(tmp_path):
     p = tmp_path / "summary.json"
-    with pytest.raises(RuntimeError):
+    with pytest.raises(RuntimeError, match="crash mid-write"):
         with io.atomic_write(p) as f:
             f.write('{"half": ')
             raise RuntimeError("crash mid-write")
@@ -31,16 +31,16 @@ def test_atomic_write_keeps_old_file_on_failure(tmp_path):
     p = tmp_path / "a.txt"
     with io.atomic_write(p) as f:
         f.write("old")
-    with pytest.raises(KeyboardInterrupt):
+    with pytest.raises(KeyboardInterrupt, match="Ctrl-C mid-write"):
         with io.atomic_write(p) as f:
             f.write("new but unfinished")
-            raise KeyboardInterrupt
+            raise KeyboardInterrupt("Ctrl-C mid-write")
     assert p.read_text() == "old" and _leftovers(tmp_path) == ["a.txt"]
 
 
 def test_atomic_path_exception_leaves_nothing(tmp_path):
     p = tmp_path / "mesh.vtu"
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match="writer failed"):
         with io.atomic_path(p) as tmp:
             assert tmp.parent == p.parent and tmp.suffix == ".vtu" and tmp != p
             tmp.write_bytes(b"partial")
@@ -60,7 +60,7 @@ def test_atomic_write_success_and_mode(tmp_path):
 
 def test_write_json_unserialisable_leaves_nothing(tmp_path):
     p = tmp_path / "summary.json"
-    with pytest.raises(TypeError):
+    with pytest.raises(TypeError, match="summary value of type object is not JSON-serialisable"):
         io.write_json(p, {"ok": 1, "bad": object()})
     assert not p.exists() and _leftovers(tmp_path) == []
 
@@ -84,7 +84,7 @@ def test_mesh_write_failure_leaves_nothing(tmp_path, monkeypatch):
         raise OSError("disk full")
 
     monkeypatch.setattr(meshio.xdmf, "write", broken)
-    with pytest.raises(OSError):
+    with pytest.raises(OSError, match="disk full"):
         io.write_mesh_file(tmp_path / "mesh.xdmf", mesh)
     assert _leftovers(tmp_path) == []
 

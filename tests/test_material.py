@@ -68,8 +68,11 @@ def test_isotropic_hand_computed():
     assert s.thickness == 0.1
 
 
-@pytest.mark.parametrize("kw", [dict(E=0.0, nu=0.3, h=0.1), dict(E=1e5, nu=0.3, h=-0.1),
-                                dict(E=1e5, nu=0.5, h=0.1), dict(E=1e5, nu=0.3, h=0.1, density=-1.0)])
-def test_isotropic_rejects_bad(kw):
-    with pytest.raises(InputError):
+@pytest.mark.parametrize("kw, words", [
+    (dict(E=0.0, nu=0.3, h=0.1), r"E must be positive and finite \[force/length\^2\], got 0\.0"),
+    (dict(E=1e5, nu=0.3, h=-0.1), r"h must be positive and finite \[length\], got -0\.1"),
+    (dict(E=1e5, nu=0.5, h=0.1), r"nu must lie in \(-1, 0\.5\), got 0\.5"),
+    (dict(E=1e5, nu=0.3, h=0.1, density=-1.0), r"density must be >= 0 \[mass/length\^3\], got -1\.0")])
+def test_isotropic_rejects_bad(kw, words):
+    with pytest.raises(InputError, match=words):
         IsotropicShell(**kw)

@@ -23,7 +23,7 @@ def _record(monkeypatch, stop_after):
     def fake_run(scene, mesh=None, solver=None, overrides=None, adaptive=None, **settings):
         calls.append((scene, solver, settings))
         if len(calls) >= stop_after:
-            raise _Stop
+            raise _Stop(f"stopped after {stop_after} run(s)")
         out = SimpleNamespace(mesh=SimpleNamespace(nodes=np.zeros((1, 3))), U=np.zeros((1, 6)))
         return out, {"converged": True, "fold_count": 8, "drape_coefficient": 0.06}
 
@@ -39,7 +39,7 @@ def _effective(scene, settings):
 
 def test_fig11_runs_rayleigh_alpha_50_and_10(monkeypatch, tmp_path):
     calls = _record(monkeypatch, stop_after=2)
-    with pytest.raises(_Stop):
+    with pytest.raises(_Stop, match=r"stopped after 2 run\(s\)"):
         fig11.make(tmp_path, quick=False)
     got = [_effective(sc, kw) for sc, solver, kw in calls]
     assert [(g.damping, g.alpha, g.mass_scaling, g.mass_scaling_mode) for g in got] == \
@@ -49,7 +49,7 @@ def test_fig11_runs_rayleigh_alpha_50_and_10(monkeypatch, tmp_path):
 @pytest.mark.parametrize("quick, damping", [(False, "rayleigh"), (True, "kinetic")])
 def test_sphere_figures_name_their_damping(monkeypatch, quick, damping):
     calls = _record(monkeypatch, stop_after=1)
-    with pytest.raises(_Stop):
+    with pytest.raises(_Stop, match=r"stopped after 1 run\(s\)"):
         _sphere.run_sphere("60x60", quick)
     (sc, solver, kw), = calls
     s = _effective(sc, kw)

@@ -320,7 +320,7 @@ def test_full_disk_exit_3_names_file_and_leaves_no_summary(tmp_path, capsys, mon
     # the old run's summary is gone (it would describe files that are no longer its own); the
     # RUNNING marker says a run started here and did not finish
     assert "summary.json" not in names(out) and "RUNNING" in names(out)
-    with pytest.raises(IOFailure) as e:
+    with pytest.raises(IOFailure, match="mesh.vtu: No space left on device") as e:
         from solidshell.runner import run_scene
         run_scene("strip-warp", mesh="4x1", solver="none", out_dir=out, progress=False)
     assert e.value.path == str(out / "mesh.vtu") and isinstance(e.value, OSError)

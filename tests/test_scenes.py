@@ -1,5 +1,6 @@
 """Scene files: the nine packaged scenes, strict validation, overrides, meshes with the paper's counts."""
 
+import re
 import textwrap
 
 import numpy as np
@@ -129,7 +130,7 @@ def test_user_scene_minimal(tmp_path):
 def test_unknown_key_names_key_and_file(tmp_path, extra, key):
     text = BASE.replace('[geometry]', extra + '[geometry]') if not extra.startswith("[") else BASE + extra
     p = write(tmp_path, text)
-    with pytest.raises(InputError) as e:
+    with pytest.raises(InputError, match=re.escape(f"{p}: {key}: unknown key (allowed here: ")) as e:
         scenes.load(p)
     msg = str(e.value)
     assert key in msg and str(p) in msg and "unknown key" in msg
@@ -157,7 +158,7 @@ def test_unknown_geometry_key(tmp_path):
 ])
 def test_wrong_types(tmp_path, old, new, key):
     p = write(tmp_path, BASE.replace(old, new))
-    with pytest.raises(InputError) as e:
+    with pytest.raises(InputError, match=re.escape(f"{p}: {key}: ")) as e:     # file: key: what is wrong
         scenes.load(p)
     assert key in str(e.value) and str(p) in str(e.value)
 
@@ -186,8 +187,11 @@ def test_malformed_density(tmp_path, density):
 
 def test_check_density():
     assert scenes.check_density("48X16×4", "square_on_square") == "48x16x4"
-    for bad in ("24x8", "0x5x4", "-3x4x4", ""):
-        with pytest.raises(InputError):
+    for bad, words in (("24x8", "'24x8': recipe 'square_on_square' takes 3 counts"),
+                       ("0x5x4", "'0x5x4': every count must be positive"),
+                       ("-3x4x4", "'-3x4x4': expected positive integers joined by 'x'"),
+                       ("", "'': expected positive integers joined by 'x'")):
+        with pytest.raises(InputError, match=re.escape(f"malformed mesh density {words}")):
             scenes.check_density(bad, "square_on_square")
 
 

@@ -198,9 +198,9 @@ def test_registry_run_entry():
 
 def test_bad_input():
     mesh, model, fixed, P = wool_strip(10, "warp")
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match="unknown static method 'dynamic'; choose one of: newton, paper"):
         solve_static(model, fixed, P, method="dynamic")
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match="every dof is fixed: nothing to solve"):
         solve_static(model, np.ones_like(fixed), P)
 
 

@@ -54,7 +54,7 @@ def test_main_list_case_and_report(capsys):
     assert json.loads(capsys.readouterr().out) == {"case": "two", "ok": True}
     cases.main([], "doc", demo, run, lambda: reported.append(1), str)      # no option: the report
     assert reported == [1]
-    with pytest.raises(SystemExit) as e:     # an unknown case is a usage error (argparse, exit 2)
+    with pytest.raises(SystemExit, match="^2$") as e:     # an unknown case is a usage error (argparse, exit 2)
         cases.main(["--case", "three"], "doc", demo, run, lambda: None, str)
     assert e.value.code == 2
 

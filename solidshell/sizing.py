@@ -6,7 +6,7 @@ alone (:func:`elements_of_density`), against the memory the machine has availabl
 (:func:`available_memory`).  ``allow_large=True`` (CLI ``--allow-large``) overrides it.
 
 Memory per element (quads; a triangle costs less), measured as the rise in peak resident memory
-of ``run_scene("square-pedestal", mesh=...)`` between meshes (2026-12-01, this machine):
+of ``run_scene("square-pedestal", mesh=...)`` between meshes (on the 2-core development machine):
 
 - meshing (gmsh) : 100x33x4 -> 200x66x4 (13200 -> 52800 elements): 1.0 KiB per element;
 - explicit/relax : 48x16x4 -> 96x32x4 (3072 -> 12288): 2.6 KiB per element for the loop, plus

@@ -17,7 +17,7 @@ energy of Eq. (7), all four rigidities are resultants (integrated through the th
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import MISSING, dataclass, field, fields
 
 import numpy as np
 
@@ -152,6 +152,10 @@ class Fabric:
         return math.radians(self.warp_angle)
 
 
+FABRIC_FIELDS = tuple(f.name for f in fields(Fabric) if f.name != "name")
+"""The Fabric fields a scene's ``[material]`` table may set beside ``fabric`` and ``name``."""
+
+
 @dataclass(frozen=True)
 class IsotropicShell:
     """Homogeneous isotropic linear-elastic shell (any consistent units).
@@ -217,3 +221,9 @@ class IsotropicShell:
     def weight_per_area(self) -> float:
         """Weight per area = mass per area * gravity (gravity defaults to g0 in cm/s^2)."""
         return self.mass_per_area * self.gravity
+
+
+ISOTROPIC_FIELDS = tuple(f.name for f in fields(IsotropicShell) if f.name not in ("gravity", "name"))
+"""The IsotropicShell fields a scene's ``material.isotropic`` table may set (gravity is the unit system's)."""
+ISOTROPIC_REQUIRED = tuple(f.name for f in fields(IsotropicShell) if f.default is MISSING)
+"""Those it must set (E, nu, h)."""

@@ -457,11 +457,13 @@ def _physical_sets(m) -> dict[str, np.ndarray]:
 # --------------------------------------------------------------------------- registry
 @dataclass(frozen=True)
 class Recipe:
-    """A mesh recipe: ``build(counts, **geometry)``, its default density and density form."""
+    """A mesh recipe: ``build(counts, **geometry)``, its default density and density form;
+    ``optional``: the geometry keywords a scene file may leave out (it states every length)."""
     build: Callable[..., ShellMesh]
     density: str | None
     form: str | None
     doc: str
+    optional: tuple[str, ...] = ()
 
     @property
     def n_fields(self) -> int:
@@ -473,11 +475,17 @@ class Recipe:
         params = list(inspect.signature(self.build).parameters)
         return tuple(params[1:]) if self.form is not None else tuple(params)
 
+    @property
+    def required(self) -> tuple[str, ...]:
+        """The geometry keywords a scene file must give (solidshell.scenes)."""
+        return tuple(p for p in self.geometry if p not in self.optional)
+
 
 RECIPES: dict[str, Recipe] = {
     "strip": Recipe(strip, "10x1", "NxM", "5x1 cm strip clamped at x = 0; N along x M across (§3.1)"),
     "square_on_square": Recipe(square_on_square, "24x8x4", "AxBx4",
-                               "hanging part of a square sheet on a square pedestal; 4 trapezoidal panels (§3.2, §3.5)"),
+                               "hanging part of a square sheet on a square pedestal; 4 trapezoidal panels (§3.2, §3.5)",
+                               optional=("grading",)),
     "disc_on_disc": Recipe(disc_on_disc, "10x40", "RxC",
                            "hanging annulus of a Ø25.4 disc on a Ø12.7 pedestal; R radial x C around (§3.3)"),
     "square_on_disc": Recipe(square_on_disc, "30x240", "RxC",

@@ -14,12 +14,10 @@ from numba import get_num_threads
 
 from .assembly import (FreeLowerPattern, SparsePattern, element_dofs, scatter_add_half, scatter_add_mat,
                        scatter_add_vec)
-from .elements import core, quad4, tri3
+from .elements import THICKNESS_STRAINS, core, quad4, tri3
 from .elements.corners import corner_alignment
 from .errors import InputError
 from .mesh import ShellMesh
-
-_THICKNESS_STRAINS = ("green", "quasi")
 
 TANGENT_CHUNK = 1024
 """Elements per kernel call when tangents are assembled (Model._force_and_tangent_into)."""
@@ -247,8 +245,8 @@ class Model:
 
     def __init__(self, mesh: ShellMesh, material, thickness_strain: str = "green", mu: float = 0.5,
                  membrane: str = "full", constants: ElementConstants | None = None):
-        if thickness_strain not in _THICKNESS_STRAINS:
-            raise InputError(f"thickness_strain must be one of {_THICKNESS_STRAINS}, got {thickness_strain!r}")
+        if thickness_strain not in THICKNESS_STRAINS:
+            raise InputError(f"thickness_strain must be one of {THICKNESS_STRAINS}, got {thickness_strain!r}")
         runs = _membrane_runs(membrane, len(mesh.quads))
         if not (0.0 < float(mu) < 1.0):
             raise InputError(f"mu of Eq. (24) must lie in (0, 1), got {mu!r}")

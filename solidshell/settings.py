@@ -85,11 +85,13 @@ def _one_line(exc: ValidationError, where: str, model: type[SettingsModel]) -> s
     return f"{where}: " + "; ".join(parts)
 
 
-def parse(model: type[SettingsModel], settings: dict | None, where: str = "settings") -> SettingsModel:
-    """``model`` built from ``settings`` (None: all defaults); InputError (one line) if invalid."""
+def parse(model: type[SettingsModel], settings: dict | None, where: str = "settings", *,
+          explain=_one_line) -> SettingsModel:
+    """``model`` built from ``settings`` (None: all defaults); InputError (one line) if invalid.
+    ``explain(exc, where, model)`` words that line (the scene schema names file and dotted key)."""
     if isinstance(settings, model):
         return settings
     try:
         return model.model_validate(dict(settings or {}))
     except ValidationError as exc:
-        raise InputError(_one_line(exc, where, model)) from None
+        raise InputError(explain(exc, where, model)) from None

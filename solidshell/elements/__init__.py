@@ -3,3 +3,7 @@
 from . import quad4, tri3
 
 TYPES = {"quad": quad4, "tri": tri3}
+
+THICKNESS_STRAINS = ("green", "quasi")
+"""The thickness strain of the kernels (core.py, lanes*.py): Green (Eq. 3) or the quasi-engineering
+strain of Eq. (24); ``Model(thickness_strain=...)`` and a scene's ``model.thickness_strain``."""

@@ -1,0 +1,551 @@
+"""The scene file's schema: one pydantic model per TOML table, on :class:`solidshell.settings.SettingsModel`.
+
+:func:`parse` validates a scene's table (a parsed TOML file, after ``--set`` overrides) and returns a
+:class:`SceneDoc`, or raises one :class:`~solidshell.errors.InputError` line ``FILE: dotted.key: what
+is wrong`` (``contact[0].radius``, ``output.snapshots[1]``).  The vocabularies come from where they
+are defined: recipes and their geometry keywords and density counts (solidshell.meshing.RECIPES),
+fabric and isotropic fields (solidshell.material), membranes (solidshell.elements.quad4), thickness
+strains (solidshell.elements), picture views (solidshell.plotting), solver kinds and their tables
+(solidshell.solvers.KINDS).  The solver tables are free plain values here: each kind's settings
+model checks them before a run (solidshell.solvers.validate).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from types import UnionType
+from typing import Annotated, Optional, Union, get_args, get_origin
+
+from pydantic import (AfterValidator, BeforeValidator, Discriminator, Field, PlainValidator, Tag,
+                      ValidationError, create_model, model_validator)
+
+from .. import meshing
+from ..elements import THICKNESS_STRAINS
+from ..elements.quad4 import MEMBRANES
+from ..errors import InputError
+from ..material import FABRIC_FIELDS, ISOTROPIC_FIELDS, ISOTROPIC_REQUIRED, Fabric, IsotropicShell
+from ..plotting import VIEWS
+from ..settings import SettingsModel, parse as parse_model
+from ..solvers import KINDS
+
+__all__ = ["SceneDoc", "parse", "check_density", "FABRICS", "make_material"]
+
+FABRICS = {"wool": Fabric.wool}
+"""Named fabrics a scene's ``material.fabric`` may start from (Table 1)."""
+RECIPES = {k: r for k, r in meshing.RECIPES.items() if r.form is not None}    # from_file: geometry.file
+
+
+# --------------------------------------------------------------------------- one-line errors
+class Bad(ValueError):
+    """A problem at ``key`` (dotted, relative to where it is raised; "" = right there)."""
+
+    def __init__(self, key: str, msg: str):
+        super().__init__(msg)
+        self.key, self.msg = key, msg
+
+
+def _typename(v) -> str:
+    return {bool: "boolean", int: "integer", float: "number", str: "string", list: "array",
+            dict: "table"}.get(type(v), type(v).__name__)
+
+
+def _got(v) -> str:
+    return f"{_typename(v)} {v!r}"
+
+
+def _join(key: str, sub) -> str:
+    """``key`` and a sub-key: a name (``a.b``), an index (``a[0]``) or a key starting with one."""
+    if sub is None or sub == "":
+        return key
+    if isinstance(sub, int):
+        return f"{key}[{sub}]"
+    return key + sub if sub.startswith("[") or not key else f"{key}.{sub}"
+
+
+def _strip(t):
+    """The type under Annotated[...] and Optional[...] (a tagged union is kept)."""
+    while True:
+        if get_origin(t) is Annotated:
+            t = get_args(t)[0]
+        elif get_origin(t) in (Union, UnionType) and type(None) in get_args(t):
+            rest = [a for a in get_args(t) if a is not type(None)]
+            t = rest[0] if len(rest) == 1 else Union[tuple(rest)]
+        else:
+            return t
+
+
+def _tag(member):
+    return next((m.tag for m in getattr(member, "__metadata__", ()) if isinstance(m, Tag)), None)
+
+
+def _key(loc, model) -> str:
+    """The dotted scene key of a pydantic error location (union tags dropped, indices as [i])."""
+    key, t = "", model
+    for p in loc:
+        t = _strip(t)
+        if isinstance(p, int):
+            key = _join(key, p)
+            t = get_args(t)[0] if get_origin(t) in (list, tuple) and get_args(t) else None
+        elif get_origin(t) in (Union, UnionType):          # a tagged union: p is the member's tag
+            t = next((m for m in get_args(t) if _tag(m) == p), None)
+        else:
+            key = _join(key, p)
+            f = t.model_fields.get(p) if isinstance(t, type) and hasattr(t, "model_fields") else None
+            t = f.annotation if f is not None else None
+    return key
+
+
+def _explain(e: dict, model) -> tuple[str, str]:
+    key, kind, v = _key(e.get("loc", ()), model), e.get("type"), e.get("input")
+    err = (e.get("ctx") or {}).get("error")
+    if isinstance(err, Bad):
+        return _join(key, err.key), err.msg
+    if isinstance(err, ValueError):
+        return key, str(err)
+    if kind == "missing":
+        return key, "required key is missing"
+    if kind == "scene_tag":                                # a discriminated union's tag
+        c = e["ctx"]
+        if not isinstance(v, dict):
+            return key, f"must be a table, got {_got(v)}"
+        key, tag = _join(key, c["key"]), v.get(c["key"])
+        if c["key"] not in v:
+            return key, f"required key is missing ({c['missing']})"
+        if not isinstance(tag, str):
+            return key, f"must be a string, got {_got(tag)}"
+        return key, f"unknown {c['what']} {tag!r} (known: {c['known']})"
+    if kind in ("model_type", "model_attributes_type", "dict_type"):
+        return key, f"must be a table, got {_got(v)}"
+    if kind == "list_type":
+        return key, f"must be an array, got {_got(v)}"
+    return key, e.get("msg", "invalid")
+
+
+def _one_line(exc: ValidationError, source: str, model) -> str:
+    errors = exc.errors()
+    unknown = [e for e in errors if isinstance((e.get("ctx") or {}).get("error"), Bad)
+               and e["ctx"]["error"].msg.startswith("unknown key")]
+    key, msg = _explain((unknown or errors)[0], model)       # a typo first: it explains the rest
+    return f"{source}: {key or '(top level)'}: {msg}"
+
+
+# --------------------------------------------------------------------------- value types
+def _number(v) -> float:
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        raise ValueError(f"must be a number, got {_got(v)}")
+    v = float(v)
+    if not math.isfinite(v):
+        raise ValueError(f"must be finite, got {v!r}")
+    return v
+
+
+def _rule(ok, msg: str) -> AfterValidator:
+    """A check after the type's: ``ok(v)`` or ValueError ``msg`` ({v!r}: the value)."""
+    def check(v):
+        if not ok(v):
+            raise ValueError(msg.format(v=v))
+        return v
+    return AfterValidator(check)
+
+
+def _string(v) -> str:
+    if not isinstance(v, str):
+        raise ValueError(f"must be a string, got {_got(v)}")
+    return v
+
+
+def _boolean(v) -> bool:
+    if not isinstance(v, bool):
+        raise ValueError(f"must be true or false, got {_got(v)}")
+    return v
+
+
+def _vec3(v) -> tuple:
+    if not isinstance(v, list) or len(v) != 3:
+        raise ValueError(f"must be an array of 3 numbers, got {v!r}")
+    out = []
+    for i, x in enumerate(v):
+        try:
+            out.append(_number(x))
+        except ValueError as e:
+            raise Bad(f"[{i}]", str(e)) from None
+    return tuple(out)
+
+
+def _names(v) -> tuple:
+    """A node-set name or a list of names."""
+    if isinstance(v, str):
+        return (v,)
+    if isinstance(v, list) and v and all(isinstance(s, str) for s in v):
+        return tuple(v)
+    raise ValueError(f"must be a node-set name or a list of names, got {v!r}")
+
+
+def _plain(v, key=""):
+    """A solver setting: a plain TOML value (number, string, boolean, array, table), finite."""
+    if isinstance(v, dict):
+        return {k: _plain(x, _join(key, k)) for k, x in v.items()}
+    if isinstance(v, list):
+        return [_plain(x, _join(key, i)) for i, x in enumerate(v)]
+    if not isinstance(v, (bool, int, float, str)):
+        raise Bad(key, f"must be a number, string, boolean, array or table, got {_typename(v)}")
+    if isinstance(v, float) and not math.isfinite(v):
+        raise Bad(key, f"must be finite, got {v!r}")
+    return v
+
+
+def _settings_table(v) -> dict:
+    if not isinstance(v, dict):
+        raise ValueError(f"must be a table, got {_got(v)}")
+    return _plain(v)
+
+
+def choice(choices, what: str | None = None):
+    """A string out of ``choices``: "must be 'a' or 'b', got 'x'" or, naming ``what``,
+    "unknown what 'x' (known: a, b, c)"."""
+    def check(v):
+        if _string(v) not in choices:
+            if what:
+                raise ValueError(f"unknown {what} {v!r} (known: {', '.join(choices)})")
+            raise ValueError(f"must be {' or '.join(map(repr, choices))}, got {v!r}")
+        return v
+    return Annotated[str, PlainValidator(check)]
+
+
+def array(item, what: str, *, tables: bool = False):
+    """An array of ``item``; with ``tables`` a single table counts as an array of one."""
+    def check(v):
+        if tables and isinstance(v, dict):
+            return [v]
+        if not isinstance(v, list):
+            raise ValueError(f"must be {what}" + ("" if tables else f", got {v!r}"))
+        return v
+    return Annotated[list[item], BeforeValidator(check)]
+
+
+Num = Annotated[float, PlainValidator(_number)]
+Pos = Annotated[float, PlainValidator(_number), _rule(lambda v: v > 0.0, "must be positive, got {v!r}")]
+NonNeg = Annotated[float, PlainValidator(_number), _rule(lambda v: v >= 0.0, "must be >= 0, got {v!r}")]
+Str = Annotated[str, PlainValidator(_string)]
+Bool = Annotated[bool, PlainValidator(_boolean)]
+Vec3 = Annotated[tuple, PlainValidator(_vec3)]
+Direction = Annotated[tuple, PlainValidator(_vec3), _rule(lambda v: math.hypot(*v) > 0.0, "must be a non-zero vector")]
+Names = Annotated[tuple, PlainValidator(_names)]
+SettingsTable = Annotated[dict, PlainValidator(_settings_table)]
+
+
+def _tagged(members: dict, tag_of, **ctx):
+    """A union of models told apart by ``tag_of(table)``; a bad or missing tag is a ``scene_tag``
+    error worded by ``ctx`` (key, what, known, missing)."""
+    def discriminator(v):
+        t = tag_of(v) if isinstance(v, dict) else None
+        return t if t is None or isinstance(t, str) else "(not a string)"
+    return Annotated[Union[tuple(Annotated[m, Tag(t)] for t, m in members.items())],
+                     Discriminator(discriminator, custom_error_type="scene_tag",
+                                   custom_error_message="bad tag", custom_error_context=ctx)]
+
+
+# --------------------------------------------------------------------------- the tables
+class Table(SettingsModel):
+    """A TOML table: unknown keys are named with the keys allowed there."""
+
+    @model_validator(mode="before")
+    @classmethod
+    def _known(cls, data):
+        if isinstance(data, dict):
+            for k in data:
+                if k not in cls.model_fields:
+                    raise Bad(k, f"unknown key (allowed here: {', '.join(sorted(cls.model_fields))})")
+        return data
+
+    def given(self) -> dict:
+        """The keys the file gave or that have a value (None = absent)."""
+        return {k: v for k, v in self.as_dict().items() if v is not None}
+
+
+class RecipeGeometry(Table):
+    """[geometry] of a built-in recipe (solidshell.meshing.RECIPES): its lengths [cm]."""
+
+    recipe: Str
+
+    @model_validator(mode="after")
+    def _lengths(self):
+        for p in RECIPES[self.recipe].required:
+            if getattr(self, p) is None:
+                raise Bad(p, f"required by recipe {self.recipe!r} [cm]; missing")
+        return self
+
+
+class FileGeometry(Table):
+    """[geometry] from a gmsh .msh/.geo (or any meshio) file, relative to the scene file."""
+
+    file: Str
+
+
+def _one_geometry(v):
+    if isinstance(v, dict) and ("recipe" in v) == ("file" in v):
+        raise ValueError("give exactly one of 'recipe' (a built-in mesh recipe) or 'file' (a .msh/.geo file)")
+    return v
+
+
+Geometry = Annotated[
+    _tagged({"file": FileGeometry,
+             **{name: create_model(f"Geometry_{name}", __base__=RecipeGeometry,
+                                   **{p: (Optional[Pos], None) for p in r.geometry})
+                for name, r in RECIPES.items()}},
+            lambda d: "file" if "file" in d else d.get("recipe"),
+            key="recipe", what="recipe", known=", ".join(sorted(RECIPES)), missing="a recipe name"),
+    BeforeValidator(_one_geometry)]
+
+
+class MeshTable(Table):
+    density: Optional[Str] = None
+    paper_meshes: array(Str, "an array of density strings") = []
+    adaptive_level0: Optional[Str] = None
+
+
+def make_material(material: dict):
+    """The Fabric or IsotropicShell of a scene's material dict."""
+    if "isotropic" in material:
+        return IsotropicShell(**material["isotropic"])
+    return FABRICS[material["fabric"]](**{k: v for k, v in material.items() if k != "fabric"})
+
+
+class _Section(Table):
+    @model_validator(mode="after")
+    def _build(self):
+        try:        # built once so that zero/negative rigidities are reported now, with the file
+            make_material(self.given())
+        except InputError as e:
+            raise Bad("", str(e)) from None
+        return self
+
+
+FabricMaterial = create_model("FabricMaterial", __base__=_Section, fabric=(choice(tuple(FABRICS), "fabric"), "wool"),
+                              name=(Optional[Str], None), **{k: (Optional[Num], None) for k in FABRIC_FIELDS})
+IsotropicTable = create_model("IsotropicTable", __base__=Table,
+                              **{k: (Num, ...) if k in ISOTROPIC_REQUIRED else (Optional[Num], None)
+                                 for k in ISOTROPIC_FIELDS})
+
+
+class IsotropicMaterial(_Section):
+    isotropic: IsotropicTable
+
+    def given(self) -> dict:
+        return {"isotropic": self.isotropic.given()}
+
+
+Material = _tagged({"fabric": FabricMaterial, "isotropic": IsotropicMaterial},
+                   lambda d: "isotropic" if "isotropic" in d else "fabric",
+                   key="fabric", what="material", known="fabric, isotropic", missing="")
+
+
+class ModelTable(Table):
+    thickness_strain: choice(THICKNESS_STRAINS) = "green"
+    mu: Annotated[Num, _rule(lambda v: 0.0 < v < 1.0, "must lie in (0, 1), got {v!r}")] = 0.5    # Eq. (24)
+    membrane: choice(MEMBRANES) = "full"
+
+
+class SupportsTable(Table):
+    clamped: Optional[Names] = None
+    fixed_translations: Optional[Names] = None
+
+
+class PointLoad(Table):
+    force: Vec3
+    node_set: Optional[Str] = None
+    at: Optional[Vec3] = None
+
+    @model_validator(mode="after")
+    def _where(self):
+        if (self.node_set is None) == (self.at is None):
+            raise ValueError("give exactly one of 'node_set' or 'at'")
+        return self
+
+
+class LineLoad(Table):
+    force: Vec3
+    node_set: Str
+
+
+class SurfaceLoad(Table):
+    force: Vec3
+
+
+class LoadsTable(Table):
+    gravity: Bool = True
+    gravity_direction: Direction = [0.0, 0.0, -1.0]
+    point: array(PointLoad, "a table or an array of tables", tables=True) = []
+    line: array(LineLoad, "a table or an array of tables", tables=True) = []
+    surface: array(SurfaceLoad, "a table or an array of tables", tables=True) = []
+
+    def given(self) -> dict:
+        return {"gravity": self.gravity, "gravity_direction": self.gravity_direction,
+                **{k: [x.given() for x in getattr(self, k)] for k in ("point", "line", "surface")}}
+
+
+class Body(Table):
+    """A rigid contact body; ``offset``: the distance kept from the mid-surface, ``friction``: mu."""
+
+    type: Str
+    offset: Optional[NonNeg] = None
+    friction: Optional[NonNeg] = None
+
+
+class Sphere(Body):
+    centre: Vec3
+    radius: Pos
+
+
+class Plane(Body):
+    point: Vec3
+    normal: Direction
+
+
+class Pedestal(Body):
+    shape: choice(("square", "disc")) = "square"
+    centre: Vec3 = [0.0, 0.0, 0.0]            # of its top face
+    size: Optional[Pos] = None
+    diameter: Optional[Pos] = None
+    height: Pos = 10.0
+    edge_radius: Optional[NonNeg] = None
+
+    @model_validator(mode="after")
+    def _extent(self):
+        need, other = ("size", "diameter") if self.shape == "square" else ("diameter", "size")
+        if getattr(self, need) is None:
+            raise Bad(need, f"required for a {self.shape} pedestal [cm]; missing")
+        if getattr(self, other) is not None:
+            raise Bad(other, f"does not apply to a {self.shape} pedestal")
+        return self
+
+
+BODIES = {"sphere": Sphere, "plane": Plane, "pedestal": Pedestal}
+Contact = _tagged(BODIES, lambda d: d.get("type"),
+                  key="type", what="contact body", known=", ".join(BODIES), missing="sphere, plane or pedestal")
+
+SolverTable = create_model("SolverTable", __base__=Table, kind=(choice(tuple(KINDS), "solver"), "static"),
+                           **{k: (SettingsTable, {}) for k in KINDS})
+
+
+class OutputTable(Table):
+    snapshots: Annotated[array(NonNeg, "an array of times [s]"),
+                         _rule(lambda v: v == sorted(v), "times must be increasing")] = []
+    pictures: array(choice(VIEWS, "view"), "an array of views") = ["top", "iso"]
+
+
+def _own_model(name: str, model, filled: bool):
+    """A table its own settings model checks now (``model()`` imports it on demand; its one-line
+    message kept): the table as written, or (``filled``) every key with its default ({} = none)."""
+    def check(v):
+        if not isinstance(v, dict):
+            raise ValueError(f"must be a table, got {_got(v)}")
+        if not v:
+            return {}
+        try:
+            parsed = parse_model(model(), v, name)
+        except InputError as e:
+            raise ValueError(str(e).removeprefix(f"{name}: ")) from None
+        return parsed.as_dict() if filled else dict(v)
+    return Annotated[dict, PlainValidator(check)]
+
+
+def _adapt_settings():
+    from ..adapt.settings import AdaptSettings
+    return AdaptSettings
+
+
+def _perturbation_settings():
+    from ..perturbation import PerturbationSettings
+    return PerturbationSettings
+
+
+def _section(v):
+    return str(v) if isinstance(v, (int, float)) and not isinstance(v, bool) else v
+
+
+# --------------------------------------------------------------------------- density strings
+_DENSITY_RE = re.compile(r"^\s*\d+(\s*[xX×]\s*\d+)*\s*$")
+
+
+def _density_problem(density, recipe: str | None) -> str | None:
+    if not isinstance(density, str) or not _DENSITY_RE.match(density):
+        return (f"malformed mesh density {density!r}: expected positive integers joined by 'x', "
+                f"e.g. '48x16x4'")
+    parts = [int(p) for p in re.split(r"\s*[xX×]\s*", density.strip())]
+    if any(p <= 0 for p in parts):
+        return f"malformed mesh density {density!r}: every count must be positive"
+    n = RECIPES[recipe].n_fields if recipe in RECIPES else None
+    if n is not None and len(parts) != n:
+        example = {2: "20x80", 3: "48x16x4"}[n] if n in (2, 3) else "x".join(["10"] * n)
+        return f"malformed mesh density {density!r}: recipe {recipe!r} takes {n} counts, e.g. {example!r}"
+    return None
+
+
+def check_density(density: str, recipe: str | None = None, where: str = "mesh density") -> str:
+    """Validate a density string like "48x16x4": positive integers joined by 'x', with as many
+    factors as the recipe takes.  Returns it normalised ("48x16x4")."""
+    problem = _density_problem(density, recipe)
+    if problem:
+        raise InputError(f"{where}: {problem}")
+    return "x".join(str(int(p)) for p in re.split(r"\s*[xX×]\s*", density.strip()))
+
+
+# --------------------------------------------------------------------------- the scene
+class SceneDoc(Table):
+    """A scene file, every table validated."""
+
+    name: Annotated[Str, _rule(str.strip, "must not be empty")]
+    title: Str
+    paper_section: Annotated[str, PlainValidator(_string), BeforeValidator(_section)] = ""
+    description: Str = ""
+    geometry: Geometry
+    mesh: MeshTable = {}
+    material: Material = {"fabric": "wool"}
+    model: ModelTable = {}
+    supports: SupportsTable = {}
+    loads: LoadsTable = {}
+    contact: array(Contact, "an array of tables ([[contact]])", tables=True) = []
+    solver: SolverTable = {}
+    output: OutputTable = {}
+    adapt: _own_model("adapt", _adapt_settings, filled=False) = Field(default_factory=dict)   # §5
+    perturbation: _own_model("perturbation", _perturbation_settings, filled=True) = Field(default_factory=dict)
+
+    @model_validator(mode="after")
+    def _densities(self):
+        """The mesh densities fit the recipe (its number of counts); a mesh file takes none."""
+        recipe, m = getattr(self.geometry, "recipe", None), self.mesh
+        for key, d in (("density", m.density), *((f"paper_meshes[{i}]", d) for i, d in enumerate(m.paper_meshes)),
+                       ("adaptive_level0", m.adaptive_level0)):
+            problem = d is not None and _density_problem(d, recipe)
+            if problem:
+                raise Bad(f"mesh.{key}", problem)
+        if recipe is not None and m.density is None:
+            raise Bad("mesh.density", f"required for recipe {recipe!r}")
+        if recipe is None and m.density is not None:
+            raise Bad("mesh.density", "applies to recipe geometries only, not to a mesh file")
+        return self
+
+    def tables(self) -> dict:
+        """The Scene's fields (every table a plain dict; densities normalised, "48x16x4")."""
+        m = self.mesh
+        norm = lambda d: None if d is None else check_density(d)     # noqa: E731
+        return {"name": self.name, "title": self.title, "paper_section": self.paper_section,
+                "description": self.description, "geometry": self.geometry.given(),
+                "mesh": {"density": norm(m.density), "paper_meshes": [norm(d) for d in m.paper_meshes],
+                         "adaptive_level0": norm(m.adaptive_level0)},
+                "material": self.material.given(), "model": self.model.as_dict(),
+                "supports": self.supports.given(), "loads": self.loads.given(),
+                "contact": tuple(c.given() for c in self.contact),
+                "solver": {"kind": self.solver.kind, **{k: dict(getattr(self.solver, k)) for k in KINDS}},
+                "output": {"snapshots": list(self.output.snapshots), "pictures": list(self.output.pictures)},
+                "adapt": dict(self.adapt), "perturbation": dict(self.perturbation)}
+
+
+def parse(data, source: str) -> SceneDoc:
+    """The validated scene ``data`` (a TOML table) read from ``source``; one InputError line
+    ``source: dotted.key: what is wrong`` if it is not a valid scene."""
+    if not isinstance(data, dict):
+        raise InputError(f"{source}: (top level): must be a table, got {_got(data)}")
+    return parse_model(SceneDoc, data, source, explain=_one_line)

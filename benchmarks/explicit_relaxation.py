@@ -54,7 +54,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 OUT = ROOT / "benchmarks" / "out"
 
-from solidshell.runner import run_scene  # noqa: E402
+from solidshell.run import run_scene  # noqa: E402
 
 VARIANTS = {
     "uniform": dict(damping="kinetic", mass_scaling=100, mass_scaling_mode="uniform"),

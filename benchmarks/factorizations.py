@@ -20,7 +20,7 @@ import numpy as np
 
 
 def tangent(density):
-    from solidshell.runner import build_problem, build_scene_mesh
+    from solidshell.scenes.build import build_problem, build_scene_mesh
     from solidshell.scenes import load
     from solidshell.solvers.static import _System
 

@@ -26,7 +26,7 @@ from numba import get_num_threads
 from solidshell.adapt.background import BackgroundMesh
 from solidshell.adapt.forest import AdaptiveMesh
 from solidshell.elements import core, lanes_tri
-from solidshell.runner import build_problem, build_scene_mesh
+from solidshell.scenes.build import build_problem, build_scene_mesh
 from solidshell.scenes import load
 from solidshell.solvers.explicit.fused import FusedForces
 

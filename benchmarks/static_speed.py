@@ -49,7 +49,7 @@ def uptime() -> str:
 
 
 def one_run(scene, mesh, **settings):
-    from solidshell.runner import run_scene
+    from solidshell.run import run_scene
 
     t0 = time.perf_counter()
     out = run_scene(scene, mesh=mesh, solver="static", out_dir=None, progress=False, **settings)
@@ -79,7 +79,7 @@ def _category(fn_key) -> str:
 
 
 def profile(scene="square-pedestal", mesh="48x16x4", top=10) -> dict:
-    from solidshell.runner import run_scene
+    from solidshell.run import run_scene
 
     pr = cProfile.Profile()
     t0 = time.perf_counter()

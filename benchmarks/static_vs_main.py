@@ -31,7 +31,7 @@ CHILD = r'''
 import json, os, resource, sys, time
 sys.path.insert(0, sys.argv[1])
 import numpy as np
-from solidshell.runner import run_scene
+from solidshell.run import run_scene
 scene, mesh, out, settings = sys.argv[2], sys.argv[3], sys.argv[4], json.loads(sys.argv[5])
 run_scene("strip-warp", mesh="10x1", solver="static", out_dir=None, progress=False)  # warm-up
 t0, c0 = time.perf_counter(), time.process_time()

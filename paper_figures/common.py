@@ -28,7 +28,7 @@ def mpl():
 
 def run(scene, mesh=None, solver=None, overrides=None, adaptive=None, **settings):
     """run_scene without files or progress bar; returns (RunOutput, a record of what ran)."""
-    from solidshell.runner import run_scene
+    from solidshell.run import run_scene
 
     t = time.perf_counter()
     out = run_scene(scene, mesh=mesh, solver=solver, out_dir=None, progress=False, overrides=overrides,
@@ -137,10 +137,10 @@ def boundary_panel(ax, runs, pedestal=None, styles=None):
 def projected_boundary(out):
     """The run's projected boundary (M,2) [cm] (solidshell.analysis), recomputed from its state."""
     from solidshell import analysis
-    from solidshell.runner import _pedestal_area
+    from solidshell.run.summary import pedestal_area
 
     sc = out.scene
-    kw = {"pedestal_area": _pedestal_area(sc) or 0.0}
+    kw = {"pedestal_area": pedestal_area(sc) or 0.0}
     sph = [c for c in sc.contact if c["type"] == "sphere"]
     if sph:
         kw["center"] = tuple(sph[0]["centre"][:2])
@@ -187,7 +187,7 @@ def views_figure(rows, views=("top", "iso"), boundaries=None, pedestal=None, bou
 
 def interpenetrated(out):
     """(N,) bool: the nodes of a run's final state where n_p . d_p < 0 in some element (§4.3)."""
-    from solidshell.runner import build_problem
+    from solidshell.scenes.build import build_problem
 
     return build_problem(out.scene, out.mesh).model.interpenetrated_nodes(out.U)
 

@@ -15,8 +15,8 @@ __version__ = "0.1.0"
 __all__ = ["ShellMesh", "Fabric", "IsotropicShell", "Model", "solve_static", "run_scene", "build_problem",
            "InputError", "SolverError", "IOFailure", "__version__"]
 
-_LAZY = {"Model": "solidshell.model", "solve_static": "solidshell.solvers.static", "run_scene": "solidshell.runner",
-         "build_problem": "solidshell.runner"}
+_LAZY = {"Model": "solidshell.model", "solve_static": "solidshell.solvers.static",
+         "run_scene": "solidshell.run.driver", "build_problem": "solidshell.scenes.build"}
 
 
 def __getattr__(name):

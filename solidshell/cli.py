@@ -160,7 +160,7 @@ def _default_out(scene: str, suffix: str = "") -> str:
 
 
 def _cmd_mesh(args) -> int:
-    from .runner import run_scene
+    from .run import run_scene
     from .scenes import parse_overrides
 
     out_dir = args.out or _default_out(args.scene, "-mesh")
@@ -175,7 +175,7 @@ def _cmd_mesh(args) -> int:
 
 
 def _cmd_run(args) -> int:
-    from .runner import run_scene
+    from .run import run_scene
     from .scenes import parse_overrides
 
     out_dir = args.out or _default_out(args.scene)

@@ -24,7 +24,9 @@ from solidshell import io as sio
 from solidshell.adapt.driver import _remap_anchors, _rows_in
 from solidshell.errors import InputError
 from solidshell.mesh import ShellMesh
-from solidshell.runner import _adaptive_run, adapt_settings, build_scene_mesh, run_scene
+from solidshell.run import run_scene
+from solidshell.run.adaptive import _adaptive_run, adapt_settings
+from solidshell.scenes.build import build_scene_mesh
 from solidshell.scenes import load
 from solidshell.solvers.explicit import checkpoint, threads_for
 

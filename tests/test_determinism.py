@@ -27,7 +27,7 @@ from solidshell.verify import pedestal
 RUNS = [("square-pedestal", "12x4x4", "static"), ("square-pedestal", "6x2x4", "relax")]
 PROBE = """
 import json, sys
-from solidshell.runner import run_scene
+from solidshell.run import run_scene
 out = []
 for scene, mesh, solver in json.loads(sys.argv[1]):
     s = run_scene(scene, mesh=mesh, solver=solver, out_dir=None, progress=False).summary

@@ -7,7 +7,7 @@ import json
 import pytest
 
 from solidshell.errors import InputError
-from solidshell.runner import run_scene
+from solidshell.run import run_scene
 from verification import dynamic_scenes
 
 
@@ -56,7 +56,7 @@ def test_sphere_scene_friction_key():
     """[[contact]] friction: the sphere scene sets mu = 0.3 (frictionless sphere: the cloth slides
     off); a negative or non-finite coefficient is refused with the key named; the runner passes it
     to the body; 0 is the default."""
-    from solidshell.runner import contact_bodies
+    from solidshell.scenes.build import contact_bodies
     from solidshell.scenes import load as load_scene
 
     sc = load_scene("sphere")

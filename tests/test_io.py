@@ -193,7 +193,7 @@ def fake_solver(record, converged=True):
 
 @pytest.fixture
 def fake(monkeypatch):
-    from solidshell import runner, solvers
+    from solidshell import solvers
 
     class Model:                     # stands in for solidshell.model.Model (no numba compile here)
         def __init__(self, mesh, material, thickness_strain="green", mu=0.5, membrane="full", constants=None):
@@ -201,6 +201,9 @@ def fake(monkeypatch):
 
         def nodal_areas(self):       # equal shares: the wiring, not the lumping, is under test here
             return np.full(self.mesh.n_nodes, self.mesh.area() / self.mesh.n_nodes)
+
+        def interpenetrated_nodes(self, U):    # none: the summary's wiring, not Section 4.3, is under test
+            return np.zeros(self.n_nodes, dtype=bool)
 
     import solidshell.model
 
@@ -211,7 +214,7 @@ def fake(monkeypatch):
 
 
 def test_run_scene_mesh_only(tmp_path):
-    from solidshell.runner import run_scene
+    from solidshell.run import run_scene
 
     out = run_scene("strip-warp", mesh="10x1", solver="none", out_dir=tmp_path, progress=False)
     assert out.summary["counts"]["nodes"] == 22 and out.summary["converged"] is None
@@ -221,7 +224,7 @@ def test_run_scene_mesh_only(tmp_path):
 
 
 def test_run_scene_dynamic_outputs(tmp_path, fake):
-    from solidshell.runner import run_scene
+    from solidshell.run import run_scene
 
     seen = []
     out = run_scene("hang-20", mesh="4x4", out_dir=tmp_path, progress=lambda f, t="": seen.append(f), t_end=0.4)
@@ -244,7 +247,7 @@ def test_run_scene_dynamic_outputs(tmp_path, fake):
 
 
 def test_run_scene_pedestal_analysis(tmp_path, fake):
-    from solidshell.runner import run_scene
+    from solidshell.run import run_scene
 
     out = run_scene("square-pedestal", mesh="8x3x4", out_dir=tmp_path, progress=False,
                     overrides={"solver.static.c": 2e-3})
@@ -258,7 +261,7 @@ def test_run_scene_pedestal_analysis(tmp_path, fake):
 
 def test_run_scene_not_converged(tmp_path, monkeypatch, fake):
     from solidshell import solvers
-    from solidshell.runner import run_scene
+    from solidshell.run import run_scene
 
     monkeypatch.setattr(solvers, "get", lambda kind: fake_solver({}, converged=False))
     out = run_scene("strip-warp", mesh="4x1", out_dir=tmp_path, progress=False)
@@ -267,7 +270,7 @@ def test_run_scene_not_converged(tmp_path, monkeypatch, fake):
 
 
 def test_run_scene_bad_inputs(tmp_path):
-    from solidshell.runner import run_scene
+    from solidshell.run import run_scene
 
     with pytest.raises(InputError, match="density"):
         run_scene("square-pedestal", mesh="24x8", solver="none", progress=False)

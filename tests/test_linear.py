@@ -67,7 +67,7 @@ def test_pardiso_and_cholmod_agree_on_a_drape_tangent_and_repeat_bit_for_bit():
     membrane), and shifted by 0.1 of its diagonal as the energy Newton's first Levenberg steps
     factorise it: both factorisations agree on definiteness, their solutions agree to cond * 1e-16,
     and PARDISO, sequential, gives the same bits on a repeated factorisation."""
-    from solidshell.runner import build_problem, build_scene_mesh
+    from solidshell.scenes.build import build_problem, build_scene_mesh
     from solidshell.scenes import load
     from solidshell.solvers.static import _System
 
@@ -94,7 +94,7 @@ def test_pardiso_and_cholmod_agree_on_a_drape_tangent_and_repeat_bit_for_bit():
 
 _THREADED_CHILD = """
 import numpy as np, numba
-from solidshell.runner import build_problem, build_scene_mesh
+from solidshell.scenes.build import build_problem, build_scene_mesh
 from solidshell.scenes import load
 from solidshell.solvers import pardiso
 from solidshell.solvers.static import _System

@@ -7,7 +7,8 @@ from solidshell.analysis import projected_boundary
 from solidshell.errors import InputError
 from solidshell.meshing import build_mesh
 from solidshell.perturbation import initial_state
-from solidshell.runner import run_scene, support_mask
+from solidshell.run import run_scene
+from solidshell.scenes.build import support_mask
 from solidshell.scenes import load
 
 

@@ -10,7 +10,7 @@ import pytest
 import scipy.linalg
 
 from solidshell import Fabric, InputError
-from solidshell.runner import run_scene
+from solidshell.run import run_scene
 from solidshell.solvers import explicit, get
 from solidshell.solvers.explicit import Integrator
 from solidshell.solvers.explicit.damping import fire

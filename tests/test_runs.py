@@ -115,7 +115,7 @@ def settings_double(monkeypatch):
     ("tol", "abc", "tol"), ("tol", -1.0, "tol"), ("tol", 0.0, "tol"), ("max_iter", "abc", "max_iter"),
     ("load_factors", ["a"], "load_factors"), ("nonsense", 1, "nonsense")])
 def test_bad_setting_refused_before_anything_is_written(tmp_path, settings_double, key, value, needle):
-    from solidshell.runner import run_scene
+    from solidshell.run import run_scene
 
     out = tmp_path / "out"
     with pytest.raises(InputError, match=needle) as e:
@@ -167,7 +167,7 @@ def test_size_guard_estimate():
 
 def test_size_guard_refuses_before_meshing(tmp_path, monkeypatch):
     from solidshell import meshing, sizing
-    from solidshell.runner import run_scene
+    from solidshell.run import run_scene
 
     def boom(*a, **k):
         raise AssertionError("meshing must not start")
@@ -227,7 +227,7 @@ def test_sheet_starting_inside_sphere_exit_2(tmp_path, capsys):
 
 # ============================================================================= 2. run folders
 def test_stale_files_replaced_and_run_id_everywhere(tmp_path):
-    from solidshell.runner import run_scene
+    from solidshell.run import run_scene
 
     out = tmp_path / "o"
     a = run_scene("strip-warp", mesh="4x1", solver="none", out_dir=out, progress=False)
@@ -321,7 +321,7 @@ def test_full_disk_exit_3_names_file_and_leaves_no_summary(tmp_path, capsys, mon
     # RUNNING marker says a run started here and did not finish
     assert "summary.json" not in names(out) and "RUNNING" in names(out)
     with pytest.raises(IOFailure, match="mesh.vtu: No space left on device") as e:
-        from solidshell.runner import run_scene
+        from solidshell.run import run_scene
         run_scene("strip-warp", mesh="4x1", solver="none", out_dir=out, progress=False)
     assert e.value.path == str(out / "mesh.vtu") and isinstance(e.value, OSError)
 
@@ -433,7 +433,7 @@ def test_warnings_listed_and_logged(tmp_path, capsys, fake, monkeypatch):
 
 
 def test_library_user_can_silence_warnings(tmp_path, fake, monkeypatch, capsys):
-    from solidshell.runner import run_scene
+    from solidshell.run import run_scene
 
     fake["solver"] = fake_solver(warnings=["quiet please"])
     log = logging.getLogger("solidshell")
@@ -449,7 +449,7 @@ class _Tty(_stdio.StringIO):
 
 
 def test_progress_bar_appears_within_a_second_and_moves(monkeypatch):
-    from solidshell.runner import _Bar
+    from solidshell.run.progress import _Bar
 
     err = _Tty()
     monkeypatch.setattr(sys, "stderr", err)
@@ -473,7 +473,7 @@ def test_progress_bar_appears_within_a_second_and_moves(monkeypatch):
 # ============================================================================= 6. build_problem
 def test_build_problem_public():
     import solidshell
-    from solidshell.runner import build_scene_mesh, support_mask
+    from solidshell.scenes.build import build_scene_mesh, support_mask
     from solidshell.scenes import load
 
     sc = load("sphere")
@@ -532,7 +532,7 @@ def test_run_output_problem_is_the_one_solved():
     """RunOutput.problem is the Problem the solver ran: the static state it returns balances that
     problem's loads.  The solver stops at a relative residual <= tol = 1e-8 (solvers/static.py);
     the bound 1e-6 leaves room for the round-off of re-evaluating the force in another call."""
-    from solidshell.runner import run_scene
+    from solidshell.run import run_scene
 
     out = run_scene("strip-warp", mesh="4x1", out_dir=None, progress=False,
                     overrides={"output.pictures": [], "output.snapshots": []})

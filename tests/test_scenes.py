@@ -213,7 +213,7 @@ def test_missing_and_broken_files(tmp_path):
 
 
 def test_file_geometry_relative_to_scene(tmp_path):
-    from solidshell.runner import build_scene_mesh
+    from solidshell.scenes.build import build_scene_mesh
 
     m = meshing.build_mesh("square", "3x2", size=6.0)
     sub = tmp_path / "meshes"

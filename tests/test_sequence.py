@@ -91,7 +91,7 @@ def test_static_settings_sequence_and_start_state_are_checked():
 def test_sequenced_solve_reaches_the_direct_equilibrium(monkeypatch):
     """square-pedestal 12x4x4 from its 6x2x4 coarse mesh (MIN_ELEMENTS lowered to allow 48
     quads): the same stable equilibrium as the direct solve from the flat sheet."""
-    from solidshell.runner import run_scene
+    from solidshell.run import run_scene
 
     monkeypatch.setattr(sequence, "MIN_ELEMENTS", 40)
     direct = run_scene("square-pedestal", mesh="12x4x4", solver="static", out_dir=None,
@@ -115,7 +115,7 @@ def test_the_sequenced_fine_mesh_takes_cg_steps_to_the_same_equilibrium(monkeypa
     """The fine mesh of a sequence takes inexact Newton steps (CG preconditioned by the last
     factorisation; thresholds lowered so that square-pedestal 12x4x4 from 6x2x4 qualifies) and ends
     on the equilibrium of the exact-step solve."""
-    from solidshell.runner import run_scene
+    from solidshell.run import run_scene
     from solidshell.solvers import static
 
     monkeypatch.setattr(sequence, "MIN_ELEMENTS", 40)
@@ -167,7 +167,7 @@ def test_an_interpenetrated_coarse_state_is_not_a_start():
     itself (n_p . d_p < 0, Section 4.3), so the 24x8x4 solve must start from the flat sheet and end
     where the direct solve ends (from that coarse state 48x16x4 had landed in another state,
     DC 0.5307 with 19 interpenetrated nodes against 0.5515)."""
-    from solidshell.runner import run_scene
+    from solidshell.run import run_scene
 
     over = {"model.membrane": "ans", "geometry.grading": 8.0}
     seq = run_scene("square-pedestal", mesh="24x8x4", solver="static", out_dir=None, progress=False,

@@ -274,7 +274,7 @@ def test_extended_shifted_steps_reach_the_same_minimum(monkeypatch):
     at alpha 1): they are doubled while Pi falls (static.EXTEND_RHO).  The run ends on the minimum of
     the run without extensions, in fewer factorisations (measured 84 iterations and 97
     factorisations with 4 extensions, against 86 and 105)."""
-    from solidshell.runner import run_scene
+    from solidshell.run import run_scene
     from solidshell.solvers import static
 
     ext = run_scene("circle-pedestal", mesh="10x40", out_dir=None, progress=False)

@@ -9,7 +9,7 @@ pytest.importorskip("distributed", reason="dask.distributed not installed (pip i
 pytest.importorskip("pyarrow", reason="pyarrow not installed (pip install 'solidshell[sweep]')")
 
 from solidshell import cli  # noqa: E402
-from solidshell.runner import run_scene  # noqa: E402
+from solidshell.run import run_scene  # noqa: E402
 from solidshell.sweep import load_spec  # noqa: E402
 from solidshell.sweep.engine import run_sweep  # noqa: E402
 from solidshell.sweep.ledger import Ledger  # noqa: E402

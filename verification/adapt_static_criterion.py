@@ -32,7 +32,8 @@ from solidshell.adapt.background import BackgroundMesh
 from solidshell.adapt.criteria import DEFAULT_EPS, leaf_bending_strain, level_side_lengths, mark
 from solidshell.adapt.forest import AdaptiveMesh
 from solidshell.adapt.transfer import to_new_mesh
-from solidshell.runner import _pedestal_area, build_problem, build_scene_mesh
+from solidshell.run.summary import pedestal_area
+from solidshell.scenes.build import build_problem, build_scene_mesh
 from solidshell.scenes import load
 from solidshell.solvers.static import solve_static
 
@@ -53,7 +54,7 @@ def membranes(choice, act, levels, scene_membrane):
 def solve(sc, mesh, membrane, U0=None):
     pb = build_problem(sc, mesh, membrane=membrane)
     r = solve_static(pb.model, pb.fixed, pb.loads, U0=U0, contact=pb.contact)
-    d = analysis.drape_summary(mesh, r.U, pedestal_area=_pedestal_area(sc) or 0.0)
+    d = analysis.drape_summary(mesh, r.U, pedestal_area=pedestal_area(sc) or 0.0)
     return pb, r, d
 
 

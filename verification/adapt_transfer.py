@@ -116,7 +116,7 @@ ALPHA = 5.0           # 1/s: the paper's Rayleigh factor (Sec. 4.2)
 def _problem(sc, mesh):
     from solidshell.model import Model
     from solidshell.problem import Problem
-    from solidshell.runner import scene_loads, support_mask
+    from solidshell.scenes.build import scene_loads, support_mask
 
     model = Model(mesh, sc.material_object(), thickness_strain=sc.model["thickness_strain"],
                   mu=sc.model["mu"], membrane=sc.model.get("membrane", "full"))
@@ -126,7 +126,7 @@ def _problem(sc, mesh):
 def _coarse_state(sc, density):
     from solidshell import solvers
     from solidshell.problem import no_progress
-    from solidshell.runner import build_scene_mesh
+    from solidshell.scenes.build import build_scene_mesh
 
     mesh, _ = build_scene_mesh(sc, density)
     pb = _problem(sc, mesh)

@@ -91,7 +91,7 @@ def _relaxed_row(label, mesh_name, s, wall):
 
 
 def _static_from(scene, problem, mesh, mesh_name, U0, label):
-    from solidshell.runner import analyse
+    from solidshell.run.summary import analyse
     from solidshell.solvers import static
 
     t = time.perf_counter()
@@ -141,7 +141,7 @@ def _adaptive(scene, case, emit):
 def _states(scene, path, case, emit):
     """Steps 1-4 (module docstring)."""
     from solidshell import run_scene
-    from solidshell.runner import build_problem
+    from solidshell.scenes.build import build_problem
     from solidshell.solvers.sequence import prolong
 
     meshes = case["meshes"]
@@ -171,7 +171,7 @@ def _states(scene, path, case, emit):
 def _ladder(scene, case, emit):
     """Step 5 (module docstring): step 3, the same state on its own mesh with the scene's membrane,
     then on the ladder of uniform meshes."""
-    from solidshell.runner import build_problem, build_scene_mesh
+    from solidshell.scenes.build import build_problem, build_scene_mesh
     from solidshell.scenes import load
     from solidshell.solvers.sequence import prolong
 

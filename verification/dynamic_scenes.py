@@ -225,7 +225,7 @@ SUMMARY_KEYS = ("converged", "message", "steps", "dt", "critical_time_step", "t_
 
 
 def run_case(name: str) -> dict:
-    from solidshell.runner import run_scene
+    from solidshell.run import run_scene
 
     scene, mesh, solver, settings, overrides, label = CASES[name]
     out_dir = RUNS / name

@@ -203,7 +203,7 @@ NOTES: list[str] = [
 
 
 def run_case(name: str) -> dict:
-    from solidshell.runner import run_scene
+    from solidshell.run import run_scene
 
     mesh, settings, overrides, label = CASES[name]
     out = RUNS / name

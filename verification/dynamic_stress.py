@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from solidshell.runner import run_scene
+from solidshell.run import run_scene
 
 OUT = Path(__file__).resolve().parent / "out"
 WOOL = dict(bending_warp=0.083, bending_weft=0.063, torsion=0.027, weight=0.019)

@@ -69,7 +69,7 @@ KEYS = ("converged", "message", "drape_coefficient", "fold_count", "fold_angles_
 
 
 def run_case(name: str) -> dict:
-    from solidshell.runner import run_scene
+    from solidshell.run import run_scene
 
     scene, mesh, solver, overrides, settings, label = CASES[name]
     row = dict(case=name, scene=scene, mesh=mesh, solver=solver, overrides=overrides, settings=settings, label=label)

@@ -89,7 +89,7 @@ def cache_path(key: str) -> Path:
 
 def run_case(scene, mesh, label, runs=RUNS, overrides=None, tag=None) -> dict:
     """Run one case; return its row (never raises: an exception becomes the row's message)."""
-    from solidshell.runner import run_scene
+    from solidshell.run import run_scene
 
     settings = parse_label(label)
     key = case_key(scene, mesh, label) + (f":{tag}" if tag else "")
@@ -124,8 +124,8 @@ def run_perturbed(scene, mesh, folds, amp, method="newton", c=1e-2, runs=RUNS) -
     from solidshell import io as sio
     from solidshell.model import Model
     from solidshell.plotting import render
-    from solidshell.runner import (_pedestal_area, build_scene_mesh, contact_bodies, scene_loads,
-                                   support_mask)
+    from solidshell.run.summary import pedestal_area
+    from solidshell.scenes.build import build_scene_mesh, contact_bodies, scene_loads, support_mask
     from solidshell.scenes import load
     from solidshell.solvers.static import solve_static
 
@@ -161,7 +161,7 @@ def run_perturbed(scene, mesh, folds, amp, method="newton", c=1e-2, runs=RUNS) -
         row["converged"], row["message"] = res.converged, res.message
         U = res.U
         if np.all(np.isfinite(U)):
-            d = analysis.drape_summary(m, U, pedestal_area=_pedestal_area(sc) or 0.0)
+            d = analysis.drape_summary(m, U, pedestal_area=pedestal_area(sc) or 0.0)
             d.pop("projected_boundary", None)
             for k in KEYS:
                 if k in d:

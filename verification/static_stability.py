@@ -35,7 +35,7 @@ CASES = [  # (label, scene, mesh, overrides, small)
 
 
 def run_case(scene, mesh, overrides):
-    from solidshell.runner import run_scene
+    from solidshell.run import run_scene
     t0 = time.perf_counter()
     out = run_scene(scene, mesh=mesh, solver="static", out_dir=None, progress=False,
                     overrides=overrides)

@@ -16,7 +16,7 @@ from .workprec import Config, Study
 
 # ------------------------------------------------------------------------------- helpers
 def _scene_run(scene, mesh, solver, overrides=None, adaptive=None, **kw) -> dict:
-    from ..runner import run_scene
+    from ..run import run_scene
 
     t = time.perf_counter()
     out = run_scene(scene, mesh=mesh, solver=solver, out_dir=None, progress=False, overrides=overrides,
@@ -35,7 +35,7 @@ def _scene_run(scene, mesh, solver, overrides=None, adaptive=None, **kw) -> dict
 def _triangulated(scene, density):
     """The scene's quad mesh at ``density`` with every quad cut into two triangles (alternating)."""
     from ..mesh import ShellMesh
-    from ..runner import build_scene_mesh
+    from ..scenes.build import build_scene_mesh
     from ..scenes import load
     from ..verify.common import split_quads
 
@@ -53,7 +53,7 @@ def _dc_errors(row, ref, half_size):
 
 
 def _warm(scene, mesh, solver):
-    from ..runner import run_scene
+    from ..run import run_scene
 
     steps = {"max_steps": 50} if solver == "relax" else {}
     run_scene(scene, mesh=mesh, solver=solver, out_dir=None, progress=False, **steps)
@@ -185,7 +185,7 @@ def _throughput_configs(quick):
         return run
 
     def loop():
-        from ..runner import run_scene
+        from ..run import run_scene
 
         t = time.perf_counter()
         s = run_scene(SPHERE, mesh=f"{n}x{n}", solver="relax", out_dir=None, progress=False, max_steps=1000).summary

@@ -310,7 +310,7 @@ def from_dict(data: dict, source: str = "<sweep>", base_dir: Path | None = None)
 def check_runs(spec: SweepSpec) -> None:
     """Every run's scene, overrides, mesh density and solver settings, before any work (InputError
     naming the sweep, the run and the problem).  The scene is parsed once per distinct setting set."""
-    from ..runner import check_solver_settings
+    from ..scenes.build import check_solver_settings
     from ..scenes import check_density, load
 
     base = load(spec.scene)

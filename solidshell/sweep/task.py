@@ -95,7 +95,7 @@ def _base_row(task, scene, mesh, solver) -> dict:
 def run_task(task: dict) -> dict:
     """Run one sweep run (see the module docstring); returns its ledger row."""
     from ..errors import InputError, SolverError
-    from ..runner import run_scene
+    from ..run import run_scene
 
     t0, c0 = time.perf_counter(), time.process_time()
     over = {"output.pictures": task["pictures"], **task["overrides"]}

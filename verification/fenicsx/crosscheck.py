@@ -280,7 +280,7 @@ def _restart_solidshell(dens, out, res, log):
     a table row as _restart_fenicsx's, distances measured to the DOLFINx state and to solidshell's
     own state ``out.U`` [cm]."""
     from solidshell.analysis import drape_summary
-    from solidshell.runner import run_scene
+    from solidshell.run import run_scene
 
     U0 = from_fenicsx_state(out.mesh, res["U"], res["director"])
     t0 = time.perf_counter()
@@ -312,7 +312,7 @@ def pedestal_problem(work, meshes, log, ranks=1, restart=True, restart_both=()):
     from solidshell.analysis import drape_summary
     from solidshell.material import Fabric
     from solidshell.meshing import build_mesh
-    from solidshell.runner import run_scene
+    from solidshell.run import run_scene
 
     recs, table = [], []
     ped_area = 100.0

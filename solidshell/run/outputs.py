@@ -1,0 +1,156 @@
+"""A run's files: the run folder (solidshell.rundir) opened and checked before any work, then the
+mesh, the state, its series, the projected boundary and the pictures, each stamped with the run id."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .. import io as sio
+from ..rundir import RunFolder
+from ..scenes import Scene
+
+
+def prepare_folder(out_dir, run_id: str, force: bool, settings: dict | None, output: dict):
+    """The run's RunFolder, checked (nothing written yet), or None when ``out_dir`` is None.  The
+    solver's checkpoint and restart files in it are kept; when the scene draws pictures, whether
+    VTK can render is asked in a child process now, while the run meshes."""
+    if out_dir is None:
+        return None
+    folder = RunFolder(out_dir, run_id, force=force,
+                       keep=[settings.get(k) for k in ("checkpoint", "restart")] if settings else ())
+    folder.check()
+    if output["pictures"] or output["snapshots"]:
+        # whether VTK can render is asked in a child process (~2 s): it runs while we mesh
+        from ..render import vtk_backend
+
+        vtk_backend.start_probe()
+    return folder
+
+
+def folder_warnings(folder) -> list[str]:
+    """A warning for files in the folder that solidshell did not write (kept with --force)."""
+    if folder is None or not folder.foreign:
+        return []
+    return [f"output folder {folder.path} holds {len(folder.foreign)} file(s) solidshell did "
+            f"not write, left untouched (--force): {', '.join(folder.foreign[:5])}"]
+
+
+def _snapshot_plan(sc, kind, result) -> list:
+    """[(time, frame index or None, warning or None)] for the scene's output snapshots: a picture
+    iso_t<time>.png for each snapshot with a kept frame, a warning for each without one (a time
+    past the run's end, or frames not kept)."""
+    snaps = sc.output["snapshots"]
+    if not snaps or kind == "none" or result is None:
+        return []
+    if kind == "static":
+        return [(None, None, f"output.snapshots ({len(snaps)} time(s)) ignored: the static solver has no time")]
+    frames = result.frames or []
+    times = np.array([float(tf) for tf, _ in frames]) if frames else np.zeros(0)
+    info = result.info or {}
+    t_final = info.get("t_final")
+    said = {float(x) for x in (info.get("snapshots_after_t_end_dropped") or [])}   # the solver's warning
+    out = []
+    for ts in snaps:
+        j = int(np.argmin(np.abs(times - ts))) if len(times) else -1
+        if j >= 0 and abs(times[j] - ts) <= 1e-6 + 1e-3 * max(ts, 1.0) and np.all(np.isfinite(frames[j][1])):
+            out.append((ts, j, None))
+        elif ts in said:
+            out.append((ts, None, None))
+        else:
+            why = (f"after the run's end t = {t_final:.6g} s" if isinstance(t_final, (int, float)) and ts > t_final
+                   else "no frame kept at that time")
+            out.append((ts, None, f"snapshot t = {ts:g} s dropped: {why}"))
+    return out
+
+
+def _write_outputs(folder, sc: Scene, kind: str, mesh_name: str, solved, summary: dict, snaps, cb) -> list:
+    """Write a run's files (each stamped with the run id) into its folder; returns their paths.
+    ``solved``: the run's driver.Solved; an adaptive run's ``series`` [(t, mesh, U)], each frame on
+    its own mesh, is written as series.pvd of VTUs."""
+    rid = folder.run_id
+    mesh, U, result, series = solved.mesh, solved.U, solved.result, solved.series
+    files = [folder.write(name, sio.write_mesh_file, mesh, run_id=rid) for name in ("mesh.xdmf", "mesh.vtu")]
+    finite = result is not None and bool(np.all(np.isfinite(U)))
+    if result is not None:
+        files += _state_files(folder, kind, solved, summary, finite)
+    boundary = summary.get("projected_boundary")
+    if boundary is not None:
+        def csv(p):
+            with sio.atomic_write(p) as f:
+                f.write(f"# projected boundary of the draped sheet on the X-Y plane [cm]\n"
+                        f"# solidshell run_id={rid}\nx,y\n")
+                f.writelines(f"{x:.6g},{y:.6g}\n" for x, y in boundary)
+            return p
+        files.append(folder.write("projected_boundary.csv", csv))
+
+    def picture(p, *a, **kw):
+        from ..plotting import render      # matplotlib only when a picture is drawn
+
+        return sio.stamp_png(render(p, *a, **kw), rid)
+
+    state = U if finite else None
+    sub = _subtitle(sc, mesh_name, mesh, kind, summary)
+    views = sc.output["pictures"]
+    for i, view in enumerate(views):
+        cb(0.92 + 0.08 * i / max(1, len(views)), f"{view} picture")
+        files.append(folder.write(f"{view}.png", picture, mesh, state, view=view, title=sc.title, scene=sc,
+                                  subtitle=sub))
+    for ts, j, _ in snaps:
+        if j is not None:
+            tj = float(result.frames[j][0])
+            mj = mesh if series is None else series[j][1]
+            sub_j = f"t = {tj:.3f} s" + ("" if series is None else f", {mj.n_nodes} active nodes")
+            for view in ("iso", "top") if series is not None else ("iso",):
+                files.append(folder.write(f"{view}_t{ts:.3f}.png", picture, mj, result.frames[j][1], view=view,
+                                          title=sc.title, scene=sc, subtitle=sub_j))
+    return files
+
+
+def _state_files(folder, kind: str, solved, summary: dict, finite: bool) -> list:
+    """The solved state's files: result (and deformed) mesh files and the run's series."""
+    rid = folder.run_id
+    mesh, U, result, series = solved.mesh, solved.U, solved.result, solved.series
+    files = [folder.write("result.xdmf", sio.write_mesh_file, mesh, U, run_id=rid),
+             folder.write("result.vtu", sio.write_mesh_file, mesh, U, run_id=rid)]
+    if finite:
+        files.append(folder.write("deformed.vtu", sio.write_mesh_file, mesh, U, deformed=True, run_id=rid))
+    frames = [(float(tf), Uf) for tf, Uf in (result.frames or [])]
+    if series is not None and len(series) > 1:
+        files.append(folder.write("series.pvd", sio.write_mesh_series, series, run_id=rid))
+        files += sio.series_frame_paths(folder.path / "series.pvd", len(series))
+        summary["series_parameter"] = "time [s]"
+    elif len(frames) > 1:
+        files.append(folder.write("series.xdmf", sio.write_time_series, mesh, frames, run_id=rid))
+        summary["series_parameter"] = "time [s]" if kind in ("explicit", "relax") else "load factor"
+    return files
+
+
+def _subtitle(sc, mesh_name, mesh, kind, summary) -> str:
+    parts = [f"mesh {mesh_name}", f"{mesh.n_nodes} nodes", f"{mesh.n_elements} elements"]
+    if kind == "none":
+        parts.append("undeformed")
+    else:
+        parts.append(kind)
+        dc = summary.get("drape_coefficient")
+        if isinstance(dc, (int, float)):
+            parts.append(f"DC = {dc:.3f}")
+        if summary.get("fold_count") is not None and summary.get("pedestal_area") is not None:
+            parts.append(f"{summary['fold_count']} folds")
+        if summary.get("converged") is False:
+            parts.append("NOT CONVERGED")
+    return ", ".join(parts)
+
+
+def write_run(folder, sc: Scene, kind: str, mesh_name: str, solved, summary: dict, cb) -> tuple[list, list]:
+    """The write step: the scene's snapshot plan (its warnings), then -- with a folder -- the
+    earlier run's files cleared (their names in ``summary["replaced_files"]``) and this run's
+    written.  Returns (file paths, warnings)."""
+    snaps = _snapshot_plan(sc, kind, solved.result)
+    warnings = [w for _, _, w in snaps if w]
+    if folder is None:
+        return [], warnings
+    cb(0.9, "writing results")
+    replaced = folder.clear_stale()
+    if replaced:
+        summary["replaced_files"] = replaced
+    return _write_outputs(folder, sc, kind, mesh_name, solved, summary, snaps, cb), warnings

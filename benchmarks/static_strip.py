@@ -13,12 +13,7 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
-import sys
 import time
-
-HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(os.path.dirname(HERE), "verification"))
 
 SETTINGS = [
     ("newton (default: trust region + shift)", dict(method="newton")),
@@ -30,14 +25,14 @@ SETTINGS = [
 
 
 def main(argv=None):
-    from strip import solve_strip  # verification/strip.py
+    from verification.checks import references
+    from verification.checks.strips import solve_strip
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--meshes", type=int, nargs="+", default=[10, 20, 40, 80])
     ap.add_argument("--json", default=None)
     a = ap.parse_args(argv)
-    with open(os.path.join(os.path.dirname(HERE), "reference", "elastica_strip.json")) as fh:
-        ref = json.load(fh)["strip"]["warp"]["tip_z"]
+    ref = references.elastica_strip()["strip"]["warp"]["tip_z"]
     solve_strip(a.meshes[0], "warp")     # warm-up: numba compilation / cache load, not timed
     rows = []
     print(f"{'solver':42} {'mesh':>6} {'tip err':>9} {'iters':>6} {'solves':>6} {'time [s]':>8} {'x default':>9}")

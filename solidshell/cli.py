@@ -121,7 +121,7 @@ def _parser() -> argparse.ArgumentParser:
     w.add_argument("--limit", type=int, metavar="N", help="run at most N of the missing runs")
     w.add_argument("--list", action="store_true", help="list the packaged studies")
     w.add_argument("--no-progress", action="store_true", help="no progress bar or lines")
-    from .verify.cli import add_parser as _add_verify
+    from .verify_cli import add_parser as _add_verify
     _add_verify(sub)
     from .bench.cli import add_parser as _add_bench
     _add_bench(sub)
@@ -280,7 +280,7 @@ def main(argv=None) -> int:
         if args.command == "sweep":
             return _cmd_sweep(args)
         if args.command == "verify":
-            from .verify.cli import run as _cmd_verify
+            from .verify_cli import run as _cmd_verify
             return _cmd_verify(args)
         if args.command == "figures":
             return _cmd_figures(args)

@@ -13,7 +13,7 @@ from solidshell import Fabric, ShellMesh
 from solidshell.model import Model
 from solidshell.solvers.explicit import scaled_mass, stepcontrol
 from solidshell.solvers.explicit.settings import parse_settings
-from solidshell.verify.common import rect_grid
+from verification.checks.common import rect_grid
 
 WOOL = Fabric.wool()
 

@@ -22,7 +22,7 @@ import numpy as np
 import pytest
 
 from solidshell.solvers import pardiso
-from solidshell.verify import pedestal
+from verification.checks import pedestal
 
 RUNS = [("square-pedestal", "12x4x4", "static"), ("square-pedestal", "6x2x4", "relax")]
 PROBE = """

@@ -5,7 +5,7 @@ import json
 import numpy as np
 import pytest
 
-from solidshell.verify import references
+from verification.checks import references
 
 el = references.module("elastica")
 

@@ -9,7 +9,7 @@ from solidshell import Fabric, IsotropicShell, ShellMesh
 from solidshell.boundary import gravity_loads, line_load, point_load, surface_load
 from solidshell.errors import InputError
 from solidshell.model import Model
-from solidshell.verify.elements import mixed_curved_mesh  # two quads + two triangles, doubly curved
+from verification.checks.elements import mixed_curved_mesh  # two quads + two triangles, doubly curved
 
 ISO = IsotropicShell(E=1.0e4, nu=0.3, h=0.1, density=2.0)
 WOOL30 = Fabric.wool(warp_angle=30.0)

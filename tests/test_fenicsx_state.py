@@ -5,7 +5,7 @@ import numpy as np
 
 from solidshell.meshing import build_mesh
 from solidshell.solvers.static import solve_static
-from solidshell.verify.strips import strip_problem
+from verification.checks.strips import strip_problem
 from verification.fenicsx.state import from_fenicsx_state, max_translation_change, to_fenicsx_state
 
 EPS = np.finfo(float).eps

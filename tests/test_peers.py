@@ -1,4 +1,4 @@
-"""The peer-code scripts' own logic (benchmarks/peers, reference/pedestal_kratos.py) without Kratos:
+"""The peer-code scripts' own logic (benchmarks/peers: kratos_launch.py, pedestal_kratos.py) without Kratos:
 the one-line refusal when Kratos is missing, and the director-to-rotation-vector seed."""
 
 from __future__ import annotations
@@ -34,14 +34,15 @@ def test_missing_kratos_says_so_in_one_line_and_exits_3(tmp_path):
     assert "pip install KratosMultiphysics KratosStructuralMechanicsApplication" in lines[0]
 
 
-def test_nodal_rotation_vectors_recover_a_rigid_rotation():
+def test_nodal_rotation_vectors_recover_a_rigid_rotation(monkeypatch):
     # A rigid rotation of the whole pedestal mesh (translations and directors rotated alike) must
     # come back as the same rotation vector at every node, drilling part included.
     from scipy.spatial.transform import Rotation
 
     from solidshell.meshing import build_mesh
 
-    ped = _load(ROOT / "reference" / "pedestal_kratos.py", "reference_pedestal_kratos")
+    monkeypatch.syspath_prepend(str(ROOT / "benchmarks" / "peers"))   # its kratos_launch, as when run as a script
+    ped = _load(ROOT / "benchmarks" / "peers" / "pedestal_kratos.py", "peers_pedestal_kratos")
     mesh = build_mesh("square_on_square", "6x2x4")
     rv = np.array([0.4, -1.1, 0.7])
     R = Rotation.from_rotvec(rv).as_matrix()

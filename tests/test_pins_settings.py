@@ -14,8 +14,8 @@ from solidshell.adapt.settings import AdaptSettings
 from solidshell.errors import InputError
 from solidshell.settings import parse
 from solidshell.solvers.static_settings import StaticSettings
-from solidshell.verify import CHECKS, record
-from solidshell.verify.runner import run_checks
+from verification.checks import CHECKS, record
+from verification.checks.runner import run_checks
 
 
 # --------------------------------------------------------------------------- solidshell verify

@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from solidshell.verify import references
+from verification.checks import references
 
 REF = references.reference_dir()
 kp = references.module("kirchhoff_plate")

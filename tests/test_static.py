@@ -13,7 +13,7 @@ from solidshell.model import Model
 from solidshell.problem import Problem, SolveResult
 from solidshell.solvers import get as get_solver
 from solidshell.solvers.static import solve_static
-from solidshell.verify import references
+from verification.checks import references
 
 ELASTICA = references.elastica_strip()
 elastica = references.module("elastica")

@@ -1,4 +1,4 @@
-"""Fast subsets of the element verification (solidshell/verify/*.py) against independent references.
+"""Fast subsets of the element verification (verification/checks/*.py) against independent references.
 
 Every tolerance is stated next to the measured value it has to admit and the failure it must catch.
 """
@@ -7,9 +7,9 @@ from __future__ import annotations
 
 import pytest
 
-from solidshell.verify import cantilevers as locking
-from solidshell.verify import elements as patch
-from solidshell.verify import plates
+from verification.checks import cantilevers as locking
+from verification.checks import elements as patch
+from verification.checks import plates
 
 # ----------------------------------------------------------------------------- shear locking
 @pytest.mark.parametrize("ratio", [10.0, 1000.0, 10000.0])

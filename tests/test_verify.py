@@ -9,9 +9,9 @@ import json
 import pytest
 
 from solidshell import cli
-from solidshell.verify import CHECKS, references
-from solidshell.verify.pedestal import check_pedestal_kratos
-from solidshell.verify.record import Context
+from verification.checks import CHECKS, references
+from verification.checks.pedestal import check_pedestal_kratos
+from verification.checks.record import Context
 
 FIELDS = {"name", "reference", "source", "quantity", "value", "reference_value", "error", "tolerance", "passed",
           "wall_time_s", "why", "status"}
@@ -70,7 +70,7 @@ def test_fenicsx_without_dolfinx_is_one_line_exit_2(capsys, monkeypatch, tmp_pat
 
 def test_failed_record_gives_exit_1(tmp_path, monkeypatch):
     # a check whose measurement misses its tolerance must fail the command
-    from solidshell.verify import record
+    from verification.checks import record
 
     def bad(ctx):
         return [record.measure("fake/x", "x", 1.1, 1.0, 1e-3, reference="r", source="s", why="test")]

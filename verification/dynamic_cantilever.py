@@ -27,7 +27,7 @@ from __future__ import annotations
 
 from solidshell import Fabric, IsotropicShell
 from solidshell.solvers import explicit
-from solidshell.verify.dynamics import (  # noqa: F401  (the computations live in the package)
+from verification.checks.dynamics import (  # noqa: F401  (the computations live in the package)
     BETA1, cantilever_problem, crossings, free_fall, frequency_case)
 
 from . import write_json

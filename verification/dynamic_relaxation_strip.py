@@ -22,7 +22,7 @@ import time
 import numpy as np
 
 from solidshell.solvers import explicit
-from solidshell.verify.dynamics import TOL, VARIANTS, relax_strip_problem as strip  # noqa: F401
+from verification.checks.dynamics import TOL, VARIANTS, relax_strip_problem as strip  # noqa: F401
 
 from . import REFERENCE, write_json
 

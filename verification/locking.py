@@ -41,7 +41,7 @@ from __future__ import annotations
 
 import argparse
 
-from solidshell.verify.cantilevers import (  # noqa: F401  (the computations live in the package)
+from verification.checks.cantilevers import (  # noqa: F401  (the computations live in the package)
     B, E, L, MH_REF, RATIOS, beams, circle, column_buckling, curved_cantilever, end_moment, macneal_harder_beam,
     macneal_harder_mesh, strip_mesh, tip_load)
 

@@ -1,11 +1,11 @@
 """Patch tests (small deflection) on the distorted five-element patch of MacNeal & Harder (1985).
 
-The table printer over solidshell.verify.elements, where the computation and its description live.
+The table printer over verification.checks.elements, where the computation and its description live.
 """
 
 from __future__ import annotations
 
-from solidshell.verify.elements import (  # noqa: F401  (the computations live in the package)
+from verification.checks.elements import (  # noqa: F401  (the computations live in the package)
     AMP, AREA, INNER, MAT, NODES, OUTER, QUADS, exact_field, patch_mesh, run_one)
 
 from . import write_json

@@ -1,6 +1,6 @@
 """Square plate under uniform pressure: solid-shell centre deflection vs the Kirchhoff series.
 
-The table printer over solidshell.verify.plates, where the computation and its description live.
+The table printer over verification.checks.plates, where the computation and its description live.
 """
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ import time
 
 import numpy as np
 
-from solidshell.verify.plates import (  # noqa: F401  (the computations live in the package)
+from verification.checks.plates import (  # noqa: F401  (the computations live in the package)
     NU, A, centre_deflection, mitc3_plate, plate_bc, plate_buckling, square_plate_mesh, triangle_vs_mitc3)
 
 from . import OUT, plate_reference, rate, write_json

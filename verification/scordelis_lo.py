@@ -15,7 +15,7 @@ from __future__ import annotations
 import json
 import pathlib
 
-from solidshell.verify.elements import REFERENCE, midside_deflection, roof  # noqa: F401
+from verification.checks.elements import REFERENCE, midside_deflection, roof  # noqa: F401
 
 OUT = pathlib.Path(__file__).with_name("out")
 

@@ -8,7 +8,7 @@
   at the clamp.
 
 Prints the errors for meshes n x 1 (default 8, 16, 32) and writes verification/out/static_cantilevers.json.
-Run:  python -m verification.static_cantilevers [--meshes 8 16 32]   (the computations: solidshell/verify/cantilevers.py)
+Run:  python -m verification.static_cantilevers [--meshes 8 16 32]   (the computations: verification/checks/cantilevers.py)
 """
 
 from __future__ import annotations
@@ -17,8 +17,8 @@ import argparse
 import json
 import os
 
-from solidshell.verify.cantilevers import large_end_shear as end_shear
-from solidshell.verify.cantilevers import roll_up as end_moment
+from verification.checks.cantilevers import large_end_shear as end_shear
+from verification.checks.cantilevers import roll_up as end_moment
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 

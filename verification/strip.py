@@ -18,8 +18,8 @@ import sys
 
 import numpy as np
 
-from solidshell.verify.references import reference_dir
-from solidshell.verify.strips import shape_error, solve_strip, strip_problem  # noqa: F401
+from verification.checks.references import reference_dir
+from verification.checks.strips import shape_error, solve_strip, strip_problem  # noqa: F401
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 REF = str(reference_dir() / "elastica_strip.json")

@@ -16,7 +16,7 @@ import numpy as np
 
 from solidshell import IsotropicShell
 from solidshell.model import Model
-from solidshell.verify.elements import distorted_patch as patch
+from verification.checks.elements import distorted_patch as patch
 
 OUT = pathlib.Path(__file__).with_name("out")
 

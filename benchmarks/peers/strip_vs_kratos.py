@@ -39,16 +39,10 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import sys
 
 import numpy as np
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.dirname(os.path.dirname(HERE))
-sys.path.insert(0, HERE)
-sys.path.insert(0, os.path.join(ROOT, "verification"))
-
-import kratos_launch  # noqa: E402
+import kratos_launch  # benchmarks/peers, this script's folder
 
 L, WIDTH, WEIGHT, B_WARP, T_WARP = 5.0, 1.0, 0.019, 0.083, 1118.2
 H_K = (12.0 * B_WARP / T_WARP) ** 0.5
@@ -88,10 +82,10 @@ def main(argv=None):
     ap.add_argument("--json", default=None)
     a = ap.parse_args(argv)
     py = kratos_launch.require_kratos()
-    from strip import solve_strip  # verification/strip.py
+    from verification.checks import references
+    from verification.checks.strips import solve_strip
 
-    with open(os.path.join(ROOT, "reference", "elastica_strip.json")) as fh:
-        ref = json.load(fh)["strip"]["warp"]["tip_z"]
+    ref = references.elastica_strip()["strip"]["warp"]["tip_z"]
     load0 = os.getloadavg()
     solve_strip(MESHES[0], "warp")          # warm-up: numba compilation / cache load, not timed
     rows = []

@@ -37,14 +37,14 @@ def _triangulated(scene, density):
     from ..mesh import ShellMesh
     from ..scenes.build import build_scene_mesh
     from ..scenes import load
-    from ..verify.common import split_quads
+    from verification.checks.common import split_quads
 
     m = build_scene_mesh(load(scene), density, "static")[0]
     return ShellMesh(m.nodes, tris=split_quads(m.quads, "x"), node_sets=m.node_sets)
 
 
 def _dc_errors(row, ref, half_size):
-    from ..verify.pedestal import boundary_distance
+    from verification.checks.pedestal import boundary_distance
 
     if ref is None or row.get("dc") is None or ref.get("dc") is None:
         return {}
@@ -61,7 +61,7 @@ def _warm(scene, mesh, solver):
 
 # ------------------------------------------------------------------------------- strip
 def _strip_configs(quick):
-    from ..verify.strips import solve_strip
+    from verification.checks.strips import solve_strip
 
     def one(n, kind="quad", method="newton", **kw):
         def run():
@@ -81,7 +81,7 @@ def _strip_configs(quick):
 
 
 def _strip_errors(row, ref):
-    from ..verify import references
+    from verification.checks import references
 
     z = references.elastica_strip()["strip"]["warp"]["tip_z"]
     return {"tip": abs(row["tip_z"] - z) / abs(z)}
@@ -91,7 +91,7 @@ STRIP = Study("strip", "the 5 x 1 cm wool strip (warp cut) under its weight, sta
               (("tip", "|tip deflection error| / |tip deflection|"),), _strip_configs, _strip_errors,
               "the heavy elastica, reference/elastica_strip.json (an independent ODE solution)",
               ["The shell's tip deflection converges to ~1e-4 of the elastica's, not to it: the shell stretches and "
-               "has a thickness the elastica lacks (verify/strips.py)."])
+               "has a thickness the elastica lacks (verification/checks/strips.py)."])
 
 
 # ------------------------------------------------------------------------------- pedestal

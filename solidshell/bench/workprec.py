@@ -11,8 +11,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
 
-from ..verify.runner import fmt_value
-
 TARGET = 0.01
 """The error the tables name the cheapest configuration for (1 %, issue 12)."""
 
@@ -93,6 +91,8 @@ def cheapest(result: dict, key: str, target: float = TARGET):
 
 
 def _fmt(v) -> str:
+    from verification.checks.runner import fmt_value   # the verification tables' cell format
+
     return fmt_value(v, 3, "–")
 
 

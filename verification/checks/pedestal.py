@@ -16,7 +16,7 @@ Kratos: ``reference/pedestal_kratos.json`` is a list of records, one per mesh an
      "section": {"E": ..., "nu": ..., "h": ..., "weight": ...},    # optional, used when no material
      "code": "kratos",                             # optional; records of other codes are skipped
      "overrides": {"model.membrane": "ans"},        # optional scene keys for our run
-     "script": "reference/pedestal_kratos.py", "source": "KratosMultiphysics 10.x MITC4 ..."}
+     "script": "benchmarks/peers/pedestal_kratos.py", "source": "KratosMultiphysics 10.x MITC4 ..."}
 
 ``material`` replaces the scene's [material] table (a matched isotropic section), ``overrides``
 are dotted scene keys applied to our run.  Without the file the check is reported as skipped.
@@ -41,8 +41,8 @@ SELF = "Richardson limit of 24x8x4, 48x16x4, 96x32x4 (our own meshes: self-conve
 
 def solve_pedestal(mesh: str, overrides: dict | None = None, material: dict | None = None):
     """Static Newton solve of square-pedestal; returns (RunOutput, projected boundary (P,2), wall s)."""
-    from .. import scenes
-    from ..runner import run_scene
+    from solidshell import scenes
+    from solidshell.run import run_scene
 
     sc = scenes.load(SCENE)
     if material is not None:
@@ -107,7 +107,7 @@ def json_load(p):
 def boundary_distance(ours, theirs, n_theta: int = 720) -> float:
     """max over theta of |r_ours(theta) - r_theirs(theta)| [cm], r the outermost crossing of the ray
     from the pedestal centre with the projected boundary (analysis.radius_profile)."""
-    from ..analysis import radius_profile
+    from solidshell.analysis import radius_profile
 
     _, ra = radius_profile(np.asarray(ours, float), n_theta=n_theta)
     _, rb = radius_profile(np.asarray(theirs, float), n_theta=n_theta)
@@ -119,7 +119,7 @@ def _matched(section: dict | None) -> dict | None:
     density = weight / (h g0) so that the weight per area is the fabric's (units.G0)."""
     if not section:
         return None
-    from ..units import G0
+    from solidshell.units import G0
     return {"isotropic": {"E": float(section["E"]), "nu": float(section["nu"]), "h": float(section["h"]),
                           "density": float(section["weight"]) / (float(section["h"]) * G0)}}
 

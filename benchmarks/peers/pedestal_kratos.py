@@ -46,7 +46,7 @@ part on the free dofs; smallest eigenvalue by ARPACK).  solidshell: ``solve_stat
 the flat sheet (its own stability report).
 
 Run (regenerates the JSON; exit 3 with one line when Kratos is missing):
-    python reference/pedestal_kratos.py [--meshes 24x8x4 48x16x4] [--out reference/pedestal_kratos.json]
+    python benchmarks/peers/pedestal_kratos.py [--meshes 24x8x4 48x16x4] [--out reference/pedestal_kratos.json]
 Measured under a load average of ~25 on 2 cores: 24x8x4 7 min, 48x16x4 24 min (Kratos' 16-28
 line-searched iterations dominate: 330 s and 1340 s against solidshell's 93 s and 85 s).
 """
@@ -57,20 +57,14 @@ import argparse
 import json
 import math
 import os
-import sys
 import time
 
 import numpy as np
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.dirname(HERE)
-sys.path.insert(0, os.path.join(ROOT, "benchmarks", "peers"))
-if ROOT not in sys.path:
-    sys.path.insert(0, ROOT)
+import kratos_launch  # benchmarks/peers, this script's folder
 
-import kratos_launch  # noqa: E402
-
-JSON_PATH = os.path.join(HERE, "pedestal_kratos.json")
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+JSON_PATH = os.path.join(ROOT, "reference", "pedestal_kratos.json")   # the checkout's reference data
 SHEET, PEDESTAL, WEIGHT = 20.0, 10.0, 0.019
 T_MEAN = 0.5 * (1118.2 + 759.5)          # gf/cm
 B_MEAN = 0.5 * (0.083 + 0.063)           # gf cm

@@ -26,11 +26,11 @@ import time
 import numpy as np
 import scipy.linalg
 
-from .. import Fabric, IsotropicShell, ShellMesh
-from ..model import Model
-from ..problem import Problem
-from ..solvers import explicit
-from ..units import G0
+from solidshell import Fabric, IsotropicShell, ShellMesh
+from solidshell.model import Model
+from solidshell.problem import Problem
+from solidshell.solvers import explicit
+from solidshell.units import G0
 from .common import rect_grid
 from .record import check, measure, timed
 
@@ -202,7 +202,7 @@ def check_explicit_energy(ctx):
 
 def _static_state(ctx, cut, nx):
     """Tip position of the static (Newton) equilibrium of the relaxation's mesh."""
-    from ..solvers.static import solve_static
+    from solidshell.solvers.static import solve_static
 
     key = ("relax-static", cut, nx)
     if key not in ctx.cache:

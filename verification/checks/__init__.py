@@ -1,4 +1,4 @@
-"""Verification of solidshell against independent references: ``solidshell verify``.
+"""The checks of solidshell against independent references, run by ``solidshell verify``.
 
     solidshell verify [NAME ...] [--quick] [--out DIR] [--list] [--references] [--fenicsx]
 
@@ -33,7 +33,8 @@ Modules: ``record`` (Record, registry, Context), ``runner`` (select, run, print)
 ``report`` (JSON, Markdown, figures), ``references`` (stored reference data, regenerate-and-compare),
 ``common`` (meshes, linear solve, buckling); the checks by topic: ``strips``, ``cantilevers``,
 ``plates``, ``elements``, ``dynamics``, ``pedestal``.  The scripts in ``verification/`` print the
-longer tables of the same computations.
+longer tables of the same computations; the stored reference data are the package ``reference``.
+The command line is ``solidshell/verify_cli.py`` (the parser, and a call into this package).
 """
 
 __all__ = ["CHECKS", "Record", "measure", "skipped", "select", "verify", "DEFAULT_OUT", "load_checks"]
@@ -48,8 +49,8 @@ _FROM = {"CHECKS": "record", "Record": "record", "measure": "record", "skipped":
 def load_checks() -> dict:
     """Import the topic modules (registering every check) and return the registry ``CHECKS``.
 
-    Not done when the package is imported: the CLI builds the ``verify`` subparser from
-    ``verify.cli`` on every command, and the topic modules pull in the element kernels, the explicit
+    Not done when the package is imported: ``solidshell verify --list`` or ``--references`` and
+    the table scripts need only parts, and the topic modules pull in the element kernels, the explicit
     solver and scipy.sparse.linalg -- 1.2-1.6 s of a 20-element ``solidshell run`` (issue 13)."""
     import importlib
 

@@ -8,7 +8,7 @@ import time
 import traceback
 from pathlib import Path
 
-from ..errors import InputError, IOFailure
+from solidshell.errors import InputError, IOFailure
 from .record import CHECKS, Context, Record
 
 DEFAULT_OUT = "verification-out"
@@ -133,3 +133,42 @@ def verify(names=None, quick: bool = False, out_dir=DEFAULT_OUT, log=print, writ
         log(f"wrote {', '.join(str(f) for f in files)}")
         run["files"] = [str(f) for f in files]
     return run
+
+
+def fenicsx(out_dir, reuse: bool = False, log=print) -> dict:
+    """``solidshell verify --fenicsx``: verification.fenicsx.crosscheck.main(out) -> record dicts (the
+    Record format), printed like the other checks and written to <out>/fenicsx.json.  DOLFINx runs
+    under the system python (verification/fenicsx/jobs.py); without it an InputError (one line) is
+    raised before anything is written.  Returns {"records", "failed", "files"}."""
+    import dataclasses
+    import json
+
+    from ..fenicsx import crosscheck, jobs
+
+    try:
+        jobs.check_dolfinx()                     # before anything is written
+        out = prepare_out(out_dir)
+        rows = crosscheck.main(out, reuse=reuse)
+    except jobs.DolfinxMissing as e:
+        raise InputError(str(e)) from None
+    fields = set(Record.__dataclass_fields__)
+    required = {k for k, f in Record.__dataclass_fields__.items() if f.default is dataclasses.MISSING}
+    recs = []
+    for i, r in enumerate(rows):
+        missing = sorted(required - set(r))
+        if missing:
+            raise InputError(f"verification.fenicsx.crosscheck record {i} lacks {', '.join(missing)}")
+        r = {k: v for k, v in r.items() if k in fields}
+        if "status" not in r:
+            r["status"] = "skipped" if r["passed"] is None else "passed" if r["passed"] else "failed"
+        recs.append(Record(**r))
+    log(HEADER)
+    for r in recs:
+        log(line(r))
+    p = out / "fenicsx.json"
+    try:
+        p.write_text(json.dumps([r.to_dict() for r in recs], indent=1, default=float))
+    except OSError as e:
+        raise IOFailure.from_oserror(e, p) from None
+    log(f"wrote {p}")
+    return {"records": recs, "failed": sum(failed(r) for r in recs), "files": [str(p)]}

@@ -35,8 +35,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import IsotropicShell, ShellMesh
-from ..model import Model
+from solidshell import IsotropicShell, ShellMesh
+from solidshell.model import Model
 from . import references
 from .common import buckling_factors, linear_solve, rect_grid, split_quads
 from .record import check, measure, timed
@@ -202,7 +202,7 @@ def circle(n: int = 16, kind: str = "quad", phi_max: float = 2 * np.pi, steps: i
     Newton (solidshell.solve_static) in ``steps`` equal increments of phi, each starting from the
     previous state (a linear interpolation of the prescribed director would pass through a zero
     director at phi = pi).  Reports the tip-position error / L at the phi's in ``report_at`` (x pi)."""
-    from ..solvers.static import solve_static
+    from solidshell.solvers.static import solve_static
 
     h = L / ratio
     mesh = strip_mesh(n, 1, kind)
@@ -279,7 +279,7 @@ def curved_cantilever(n: int = 16, kind: str = "quad", R_over_h: float = 100.0, 
 
 
 def _elastic_strip(n):
-    from ..meshing import build_mesh
+    from solidshell.meshing import build_mesh
 
     mesh = build_mesh("strip", f"{n}x1", length=L, width=1.0)
     mat = IsotropicShell(E=1.2e6, nu=0.0, h=0.1)
@@ -287,8 +287,8 @@ def _elastic_strip(n):
 
 
 def large_end_shear(n, alpha, method="newton"):
-    from ..boundary import clamp
-    from ..solvers.static import solve_static
+    from solidshell.boundary import clamp
+    from solidshell.solvers.static import solve_static
 
     mesh, mat, model = _elastic_strip(n)
     tip = mesh.node_set("tip")
@@ -304,8 +304,8 @@ def large_end_shear(n, alpha, method="newton"):
 
 
 def roll_up(n, steps=32):
-    from ..boundary import clamp, director_rotation
-    from ..solvers.static import solve_static
+    from solidshell.boundary import clamp, director_rotation
+    from solidshell.solvers.static import solve_static
 
     mesh, mat, model = _elastic_strip(n)
     tip = mesh.node_set("tip")
@@ -432,7 +432,7 @@ def check_locking(ctx):
             recs.append(measure(f"locking/curved/{kind}/{load}", "tip deflection, quarter circle, 16 el., R/h = 1e4",
                                 row["tip"], row["reference"], 4e-3, wall_time_s=t(),
                                 reference="thin curved beam (Castigliano)", source="reference: closed form in "
-                                "solidshell/verify/cantilevers.py curved_cantilever",
+                                "verification/checks/cantilevers.py curved_cantilever",
                                 why="measured +0.080 % (radial), +0.242 % (tangential), the O(n^-2) error, equal "
                                     "at R/h = 1e3 and 1e4; trapezoidal locking drives it towards -100 %"))
     return recs

@@ -6,7 +6,7 @@ import json
 import math
 from pathlib import Path
 
-from ..errors import IOFailure
+from solidshell.errors import IOFailure
 
 
 def _write(path: Path, text: str) -> Path:

@@ -1,9 +1,10 @@
 """Where the stored reference data live, how to load them, and the regenerate-and-compare command.
 
-The data and the scripts that make them are in the repository's ``reference/`` folder (one copy:
-the editable install, ``pip install -e .``, imports solidshell from the source tree, so the folder
-is found next to it; ``SOLIDSHELL_REFERENCE_DIR`` points elsewhere).  The generating scripts are
-loaded by file path so that they stay independent of solidshell (none of them imports it).
+The data and the scripts that make them are the package ``reference`` (the repository's
+``reference/`` folder; the wheel ships its JSON and Markdown files with it), found through
+``importlib.resources`` -- the same in a checkout's editable install and in an installed wheel.
+``SOLIDSHELL_REFERENCE_DIR`` points at another folder laid out alike (its scripts are then loaded
+by file path).  None of the generating scripts imports solidshell.
 
 ``solidshell verify --references [--quick]`` regenerates every stored reference file into a
 temporary folder and compares it with the stored one, number by number (tolerances in
@@ -12,6 +13,7 @@ temporary folder and compares it with the stored one, number by number (toleranc
 
 from __future__ import annotations
 
+import importlib
 import importlib.util
 import json
 import math
@@ -20,23 +22,32 @@ import sys
 import tempfile
 import time
 from functools import lru_cache
+from importlib import resources
 from pathlib import Path
 
-from ..errors import InputError
+from solidshell.errors import InputError
+
+
+ENV = "SOLIDSHELL_REFERENCE_DIR"
 
 
 def reference_dir() -> Path:
-    env = os.environ.get("SOLIDSHELL_REFERENCE_DIR")
-    p = Path(env) if env else Path(__file__).resolve().parents[2] / "reference"
+    """The folder of the reference data: ``$SOLIDSHELL_REFERENCE_DIR``, else the installed package
+    ``reference`` (a real folder: wheels and editable installs are not zipped)."""
+    env = os.environ.get(ENV)
+    p = Path(env) if env else Path(resources.files("reference"))
     if not p.is_dir():
-        raise InputError(f"reference data folder {p} not found (set SOLIDSHELL_REFERENCE_DIR to the "
-                         "repository's reference/ folder)")
+        raise InputError(f"reference data folder {p} not found ({ENV} must name a folder laid out like "
+                         "the package reference/)")
     return p
 
 
 @lru_cache(maxsize=None)
 def module(name: str):
-    """The reference script ``reference/<name>.py`` as a module (elastica, beams, kirchhoff_plate)."""
+    """The reference script ``reference/<name>.py`` as a module (elastica, beams, kirchhoff_plate):
+    ``reference.<name>``, or the file in ``$SOLIDSHELL_REFERENCE_DIR`` when that is set."""
+    if not os.environ.get(ENV):
+        return importlib.import_module(f"reference.{name}")
     path = reference_dir() / f"{name}.py"
     spec = importlib.util.spec_from_file_location(f"solidshell_reference_{name}", path)
     mod = importlib.util.module_from_spec(spec)

@@ -103,7 +103,7 @@ def check(name: str, topic: str, summary: str, *, quick: bool = True, default: b
 @dataclass
 class Context:
     """What a check gets: ``quick`` (the reduced set), a ``log`` callback for progress lines and
-    the figures it declares (plain data, drawn by solidshell.verify.report)."""
+    the figures it declares (plain data, drawn by verification.checks.report)."""
 
     quick: bool = False
     log: Callable[[str], None] = print

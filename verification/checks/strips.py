@@ -23,11 +23,11 @@ ELASTICA_SRC = "reference/elastica.py (solve_bvp tol 1e-10, checked by shooting)
 def strip_problem(n: int, cut: str, membrane: str = "full", kind: str = "quad"):
     """Mesh, model, fixed mask and gravity loads of the n x 1 strip (warp- or weft-cut); ``kind``
     "tri" cuts every quad into two triangles, the diagonals alternating (common.split_quads "x")."""
-    from ..boundary import clamp, gravity_loads
-    from ..material import Fabric
-    from ..mesh import ShellMesh
-    from ..meshing import build_mesh
-    from ..model import Model
+    from solidshell.boundary import clamp, gravity_loads
+    from solidshell.material import Fabric
+    from solidshell.mesh import ShellMesh
+    from solidshell.meshing import build_mesh
+    from solidshell.model import Model
     from .common import split_quads
 
     mesh = build_mesh("strip", f"{n}x1", length=5.0, width=1.0)
@@ -39,7 +39,7 @@ def strip_problem(n: int, cut: str, membrane: str = "full", kind: str = "quad"):
 
 def solve_strip(n: int, cut: str, method: str = "newton", membrane: str = "full", kind: str = "quad", **kw):
     """Solve the strip; returns dict(tip_x, tip_z, centreline (x, z) sorted by x, result, wall)."""
-    from ..solvers.static import solve_static
+    from solidshell.solvers.static import solve_static
 
     mesh, model, fixed, loads = strip_problem(n, cut, membrane, kind)
     t0 = time.perf_counter()

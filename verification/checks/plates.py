@@ -42,8 +42,8 @@ import time
 
 import numpy as np
 
-from .. import IsotropicShell, ShellMesh
-from ..model import Model
+from solidshell import IsotropicShell, ShellMesh
+from solidshell.model import Model
 from . import references
 from .common import buckling_factors, linear_solve, rect_grid, split_quads
 from .record import check, measure, observed_order, timed
@@ -299,7 +299,7 @@ def check_plates(ctx):
             a, b = centre_deflection(8, "tri", support, 1000.0), mitc3_plate(8, support, 1000.0)
         recs.append(measure(f"plates/{support}/tri8x8-vs-mitc3", "centre deflection, '/'-split 8x8 triangles", a, b,
                             1e-8, wall_time_s=t(), reference="independent MITC3 plate code (same mesh)",
-                            source="solidshell/verify/plates.py mitc3_plate (shares no code with the element)",
+                            source="verification/checks/plates.py mitc3_plate (shares no code with the element)",
                             why="measured 1e-13..4e-10; any deviation of Eqs. (12)-(14) from the Nedelec shear "
                                 "field shows as >1e-3"))
     return recs

@@ -61,11 +61,13 @@ Hessian is neglected in this bound; it is of relative size p / R and p is tiny.)
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numpy as np
 
 from . import contact_kernels as ck
 from .errors import InputError
+from .interfaces import ContactBody
 
 DEFAULT_PENALTY_FACTOR = 0.1
 """Default ``factor`` of :func:`penalty_stiffness` (contact frequency sqrt(0.1) * omega_max)."""
@@ -106,7 +108,8 @@ def _params(*values) -> np.ndarray:
 
 
 class RigidBody:
-    """Base class.  The bodies here set ``code`` and ``params`` (the compiled distances of
+    """Base class (the interface the solvers use: solidshell.interfaces.ContactBody; every member
+    is declared here).  The bodies here set ``code`` and ``params`` (the compiled distances of
     ``contact_kernels``); a user's subclass implements :meth:`signed_distance` -> (g (N,), n (N,3))
     instead, and gets the same penalty and friction laws.
 
@@ -269,7 +272,7 @@ class Pedestal(RigidBody):
 
 
 # ---------------------------------------------------------------------- all bodies at once
-def contact_forces(bodies, x, k):
+def contact_forces(bodies: Sequence[ContactBody], x, k):
     """Sum over ``bodies`` of the penalty forces on points x (N,3): (forces (N,3), energy, active
     count).  No body: zeros and no work done."""
     x = np.asarray(x, dtype=float).reshape(-1, 3)
@@ -284,7 +287,7 @@ def contact_forces(bodies, x, k):
     return f, e, n_active
 
 
-def frictional_contact(body, x, k, k_t, anchor):
+def frictional_contact(body: ContactBody, x, k, k_t, anchor):
     """Penalty normal force plus Coulomb friction of one body (mu = body.friction > 0).
 
     x : (N,3) points;  k, k_t : scalar or (N,) normal and tangential penalty stiffnesses;
@@ -339,7 +342,7 @@ def combined_critical_time_step(omega_max, k, node_mass) -> float:
 
 
 # ---------------------------------------------------------------------- the starting configuration
-def initial_penetration(bodies, x, free=None, tol=None) -> list:
+def initial_penetration(bodies: Sequence[ContactBody], x, free=None, tol=None) -> list:
     """Nodes that start inside a body: for each body with any, ``(index, body, count, depth)``.
 
     x : (N,3) starting mid-surface positions X_o (+ U_o of a given initial state);

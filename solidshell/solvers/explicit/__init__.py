@@ -15,12 +15,16 @@ from __future__ import annotations
 
 from contextlib import contextmanager
 
+from ...interfaces import SolverProblem
+from ...model import Model
 from ...problem import Problem, SolveResult, no_progress
 from ..blas import single_threaded_blas
 from . import checkpoint
 from .integrator import Integrator, scaled_mass
 from .kernels import central_step as _central_step  # noqa: F401  (the hot loop's compiled step)
-from .settings import RELAX_KEYS as _RELAX_KEYS, RUN_KEYS as _RUN_KEYS, ExplicitSettings, RelaxSettings, parse_settings
+from .settings import RELAX_KEYS as _RELAX_KEYS
+from .settings import RUN_KEYS as _RUN_KEYS
+from .settings import ExplicitSettings, RelaxSettings, parse_settings
 from .state import State
 
 __all__ = ["run", "run_relax", "scaled_mass", "SMALL_MESH_ELEMENTS", "Integrator", "State", "checkpoint",
@@ -36,12 +40,13 @@ slower (a worker waits a whole time slice for a core); pass ``threads=1`` there.
 
 
 @contextmanager
-def threads_for(problem, threads):
+def threads_for(problem: SolverProblem, threads):
     """Numba threads for the force kernel during the block: ``threads`` (capped at the machine's),
     or 1 below SMALL_MESH_ELEMENTS elements and the current count otherwise; yields the count."""
     import numba
 
-    n_elem = int(getattr(getattr(problem.model, "mesh", None), "n_elements", 0))
+    model = problem.model
+    n_elem = model.mesh.n_elements if isinstance(model, Model) else 0   # a model of its own: small
     old = numba.get_num_threads()
     new = (1 if n_elem < SMALL_MESH_ELEMENTS else old) if threads is None else \
         min(int(threads), numba.config.NUMBA_NUM_THREADS)

@@ -18,8 +18,13 @@ candidate, always.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 from numba import njit
+
+from ...interfaces import ContactBody
+from ...mesh import ShellMesh
 
 SAFETY = 0.999
 """Re-select at SAFETY x margin / L: the gaps at the selection are rounded (relative 1e-16 of the
@@ -52,13 +57,13 @@ def contact_power(C, Dn1, Dp, nodes):
     return s
 
 
-def default_margin(mesh) -> float:
+def default_margin(mesh: ShellMesh) -> float:
     """2 x the mean edge length of the mesh [length]: a few rows of nodes around the contact zone,
     re-selected after a node has moved that far."""
     P = np.asarray(mesh.nodes, dtype=float)
     edges = []
-    for conn in (getattr(mesh, "quads", None), getattr(mesh, "tris", None)):
-        if conn is not None and len(conn):
+    for conn in (mesh.quads, mesh.tris):
+        if len(conn):
             c = np.asarray(conn)
             edges.append(np.linalg.norm(P[np.roll(c, -1, axis=1)] - P[c], axis=-1).ravel())
     return 2.0 * float(np.mean(np.concatenate(edges))) if edges else 0.0
@@ -67,11 +72,11 @@ def default_margin(mesh) -> float:
 class Candidates:
     """The candidate nodes of ``bodies`` for a sheet with initial positions X0 (N,3)."""
 
-    def __init__(self, bodies, X0, margin: float):
+    def __init__(self, bodies: Sequence[ContactBody], X0, margin: float):
         self.bodies = list(bodies)
         self.X0 = np.asarray(X0, dtype=float)
         self.N = len(self.X0)
-        L = [getattr(b, "lipschitz", None) for b in self.bodies]
+        L = [b.lipschitz for b in self.bodies]
         self.enabled = bool(self.bodies) and margin > 0.0 and all(v is not None and v > 0.0 for v in L)
         self.margin = float(margin)
         self.limit2 = (SAFETY * self.margin / max(L)) ** 2 if self.enabled else 0.0

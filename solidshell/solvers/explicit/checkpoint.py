@@ -16,7 +16,9 @@ import zipfile
 import numpy as np
 
 from ...errors import InputError
+from ...interfaces import QuasiStrainModel, SolverProblem
 from ...io import atomic_path
+from ...model import Model
 from .state import FIELDS, State
 
 VERSION = 3
@@ -31,7 +33,7 @@ def save(path, state: State, extra: dict | None = None) -> None:
     arrays["frame_k"] = np.asarray(state.frame_k, dtype=np.int64)
     for i, u in enumerate(state.frame_U):   # one array each: frames of a remeshed run differ in size
         arrays[f"frame_U{i}"] = np.asarray(u)
-    for k, v in (getattr(state, "fingerprint", None) or {}).items():
+    for k, v in state.fingerprint.items():
         arrays[_FP + k] = np.asarray(v)
     for k, v in (extra or {}).items():
         arrays[_EXTRA + k] = np.asarray(v)
@@ -104,29 +106,33 @@ def digest(obj) -> str:
     return h.hexdigest()
 
 
-def fingerprint(problem, settings: dict, mass: np.ndarray) -> dict[str, str]:
+def fingerprint(problem: SolverProblem, settings: dict, mass: np.ndarray) -> dict[str, str]:
     """Per-item digests of everything that shapes a run: mesh nodes and elements, material/section,
     the (scaled) masses, loads, supports, prescribed values, contact bodies, and each solver setting
     (``settings``: the ones that shape the run)."""
     model = problem.model
-    mesh = getattr(model, "mesh", None)
-    membrane = getattr(model, "membrane", None)
-    if isinstance(membrane, tuple):
-        # one value per quad (an adaptive mesh's coarse "ans" and finest "full"): one array, not a
-        # tuple fed item by item (1600 hash updates, 2 % of each remesh on square-pedestal)
-        membrane = np.asarray(membrane, dtype=str)
+    if isinstance(model, Model):
+        mesh, membrane = model.mesh, model.membrane
+        if isinstance(membrane, tuple):
+            # one value per quad (an adaptive mesh's coarse "ans" and finest "full"): one array, not a
+            # tuple fed item by item (1600 hash updates, 2 % of each remesh on square-pedestal)
+            membrane = np.asarray(membrane, dtype=str)
+        nodes, elements = mesh.nodes, [mesh.quads, mesh.tris, mesh.directors]
+        section = [model.material, model.quasi, model.mu, membrane]
+    else:   # a model of its own (interfaces.ExplicitModel): its class, and Eq. (24)'s flags if it has them
+        q = isinstance(model, QuasiStrainModel)
+        nodes, elements = model.n_nodes, [None, None, None]
+        section = [type(model).__name__, model.quasi if q else None, model.mu if q else None, None]
     items = {
-        "mesh nodes": getattr(mesh, "nodes", model.n_nodes),
-        "mesh elements": [getattr(mesh, "quads", None), getattr(mesh, "tris", None),
-                          getattr(mesh, "directors", None)],
-        "material": [getattr(model, "material", type(model).__name__), getattr(model, "quasi", None),
-                     getattr(model, "mu", None), membrane],
+        "mesh nodes": nodes,
+        "mesh elements": elements,
+        "material": section,
         "masses": mass,
         "loads": problem.loads,
         "supports": problem.fixed,
         "prescribed displacements": problem.prescribed,
         "contact bodies": [type(b).__name__ for b in problem.contact or []] + list(problem.contact or []),
-        "friction coefficients": [float(getattr(b, "friction", 0.0)) for b in problem.contact or []],
+        "friction coefficients": [float(b.friction) for b in problem.contact or []],
     }
     fp = {k: digest(v) for k, v in items.items()}
     fp.update({f"setting {k}": digest(v) for k, v in settings.items()})

@@ -10,29 +10,33 @@ import numpy as np
 
 from ... import contact_kernels as ck
 from ...contact import contact_forces, frictional_contact
+from ...interfaces import QuasiStrainModel, SolverProblem
+from ...model import Model
 
 
 class Forces:
     """Force evaluations for one problem.  ``k_pen`` (N,) is the normal penalty stiffness per node,
     ``k_t`` the tangential stick stiffness (None without friction), ``fric_of`` the friction
     coefficient of each contact body (0: frictionless); ``fused`` the model's FusedForces (None:
-    the model's own methods)."""
+    the model's own methods).  A library Model (``shell``) has a mesh, energy_and_force and the
+    interpenetration counts; any other model (interfaces.ExplicitModel) its force and energy, its
+    nodes at the origin, and Eq. (24)'s books when it is an interfaces.QuasiStrainModel."""
 
-    def __init__(self, problem, k_pen, k_t, fric_of, fused=None):
+    def __init__(self, problem: SolverProblem, k_pen, k_t, fric_of, fused=None):
         self.model = model = problem.model
         self.N = model.n_nodes
         self.shape = (self.N, 6)
-        self.X0 = model.mesh.nodes if hasattr(model, "mesh") else np.zeros((self.N, 3))
+        self.shell = isinstance(model, Model)
+        self.X0 = model.mesh.nodes if self.shell else np.zeros((self.N, 3))
         self.bodies = list(problem.contact or [])
         self.k_pen, self.k_t, self.fric_of = k_pen, k_t, list(fric_of)
         self.n_fric = sum(1 for mu in self.fric_of if mu > 0.0)
-        self.has_energy_force = hasattr(model, "energy_and_force")
-        self.quasi = bool(getattr(model, "quasi", False)) and hasattr(model, "interpenetration")
-        self.q_mu = float(getattr(model, "mu", 0.5))
+        self.quasi = isinstance(model, QuasiStrainModel) and bool(model.quasi)
+        self.q_mu = float(model.mu) if self.quasi else None   # Eq. (24)'s threshold
         self.fused = fused
         self._all = np.arange(self.N)
         # every body one of the kernels' (contact_kernels): one compiled pass over the nodes
-        self.compiled = bool(self.bodies) and all(getattr(b, "code", -1) >= 0 for b in self.bodies)
+        self.compiled = bool(self.bodies) and all(b.code >= 0 for b in self.bodies)
         if self.compiled:
             self.X0 = np.ascontiguousarray(self.X0, dtype=float)
             self.codes = np.array([b.code for b in self.bodies], dtype=np.int64)
@@ -50,7 +54,7 @@ class Forces:
         if self.fused is not None:
             return self.fused.internal(D, want_energy)
         if want_energy:
-            if self.has_energy_force:
+            if self.shell:
                 E, F = model.energy_and_force(D.reshape(shape))
             else:
                 F = model.internal_force(D.reshape(shape))
@@ -168,9 +172,37 @@ class Forces:
             return C, ec, 0.0
         return np.zeros(6 * self.N), 0.0, 0.0
 
+    def contact_stiffness(self, D, anchors, eps: float = 1e-7):
+        """(rows, cols, vals) of the contact stiffness -dC/dx on the translation dofs at D, anchors
+        held (stick springs count, slipping nodes only through their normal spring); None without
+        bodies.  Central differences: each node's contact force depends on its own position only,
+        so three perturbed pairs give every 3x3 nodal block."""
+        N = self.N
+        if not self.bodies:
+            return None
+        D = D.copy()
+        cols = []
+        for j in range(3):
+            Dp_, Dm_ = D.copy(), D.copy()
+            Dp_[j::6] += eps
+            Dm_[j::6] -= eps
+            if self.n_fric:
+                Cp = self.contact_friction(Dp_, anchors)[0]
+                Cm = self.contact_friction(Dm_, anchors)[0]
+            else:
+                Cp = self.contact(Dp_)[0]
+                Cm = self.contact(Dm_)[0]
+            cols.append(-(np.asarray(Cp) - np.asarray(Cm)).reshape(N, 6)[:, :3] / (2 * eps))
+        B = np.stack(cols, axis=2)                    # (N, 3 rows i, 3 cols j): d(-C_i)/dx_j
+        nodes = np.flatnonzero(np.any(B != 0.0, axis=(1, 2)))
+        ii, jj = np.meshgrid(np.arange(3), np.arange(3), indexing="ij")
+        rows = (6 * nodes[:, None, None] + ii[None]).ravel()
+        colz = (6 * nodes[:, None, None] + jj[None]).ravel()
+        return rows, colz, B[nodes].ravel()
+
     def interp_count(self, D) -> int:
-        """Nodes with n_p.d_p < 0 (interpenetrated faces), 0 for models that cannot tell."""
-        if hasattr(self.model, "interpenetrated_nodes"):
+        """Nodes with n_p.d_p < 0 (interpenetrated faces), 0 for models that cannot tell (not a Model)."""
+        if self.shell:
             return int(np.count_nonzero(self.model.interpenetrated_nodes(D.reshape(self.shape))))
         return 0
 

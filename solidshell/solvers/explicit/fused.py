@@ -27,8 +27,7 @@ from numba import get_num_threads, njit, prange
 from ...assembly import scatter_add_vec
 from ...elements import core, lanes, lanes_ans, lanes_tri, quad4, tri3
 from ...elements.core import _FM
-from .kernels import dof_power
-
+from .kernels import Coefficients, Dofs, dof_power
 
 CHUNKS = 4
 """The lane blocks are cut into this many contiguous chunks, a fixed number whatever the thread
@@ -287,26 +286,26 @@ class FusedForces:
         self.assemble()
         return self.F.copy(), (self.energy() if want_energy else None)
 
-    def step(self, D, Dp, Dn1, R, P, C, cF, cD, cDp, fixed, presc, Mf, inv2dt, want_energy, residual_only=False,
-             power=None):
+    def step(self, D, Dp, Dn1, R, C, dofs: Dofs, co: Coefficients, want_energy, residual_only=False, power=False):
         """One step of Eq. (23) from D_n: F into self.F, R = P - F (+ C unless None), D_n+1 into Dn1
-        (prescribed where ``fixed``, a (6N,) bool mask, values ``presc`` (6N,)).  Returns (v_n.M.v_n,
-        finite, strain energy or None).  ``residual_only``: F and R only, Dn1 untouched, (0, True,
-        energy) -- for a damper that computes D_n+1 itself (FIRE): one pass over the dofs fewer;
-        with ``power`` = (invM, dt) also FIRE's power sums at v_n into self.last_power
+        (prescribed on ``dofs.fixed_mask`` with the values ``dofs.presc_full``; coefficients ``co``).
+        Returns (v_n.M.v_n, finite, strain energy or None).  ``residual_only``: F and R only, Dn1
+        untouched, (0, True, energy) -- for a damper that computes D_n+1 itself (FIRE): one pass over
+        the dofs fewer; with ``power`` also FIRE's power sums at v_n into self.last_power
         (residual_power), else self.last_power is None."""
         self.element_pass(D.reshape(self.N, 6))
         self.assemble()
         has_C = C is not None
+        Cv = C if has_C else self._zero
         self.last_power = None
         if residual_only:
-            if power is None:
-                residual(self.F, P, C if has_C else self._zero, has_C, R)
+            if not power:
+                residual(self.F, dofs.P, Cv, has_C, R)
             else:
-                invM, dt = power
-                self.last_power = residual_power(self.F, P, C if has_C else self._zero, has_C, R, D, Dp, invM, Mf,
-                                                 fixed, 1.0 / dt, 0.5 * dt)
+                dt = co.dt
+                self.last_power = residual_power(self.F, dofs.P, Cv, has_C, R, D, Dp, dofs.invM, dofs.Mf,
+                                                 dofs.fixed_mask, 1.0 / dt, 0.5 * dt)
             return 0.0, True, (self.energy() if want_energy else None)
-        vMv, finite = update(self.F, P, C if has_C else self._zero, has_C, R, Dn1, D, Dp, cF, cD, cDp, fixed, presc,
-                             Mf, inv2dt)
+        vMv, finite = update(self.F, dofs.P, Cv, has_C, R, Dn1, D, Dp, co.cF, co.cD, co.cDp, dofs.fixed_mask,
+                             dofs.presc_full, dofs.Mf, 0.5 / co.dt)
         return vMv, finite, (self.energy() if want_energy else None)

@@ -21,20 +21,28 @@ import numpy as np
 
 from ...contact_kernels import friction_work
 from ...errors import InputError, SolverError
+from ...interfaces import ExplicitModel, SolverProblem
+from ...model import Model
 from ...problem import SolveResult, no_progress
-from . import checkpoint, damping, ledger, observers, report, stepcontrol
+from . import checkpoint, damping, kernels, ledger, observers, report, stepcontrol
 from .candidates import Candidates, contact_power, default_margin
 from .forces import Forces
 from .fused import FusedForces
-from .kernels import central_step, coefficients, dot, norm
-from .settings import RESTART_NEUTRAL, ExplicitSettings, RelaxSettings, parse_settings
+from .kernels import Coefficients, Dofs, dot, norm
+from .settings import (
+    FIRE_ALPHA_START,
+    RESTART_NEUTRAL,
+    ExplicitSettings,
+    RelaxSettings,
+    parse_settings,
+)
 from .state import State
 
 STATUSES = ("running", "done", "steady", "diverged", "nonfinite", "failed", "walltime", "interrupted")
 """The status words of advance() and info["status"]."""
 
 
-def scaled_mass(model, scaling: float = 1.0, mode: str = "uniform") -> np.ndarray:
+def scaled_mass(model: ExplicitModel, scaling: float = 1.0, mode: str = "uniform") -> np.ndarray:
     """(N,6) lumped mass after mass scaling (Section 4.2): "uniform" multiplies every mass by
     ``scaling``; "director" only the U_n masses."""
     M = np.asarray(model.lumped_mass(), dtype=float).copy()
@@ -52,7 +60,8 @@ class Integrator:
     (``relax`` says which); ``progress(fraction, text)`` is called within a second and then at least
     every 0.5 s while stepping."""
 
-    def __init__(self, problem, settings, progress=no_progress, *, relax: bool = False, _start=True):
+    def __init__(self, problem: SolverProblem, settings, progress=no_progress, *, relax: bool = False,
+                 _start=True):
         self.s = s = parse_settings(settings, relax) if not isinstance(settings, (ExplicitSettings, RelaxSettings)) \
             else settings
         self.relax = s.relax
@@ -61,27 +70,30 @@ class Integrator:
         self.status, self.message, self.warnings, self.info_dt = "running", "", [], {}
         self.restarted_from, self.steps_done, self.t_loop = None, 0, 0.0
         self.checkpoint_extra = None   # callable -> dict of arrays saved with each checkpoint
+        self.snaps = None              # the snapshot times kept (_snap_filter), None until _prepare
         self._setup(problem)
         if _start:
             self.progress_cb(0.0, "estimating the critical time step")
-            lim = stepcontrol.estimate(self.model, self.M, self.free_mask, self._D0(), self.bodies,
-                                       self.n_fric, s, self.alpha, self.force_fn)
+            lim = stepcontrol.estimate(self.dynamics, self._D0(), s, self.alpha)
             self._bind(lim)
             self.state = self._initial_state(self._first_step(lim), lim)
             self._prepare(fresh=True)
 
     # ------------------------------------------------------------------ set-up
-    def _setup(self, problem) -> None:
+    def _setup(self, problem: SolverProblem) -> None:
         """Everything fixed for one problem: masses, loads, supports, contact bodies."""
         s = self.s
         self.problem, self.model = problem, problem.model
+        # the library's Model: its mesh (contact candidates, throughput) and the fused passes;
+        # any other model (interfaces.ExplicitModel) through its own methods
+        mesh = self.model.mesh if isinstance(self.model, Model) else None
         self.N = self.model.n_nodes
         self.shape = (self.N, 6)
-        self.n_elem = int(getattr(getattr(self.model, "mesh", None), "n_elements", 0))
+        self.n_elem = mesh.n_elements if mesh is not None else 0
         self.damping = s.damping if self.relax else "rayleigh"
         self.damper = damping.make(self.damping)
-        self.damper_rewrites = bool(getattr(self.damper, "rewrites_step", False))
-        self.damper_power = bool(getattr(self.damper, "wants_power", False))
+        self.damper_rewrites = bool(self.damper.rewrites_step)
+        self.damper_power = bool(self.damper.wants_power)
         self.step_power = None   # (P, v.M.v, R.M^-1.R) of this step when the fused pass formed them
         self.M = M = scaled_mass(self.model, s.mass_scaling, s.mass_scaling_mode)
         self.free_mask = ~problem.fixed
@@ -96,9 +108,8 @@ class Integrator:
         self.presc_full = np.zeros(6 * self.N)
         self.presc_full[self.fixed_idx] = self.presc
         self.bodies = list(problem.contact or [])
-        self.fric_of = [float(getattr(b, "friction", 0.0)) for b in self.bodies]
+        self.fric_of = [float(b.friction) for b in self.bodies]
         self.n_fric = sum(1 for mu in self.fric_of if mu > 0.0)   # 0: the frictionless path
-        mesh = getattr(self.model, "mesh", None)
         # the step's contact only at the nodes near a body (candidates.py), into buffers of its own
         self.cand = Candidates(self.bodies, mesh.nodes, default_margin(mesh)) if self.bodies and mesh is not None \
             else None
@@ -109,12 +120,16 @@ class Integrator:
         self.invM = np.zeros_like(self.Mf)
         self.invM[self.free_idx] = 1.0 / self.Mf[self.free_idx]
         self.Pn = norm(self.P[self.free_idx])
-        self.alpha = self.damper.alpha0(self)   # the viscous alpha [1/s] of Eq. (23) at the start
+        self.dofs = Dofs(Mf=self.Mf, invM=self.invM, P=self.P, fixed_idx=self.fixed_idx, presc=self.presc,
+                         fixed_mask=self.fixed_mask, presc_full=self.presc_full, free_idx=self.free_idx)
+        self.alpha = self.damper.alpha0(s)   # the viscous alpha [1/s] of Eq. (23) at the start
+        self.damping_view = _DampingView(self)
         # the preallocated element/node passes for the library's Model (fused.py), also the force
         # the critical-step estimates differentiate; other models (e.g. a user's with its own
         # internal_force) go through their methods
-        self.fused = FusedForces(self.model) if hasattr(self.model, "blocks") and hasattr(self.model, "mesh") else None
+        self.fused = FusedForces(self.model) if mesh is not None else None
         self.force_fn = self._fused_force if self.fused is not None else self.model.internal_force
+        self.dynamics = stepcontrol.Dynamics(self.model, M, self.free_mask, self.bodies, self.n_fric, self.force_fn)
         shaping = {k: v for k, v in s.as_dict().items() if k not in RESTART_NEUTRAL}
         self.fingerprint = checkpoint.fingerprint(problem, shaping, M)
 
@@ -173,7 +188,8 @@ class Integrator:
             q_F=(F0.copy() if quasi else np.zeros(0)), q_D=(D0.copy() if quasi else np.zeros(0)),
             anchors=anchors0, fric_work=0.0, max_slip=0, max_interp=mi0, t_max_interp=0.0, max_contact=0,
             max_pen=0.0, ek_prev_half=0.0, resets=0, last_ekin=Ek0,
-            fire_a=float(getattr(self.s, "fire_alpha_start", 0.1)), fire_n=0, damper_alpha=float(self.alpha),
+            fire_a=float(self.s.fire_alpha_start if self.relax else FIRE_ALPHA_START), fire_n=0,
+            damper_alpha=float(self.alpha),
             last_rel_res=(norm((self.P - F0 + C0)[self.free_idx]) / self.Pn if self.Pn > 0 else 0.0),
             frame_dt=self._frame_interval())
         st.fingerprint = self.fingerprint
@@ -237,8 +253,8 @@ class Integrator:
 
     def _set_step(self, dt) -> None:
         self.state.dt = dt
-        self.cF, self.cD, self.cDp = coefficients(self.invM, dt, self.alpha)
-        if hasattr(self, "snaps"):
+        self.coef = Coefficients.of(self.invM, dt, self.alpha)
+        if self.snaps is not None:
             self.end_step, self.snap_steps = self._schedule()
 
     def _keep(self, t, D, k) -> None:
@@ -279,7 +295,7 @@ class Integrator:
             f, vMv, finite = self._forces_and_step(n, D, Dp, Dn1, sample, R)
             if f is None:
                 return "failed"
-            vMv, finite_d = self.damper.correct(self, n, D, Dp, Dn1, R, vMv)
+            vMv, finite_d = self.damper.correct(self.damping_view, n, D, Dp, Dn1, R, vMv)
             finite = finite and finite_d
             if not finite:
                 return self._nonfinite(n)
@@ -293,7 +309,7 @@ class Integrator:
             self._frames(n, D)
             if check and n > 0 and self._steady(n, vMv):
                 return "steady"
-            self.damper.after(self, n, D, Dn1, R, vMv)
+            self.damper.after(self.damping_view, n, D, Dn1, R, vMv)
             if self.n_fric:
                 self._friction_work(f, Dn1, Dp)
             Dp, D, Dn1 = D, Dn1, Dp
@@ -320,9 +336,8 @@ class Integrator:
                 # a damper that rewrites the whole step (FIRE) needs only R, except on a fresh
                 # run's first step, which is the scheme's own
                 r_only = self.damper_rewrites and not (n == 0 and self.fresh)
-                vMv, finite, Es = fused.step(D, Dp, Dn1, R, self.P, C, self.cF, self.cD, self.cDp, self.fixed_mask,
-                                             self.presc_full, self.Mf, 0.5 / st.dt, sample, r_only,
-                                             (self.invM, st.dt) if r_only and self.damper_power else None)
+                vMv, finite, Es = fused.step(D, Dp, Dn1, R, C, self.dofs, self.coef, sample, r_only,
+                                             r_only and self.damper_power)
                 F = fused.F
                 self.step_power = fused.last_power
         except (FloatingPointError, ZeroDivisionError, SolverError) as exc:
@@ -334,8 +349,7 @@ class Integrator:
             C = self._contact(n, D, f)
             if C is not None:
                 R += C
-            vMv, finite = central_step(Dn1, D, Dp, R, self.cF, self.cD, self.cDp, self.fixed_idx, self.presc,
-                                       self.Mf, 0.5 / st.dt)
+            vMv, finite = kernels.step(Dn1, D, Dp, R, self.dofs, self.coef)
         f["F"], f["Es"] = F, Es
         if self.quasi and n > 0:
             # work of the internal forces along the path actually taken, trapezoidal rule per
@@ -469,8 +483,7 @@ class Integrator:
         """Re-estimate the critical step at the current state; when dt exceeds (1 + safety)/2 of it,
         shorten the step to safety x it, keeping the velocity v_n-1/2."""
         st = self.state
-        dtc_now, mode = stepcontrol.recheck(self.model, self.M, self.free_mask, st.D, st.mode, self.lim, self.alpha,
-                                            self.force_fn)
+        dtc_now, mode = stepcontrol.recheck(self.dynamics, st.D, st.mode, self.lim, self.alpha)
         if dtc_now is None:
             return
         st.rechecks += 1
@@ -550,8 +563,7 @@ class Integrator:
         R = self.P - F
         if np.size(C) == R.size:
             R += np.asarray(C).ravel()
-        vMv, _ = central_step(np.empty_like(st.D), st.D, st.D_prev, R, self.cF, self.cD, self.cDp,
-                              self.fixed_idx, self.presc, self.Mf, 0.5 / st.dt)
+        vMv, _ = kernels.step(np.empty_like(st.D), st.D, st.D_prev, R, self.dofs, self.coef)
         return float(vMv)
 
     def result(self) -> SolveResult:
@@ -566,8 +578,8 @@ class Integrator:
 
     # ------------------------------------------------------------------ continuing a state
     @classmethod
-    def from_state(cls, problem, state: State, settings, *, reestimate_step: bool = True, new_segment: bool = True,
-                   progress=no_progress, relax: bool = False) -> "Integrator":
+    def from_state(cls, problem: SolverProblem, state: State, settings, *, reestimate_step: bool = True, new_segment: bool = True,
+                   progress=no_progress, relax: bool = False) -> Integrator:
         """Continue ``state`` on ``problem`` (possibly another mesh: D, D_prev and anchors already on
         its dofs).  reestimate_step: the critical step is estimated anew at the state (Lanczos) and,
         when dt changes, the velocity kept; else state.dt is reused exactly.  new_segment: the ledger
@@ -579,13 +591,13 @@ class Integrator:
         return integ
 
     @classmethod
-    def resume(cls, problem, state: State, settings, *, source="the checkpoint", progress=no_progress,
-               relax: bool = False) -> "Integrator":
+    def resume(cls, problem: SolverProblem, state: State, settings, *, source="the checkpoint", progress=no_progress,
+               relax: bool = False) -> Integrator:
         """Continue a checkpointed ``state`` (``checkpoint.load``) bit for bit: refused (InputError
         naming the differing items) unless it was written by a run of this very problem and these
         settings (``state.fingerprint``)."""
         integ = cls(problem, settings, progress, relax=relax, _start=False)
-        checkpoint.check_fingerprint(getattr(state, "fingerprint", {}), integ.fingerprint, source)
+        checkpoint.check_fingerprint(state.fingerprint, integ.fingerprint, source)
         integ._adopt(state, reestimate_step=False, new_segment=False)
         integ.restarted_from = state.step
         return integ
@@ -594,7 +606,7 @@ class Integrator:
         self._check_sizes(st)
         self.progress_cb(0.0, f"continuing at t = {st.t:.4g} s, step {st.step}")
         self.state = st
-        if getattr(self.damper, "varies_alpha", False):
+        if self.damper.varies_alpha:
             self.alpha = float(st.damper_alpha)   # the estimate the run had reached
         if reestimate_step:
             # warm-started from the state's top mode when it has one (e.g. carried over a remesh),
@@ -602,11 +614,10 @@ class Integrator:
             # the evaluations of the central ones: this estimate was 30-43 % of the remeshing
             # (docs/adaptivity.md)
             warm = bool(np.any(st.mode))
-            lim = stepcontrol.estimate(self.model, self.M, self.free_mask, st.D, self.bodies, self.n_fric,
-                                       self.s, self.alpha, self.force_fn, v0=st.mode if warm else None,
+            lim = stepcontrol.estimate(self.dynamics, st.D, self.s, self.alpha, v0=st.mode if warm else None,
                                        difference="forward", tol=stepcontrol.WARM_TOL if warm else None)
         else:
-            lim = stepcontrol.limit(st.omega_el, st.method, self.M, self.bodies, self.n_fric, self.s, self.alpha)
+            lim = stepcontrol.limit(st.omega_el, st.method, self.dynamics, self.s, self.alpha)
         self._bind(lim)
         if reestimate_step:
             # dtc_min is the smallest critical step of the problem being stepped (FIRE's dt_max is
@@ -655,3 +666,63 @@ class Integrator:
         n_int, st.qflags = self.forces.interp_flags(st.D)
         st.good_D, st.good_t = st.D.copy(), st.t
         self._read_books()
+
+
+class _DampingView:
+    """What the damper sees of its run (interfaces.DampingView): the settings, the dof arrays, the
+    state, the critical step and the few operations a damper performs on the scheme -- the
+    integrator itself stays out of its reach."""
+
+    __slots__ = ("_integ", "dofs", "settings")
+
+    def __init__(self, integ: Integrator):
+        self._integ = integ
+        self.settings = integ.s
+        self.dofs = integ.dofs
+
+    @property
+    def state(self) -> State:
+        return self._integ.state
+
+    @property
+    def fresh(self) -> bool:
+        return self._integ.fresh
+
+    @property
+    def step_power(self):
+        return self._integ.step_power
+
+    @property
+    def dt_crit(self) -> float:
+        return self._integ.lim.dt_crit
+
+    def time_of(self, n: int) -> float:
+        return self._integ.time_of(n)
+
+    def change_step(self, n: int, dt: float) -> None:
+        """The steps from t_n on are dt: t_n stays where it is."""
+        integ = self._integ
+        st = integ.state
+        st.t_base, st.n_base = integ.time_of(n), n
+        integ._set_step(dt)
+
+    def set_alpha(self, alpha: float) -> None:
+        """The viscous alpha from now on: Eq. (23)'s coefficients re-formed at the current step."""
+        integ = self._integ
+        integ.alpha = alpha
+        integ.state.damper_alpha = alpha
+        integ._set_step(integ.state.dt)
+
+    def central_step(self, Dn1, D, Dp, R):
+        return kernels.step(Dn1, D, Dp, R, self.dofs, self._integ.coef)
+
+    def stiffness(self, D):
+        """The model's tangent at D plus the contact (and stick) springs, (6N, 6N) CSR."""
+        import scipy.sparse as sp
+
+        integ = self._integ
+        K = integ.model.tangent(D.reshape(integ.shape)).tocsr()
+        cb = integ.forces.contact_stiffness(D, integ.state.anchors)
+        if cb is not None:
+            K = K + sp.csr_matrix((cb[2], (cb[0], cb[1])), shape=K.shape)
+        return K

@@ -8,9 +8,38 @@ for the plain pairwise sum below.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
+
+
+@dataclass(frozen=True)
+class Dofs:
+    """The flat (6N,) dof arrays of one explicit problem that a step reads (built once per problem)."""
+
+    Mf: np.ndarray           # lumped (scaled) masses
+    invM: np.ndarray         # 1 / Mf on the free dofs, 0 on the fixed ones
+    P: np.ndarray            # dead loads [force]
+    fixed_idx: np.ndarray    # indices of the fixed dofs
+    presc: np.ndarray        # their prescribed values [length], in fixed_idx's order
+    fixed_mask: np.ndarray   # (6N,) bool, True on the fixed dofs
+    presc_full: np.ndarray   # the prescribed values on all dofs (0 on the free ones)
+    free_idx: np.ndarray     # indices of the free dofs
+
+
+@dataclass(frozen=True)
+class Coefficients:
+    """Eq. (23)'s coefficients for the step dt [s] and alpha [1/s] (:func:`coefficients`)."""
+
+    dt: float
+    cF: np.ndarray           # (6N,) multiplies (P - F + C)
+    cD: float                # multiplies D_n
+    cDp: float               # multiplies D_n-1
+
+    @classmethod
+    def of(cls, invM, dt: float, alpha: float) -> Coefficients:
+        return cls(dt, *coefficients(invM, dt, alpha))
 
 
 def dot(a, b) -> float:
@@ -62,3 +91,9 @@ def coefficients(invM, dt: float, alpha: float):
     return (invM / lhs,                                   # multiplies (P - F + C)
             (2.0 / dt**2) / lhs,                          # multiplies D_n
             (alpha / (2.0 * dt) - 1.0 / dt**2) / lhs)     # multiplies D_n-1
+
+
+def step(Dn1, D, Dp, R, dofs: Dofs, co: Coefficients):
+    """:func:`central_step` with a problem's dof arrays and the current coefficients:
+    (v_n.M.v_n, D_n+1 finite)."""
+    return central_step(Dn1, D, Dp, R, co.cF, co.cD, co.cDp, dofs.fixed_idx, dofs.presc, dofs.Mf, 0.5 / co.dt)

@@ -1,6 +1,8 @@
 """What watches a run without changing it: kept frames (with thinning), checkpoints, progress and
 the steady-state test of dynamic relaxation (Section 4.2).  The integrator calls each only on the
-steps where it is due (an integer or clock comparison per step)."""
+steps where it is due (an integer or clock comparison per step: interfaces.Observer's ``due``).
+What each gets: the frame store and the readings of the state (interfaces.FrameStore,
+interfaces.RunReadings); a checkpoint the whole state, which it saves."""
 
 from __future__ import annotations
 
@@ -10,12 +12,14 @@ import threading
 import time
 from contextlib import contextmanager
 
+from ...interfaces import FrameStore, RunReadings
 from . import checkpoint
 from .kernels import dot
+from .state import State
 
 
 # ----------------------------------------------------------------------------- frames
-def keep_frame(st, t: float, D, k: int, shape, max_frames: int) -> None:
+def keep_frame(st: FrameStore, t: float, D, k: int, shape, max_frames: int) -> None:
     """Append the frame (t, D) with its interval index k (-1: not an interval frame); past
     ``max_frames`` interval frames, keep the even-indexed ones and double the interval."""
     st.frame_t.append(float(t))
@@ -29,7 +33,7 @@ def keep_frame(st, t: float, D, k: int, shape, max_frames: int) -> None:
         st.frame_dt *= 2.0
 
 
-def next_frame_time(st) -> float:
+def next_frame_time(st: FrameStore) -> float:
     """Simulated time [s] of the next interval frame (inf without interval frames)."""
     if st.frame_dt <= 0.0:
         return math.inf
@@ -54,7 +58,7 @@ class Checkpointer:
             return step % self.every == 0
         return step % 100 == 0 and time.perf_counter() - self.t_last >= self.wall
 
-    def write(self, st) -> None:
+    def write(self, st: State) -> None:
         if self.path:
             checkpoint.save(self.path, st, self.extra() if self.extra else None)
             self.t_last = time.perf_counter()
@@ -80,7 +84,7 @@ class Progress:
             return 0.0 if not x == 0 else 0.99
         return min(0.99, max(0.0, math.log(max(x, tol)) / math.log(tol)))
 
-    def fraction(self, st, step: int, end_step: int) -> float:
+    def fraction(self, st: RunReadings, step: int, end_step: int) -> float:
         f = step / max(end_step, 1)
         if self.s.relax:
             f = max(f, min(self._log_progress(st.last_rel_res, self.s.tol_residual),
@@ -88,7 +92,7 @@ class Progress:
         self.frac = max(self.frac, min(f, 1.0))
         return self.frac
 
-    def report(self, st, step: int, end_step: int, t: float) -> None:
+    def report(self, st: RunReadings, step: int, end_step: int, t: float) -> None:
         frac = self.fraction(st, step, end_step)
         text = f"t = {t:.4g} s, E_kin = {st.last_ekin:.3g}"
         if self.s.relax:

@@ -12,7 +12,14 @@ import os
 from typing import Annotated, Any, Literal, Optional
 
 import numpy as np
-from pydantic import AfterValidator, BeforeValidator, Field, ValidationInfo, field_validator, model_validator
+from pydantic import (
+    AfterValidator,
+    BeforeValidator,
+    Field,
+    ValidationInfo,
+    field_validator,
+    model_validator,
+)
 
 from ...errors import InputError
 from ...settings import Finite, SettingsModel, StateArray, parse
@@ -43,6 +50,11 @@ def _times(v: Any) -> Any:
 
 
 PathStr = Annotated[Any, AfterValidator(_path)]
+
+
+FIRE_ALPHA_START = 0.1
+"""FIRE's velocity mixing a after a freeze (Bitzek et al. 2006): RelaxSettings.fire_alpha_start's
+default, and the (unused) state.fire_a of an explicit run, which has no FIRE settings."""
 
 
 class _Common(SettingsModel):
@@ -122,7 +134,7 @@ class RelaxSettings(_Common):
     mass_scaling: Pos = 100.0
     damping: Literal["rayleigh", "kinetic", "fire", "modal"] = "rayleigh"
     # FIRE (damping = "fire"; Bitzek et al. 2006, their defaults; dt_max = the scheme's stable step)
-    fire_alpha_start: Annotated[Finite, Field(gt=0, lt=1)] = 0.1   # velocity mixing a after a freeze
+    fire_alpha_start: Annotated[Finite, Field(gt=0, lt=1)] = FIRE_ALPHA_START   # velocity mixing a after a freeze
     fire_f_alpha: Annotated[Finite, Field(gt=0, le=1)] = 0.99      # a <- f_alpha a while P >= 0
     fire_f_inc: Annotated[Finite, Field(ge=1)] = 1.1               # dt <- f_inc dt while P >= 0
     fire_f_dec: Annotated[Finite, Field(gt=0, le=1)] = 0.5         # dt <- f_dec dt at a freeze

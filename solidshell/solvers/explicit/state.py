@@ -39,6 +39,7 @@ FIELDS = {
 }
 FRAMES = ("frame_t", "frame_U", "frame_k")   # lists: time [s], (N,6) U, interval index (-1: other)
 TRANSIENT = ("good_D", "good_t", "last", "last_rel_ke")   # not checkpointed (as before the split)
+# ``fingerprint`` (name -> digest) is saved as items of its own (checkpoint.save)
 
 
 class State:
@@ -47,6 +48,7 @@ class State:
     def __init__(self, **kw):
         self.frame_t, self.frame_U, self.frame_k = [], [], []
         self.good_D, self.good_t, self.last, self.last_rel_ke = None, 0.0, {}, math.inf
+        self.fingerprint = {}   # per-item digests of what shaped the run (checkpoint.fingerprint)
         self.__dict__.update(kw)
         missing = [k for k in FIELDS if k not in self.__dict__]
         if missing:
@@ -61,10 +63,10 @@ class State:
         """Simulated time [s] of D_n."""
         return self.t_base + (self.step - self.n_base) * self.dt
 
-    def copy(self) -> "State":
+    def copy(self) -> State:
         return copy.deepcopy(self)
 
-    def typed(self) -> "State":
+    def typed(self) -> State:
         """Scalars as Python int / float / str and arrays as owned copies (after a load)."""
         conv = {"i": int, "f": float, "s": str, "a": np.array}
         for k, kind in FIELDS.items():

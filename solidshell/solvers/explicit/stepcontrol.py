@@ -10,13 +10,28 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
 from ...contact import combined_critical_time_step, penalty_stiffness
 from ...errors import InputError
+from ...interfaces import ContactBody, ExplicitModel
+from ...model import Model
 from ..timestep import critical_time_step, estimate_omega_max
+
+
+@dataclass(frozen=True)
+class Dynamics:
+    """What the critical-step estimates need of one problem."""
+
+    model: ExplicitModel           # its tangent serves method="tangent" (a library Model's only)
+    M: np.ndarray                  # (N,6) lumped masses after mass scaling
+    free_mask: np.ndarray          # (N,6) bool, True on the free dofs
+    bodies: list[ContactBody]      # the contact bodies (their penalty springs)
+    n_fric: int                    # how many of them have friction (their stick springs)
+    force: Callable | None = None  # U (N,6) -> internal force to differentiate (None: model.internal_force)
 
 
 @dataclass
@@ -53,14 +68,16 @@ def omega_sheet(model, M, free_mask, D, s, force=None, v0=None, difference="cent
     try:
         est = estimate_omega_max(force or model.internal_force, M, free_mask, D.reshape(M.shape),
                                  method=s.critical_step_method, tol=tol or s.critical_step_tol,
-                                 tangent=getattr(model, "tangent", None), v0=v0, difference=difference)
+                                 tangent=model.tangent if isinstance(model, Model) else None, v0=v0,
+                                 difference=difference)
     except ValueError as exc:
         raise InputError(f"cannot estimate the critical time step: {exc}") from None
     return est.omega_max, s.critical_step_method, est.n_force_evals, est.mode
 
 
-def limit(omega_el, method, M, bodies, n_fric, s, alpha, n_evals=0, seconds=0.0, mode=None) -> StepLimit:
-    """Combine the sheet's omega_el with the penalty springs of ``bodies`` into a StepLimit."""
+def limit(omega_el, method, dyn: Dynamics, s, alpha, n_evals=0, seconds=0.0, mode=None) -> StepLimit:
+    """Combine the sheet's omega_el with the penalty springs of ``dyn.bodies`` into a StepLimit."""
+    M, bodies, n_fric = dyn.M, dyn.bodies, dyn.n_fric
     k_pen = k_max = k_t = None
     omega = omega_el
     if bodies:
@@ -74,13 +91,12 @@ def limit(omega_el, method, M, bodies, n_fric, s, alpha, n_evals=0, seconds=0.0,
                      n_evals, seconds, mode)
 
 
-def estimate(model, M, free_mask, D, bodies, n_fric, s, alpha, force=None, v0=None,
-             difference="central", tol=None) -> StepLimit:
-    """The critical step at the flat state D (the start estimate); ``force``, ``v0``, ``difference``,
-    ``tol`` as in omega_sheet."""
+def estimate(dyn: Dynamics, D, s, alpha, v0=None, difference="central", tol=None) -> StepLimit:
+    """The critical step at the flat state D (the start estimate); ``v0``, ``difference``, ``tol``
+    as in omega_sheet."""
     t0 = time.perf_counter()
-    w, method, n_ev, mode = omega_sheet(model, M, free_mask, D, s, force, v0, difference, tol)
-    return limit(w, method, M, bodies, n_fric, s, alpha, n_ev, time.perf_counter() - t0, mode)
+    w, method, n_ev, mode = omega_sheet(dyn.model, dyn.M, dyn.free_mask, D, s, dyn.force, v0, difference, tol)
+    return limit(w, method, dyn, s, alpha, n_ev, time.perf_counter() - t0, mode)
 
 
 def initial_step(lim: StepLimit, s, alpha, info: dict) -> float:
@@ -105,13 +121,13 @@ def landing_step(dt: float, t_now: float, t_end: float) -> float:
     return (t_end - t_now) / int(math.ceil((t_end - t_now) / dt * (1.0 - 1e-12)))
 
 
-def recheck(model, M, free_mask, D, mode, lim: StepLimit, alpha, force=None):
+def recheck(dyn: Dynamics, D, mode, lim: StepLimit, alpha):
     """(dt_crit now, top mode) at the flat state D, warm-started from ``mode``; (None, mode) when the
-    estimate fails (e.g. an indefinite state: keep the step, the energy check still watches).
-    ``force`` as in omega_sheet."""
+    estimate fails (e.g. an indefinite state: keep the step, the energy check still watches)."""
+    M = dyn.M
     try:
-        est = estimate_omega_max(force or model.internal_force, M, free_mask, D.reshape(M.shape), tol=WARM_TOL,
-                                 v0=mode if np.any(mode) else None)
+        est = estimate_omega_max(dyn.force or dyn.model.internal_force, M, dyn.free_mask, D.reshape(M.shape),
+                                 tol=WARM_TOL, v0=mode if np.any(mode) else None)
     except ValueError:
         return None, mode
     w = est.omega_max

@@ -39,7 +39,9 @@ import math
 
 from numba import njit
 
+from ....interfaces import DampingView
 from ..kernels import dof_power
+from .base import Damper
 
 
 @njit(cache=True)
@@ -82,24 +84,24 @@ def update(Dn1, D, Dp, R, invM, Mf, fixed, presc, inv_dt_old, dt_new, c_v, c_f):
     return wMw, finite
 
 
-class Fire:
+class Fire(Damper):
     name = "fire"
     rewrites_step = True   # correct() computes D_n+1 from R alone (but on a fresh run's first step)
-    wants_power = True     # correct() reads integ.step_power (P, v.M.v, R.M^-1.R) when the step formed it
+    wants_power = True     # correct() reads view.step_power (P, v.M.v, R.M^-1.R) when the step formed it
 
-    def alpha0(self, integ) -> float:
+    def alpha0(self, settings) -> float:
         return 0.0   # no viscous damping: FIRE's mixing and freezes take the energy out
 
-    def correct(self, integ, n, D, Dp, Dn1, R, vMv):
+    def correct(self, view: DampingView, n, D, Dp, Dn1, R, vMv):
         """Rewrite the step into Dn1 (see the module docstring); (v_n.M.v_n of the step taken,
         D_n+1 finite)."""
-        st, s = integ.state, integ.s
+        st, s, dofs = view.state, view.settings, view.dofs
         dt = st.dt
-        dt_max = min(s.dt if s.dt is not None else s.safety * integ.lim.dt_crit, s.safety * st.dtc_min)
-        pw = integ.step_power     # formed with R by the fused residual pass, else one pass here
+        dt_max = min(s.dt if s.dt is not None else s.safety * view.dt_crit, s.safety * st.dtc_min)
+        pw = view.step_power      # formed with R by the fused residual pass, else one pass here
         P, vMv_old, fMf = pw if pw is not None else \
-            power(D, Dp, R, integ.invM, integ.Mf, integ.fixed_mask, 1.0 / dt, 0.5 * dt)
-        if n == 0 and integ.fresh:
+            power(D, Dp, R, dofs.invM, dofs.Mf, dofs.fixed_mask, 1.0 / dt, 0.5 * dt)
+        if n == 0 and view.fresh:
             # D_-1 is the start rule's Taylor point (v_-1/2 = V_0 - dt/2 A_0), not a velocity the
             # run had: the first step is the scheme's own
             return vMv, True
@@ -118,14 +120,9 @@ class Fire:
             st.fire_a = s.fire_alpha_start
             st.fire_n = 0
             st.resets += 1
-        wMw, finite = update(Dn1, D, Dp, R, integ.invM, integ.Mf, integ.fixed_mask, integ.presc_full,
-                                  1.0 / dt, dt_new, c_v, c_f)
+        wMw, finite = update(Dn1, D, Dp, R, dofs.invM, dofs.Mf, dofs.fixed_mask, dofs.presc_full,
+                             1.0 / dt, dt_new, c_v, c_f)
         st.damp_sum += 0.5 * (vMv_old - wMw)   # >= 0: |(1 - a) v + a |v| F^| <= |v|
         if dt_new != dt:
-            # t_n stays where it is; the step n -> n+1 (and on) is dt_new
-            st.t_base, st.n_base = integ.time_of(n), n
-            integ._set_step(dt_new)
+            view.change_step(n, dt_new)   # t_n stays where it is; the step n -> n+1 (and on) is dt_new
         return wMw, finite
-
-    def after(self, integ, n, D, Dn1, R, vMv) -> None:
-        return None

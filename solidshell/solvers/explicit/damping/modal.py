@@ -9,7 +9,8 @@ slowest pedestal mode is ~11 rad/s there, so the paper's path is ~2.2x overdampe
 
 K = the model tangent (``model.tangent``) plus the contact and friction springs, whose 3x3 nodal
 blocks come from central differences of the nodal contact forces (each node's contact force depends
-on its own position only, so three perturbed evaluations give every block); omega_min from ARPACK
+on its own position only, so three perturbed evaluations give every block; forces.Forces.
+contact_stiffness), both from the run's ``view.stiffness``; omega_min from ARPACK
 in shift-invert mode on K x = lambda M x (the tangent is sparse; one sparse LU per estimate).
 Eigenvalues below 1e-10 of the largest diagonal ratio K_ii / M_ii are zero modes (a sheet free to
 slide) and are skipped: they carry no out-of-balance force.  The estimate is taken at the start
@@ -23,47 +24,20 @@ import math
 
 import numpy as np
 
-
-def contact_blocks(integ, D, eps: float = 1e-7):
-    """(rows, cols, vals) of the contact stiffness -dC/dx on the translation dofs at D (anchors held:
-    stick springs count, slipping nodes only through their normal spring)."""
-    N = integ.N
-    if not integ.bodies:
-        return None
-    D = D.copy()
-    cols = []
-    for j in range(3):
-        Dp_, Dm_ = D.copy(), D.copy()
-        Dp_[j::6] += eps
-        Dm_[j::6] -= eps
-        if integ.n_fric:
-            Cp = integ.forces.contact_friction(Dp_, integ.state.anchors)[0]
-            Cm = integ.forces.contact_friction(Dm_, integ.state.anchors)[0]
-        else:
-            Cp = integ.forces.contact(Dp_)[0]
-            Cm = integ.forces.contact(Dm_)[0]
-        cols.append(-(np.asarray(Cp) - np.asarray(Cm)).reshape(N, 6)[:, :3] / (2 * eps))
-    B = np.stack(cols, axis=2)                    # (N, 3 rows i, 3 cols j): d(-C_i)/dx_j
-    nodes = np.flatnonzero(np.any(B != 0.0, axis=(1, 2)))
-    ii, jj = np.meshgrid(np.arange(3), np.arange(3), indexing="ij")
-    rows = (6 * nodes[:, None, None] + ii[None]).ravel()
-    colz = (6 * nodes[:, None, None] + jj[None]).ravel()
-    return rows, colz, B[nodes].ravel()
+from ....interfaces import DampingView
+from .base import Damper
 
 
-def omega_min(integ, D) -> float | None:
+def omega_min(view: DampingView, D) -> float | None:
     """Smallest positive omega [rad/s] of M^-1 K at D (None when the estimate fails)."""
     import scipy.sparse as sp
     from scipy.sparse.linalg import eigsh
 
-    K = integ.model.tangent(D.reshape(integ.shape)).tocsr()
-    cb = contact_blocks(integ, D)
-    if cb is not None:
-        K = K + sp.csr_matrix((cb[2], (cb[0], cb[1])), shape=K.shape)
-    idx = integ.free_idx
+    K = view.stiffness(D)
+    idx = view.dofs.free_idx
     K = K[idx][:, idx].tocsc()
     K = 0.5 * (K + K.T)
-    m = integ.Mf[idx]
+    m = view.dofs.Mf[idx]
     zero = 1e-10 * float(np.max(K.diagonal() / m))
     try:
         lam = eigsh(K, k=6, M=sp.diags(m).tocsc(), sigma=-zero, which="LM", return_eigenvectors=False)
@@ -73,26 +47,16 @@ def omega_min(integ, D) -> float | None:
     return float(math.sqrt(pos[0])) if pos.size else None
 
 
-class Modal:
+class Modal(Damper):
     name = "modal"
-    varies_alpha = True
+    varies_alpha = True     # alpha0 (the alpha setting) until the first estimate, at step 0 of a new run
 
-    def alpha0(self, integ) -> float:
-        return float(integ.s.alpha)   # until the first estimate (at step 0 of a new run)
-
-    def correct(self, integ, n, D, Dp, Dn1, R, vMv):
-        if n % integ.s.modal_every == 0:
-            w = omega_min(integ, D)
+    def correct(self, view: DampingView, n, D, Dp, Dn1, R, vMv):
+        s = view.settings
+        if n % s.modal_every == 0:
+            w = omega_min(view, D)
             if w is not None:
-                integ.alpha = 2.0 * integ.s.modal_zeta * w
-                integ.state.damper_alpha = integ.alpha
+                view.set_alpha(2.0 * s.modal_zeta * w)
                 # the step D_n -> D_n+1 already taken is redone with the new alpha
-                integ._set_step(integ.state.dt)
-                from ..kernels import central_step
-                vMv, finite = central_step(Dn1, D, Dp, R, integ.cF, integ.cD, integ.cDp, integ.fixed_idx,
-                                           integ.presc, integ.Mf, 0.5 / integ.state.dt)
-                return vMv, finite
+                return view.central_step(Dn1, D, Dp, R)
         return vMv, True
-
-    def after(self, integ, n, D, Dn1, R, vMv) -> None:
-        return None

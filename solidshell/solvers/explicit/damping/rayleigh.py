@@ -3,16 +3,8 @@ alpha = 5 1/s with all masses x100).  Nothing to do per step: alpha enters Eq. (
 
 from __future__ import annotations
 
+from .base import Damper
 
-class Rayleigh:
+
+class Rayleigh(Damper):
     name = "rayleigh"
-
-    def alpha0(self, integ) -> float:
-        """The ``alpha`` setting [1/s]."""
-        return float(integ.s.alpha)
-
-    def correct(self, integ, n, D, Dp, Dn1, R, vMv):
-        return vMv, True
-
-    def after(self, integ, n, D, Dn1, R, vMv) -> None:
-        return None

@@ -35,9 +35,23 @@ from numba import njit, prange
 
 # fastmath without nnan/ninf: a blown-up state must stay visibly non-finite for the solvers.
 _FM = {"nsz", "arcp", "contract", "reassoc"}
+"""The flags of the lane kernels (lanes*.py, solvers/explicit/fused.py), not of this module's."""
+
+_FM_EXACT = {"nsz"}
+"""This module's kernels: no flag that lets LLVM change a result (reassoc, contract = FMA fusion,
+arcp = x/y as x*(1/y)), so a kernel rounds the same wherever numba compiled it.  Numba compiles a
+jitted callee (_element_force, _element_tangent, ...) into a library of its own and again,
+re-optimised, inside each caller's library.  The process that compiles the caller runs the callee's
+own library; a process that loads the caller from numba's on-disk cache (``cache=True``) runs the
+copy inside it.  With _FM the two copies of _element_tangent differed (other vectorisation and FMA
+fusion): on the same element, a freshly compiled force_tangent and the cached one differed by one
+ulp in 6 of 13824 tangent entries (quads-ans-quasi, tests/test_half_tangent.py), so a run's last
+bits depended on what an earlier process had cached, and the whole and half tangents differed
+whenever one came from the cache and the other was compiled.  Cost measured in one process on
+4800 quads, one thread: half tangent kernel +4-7 %, force kernel +0-10 %."""
 
 
-@njit(cache=True, fastmath=_FM, inline="always")
+@njit(cache=True, fastmath=_FM_EXACT, inline="always")
 def _sign_quasi(xo, xn, conn_e, nn, i, mu):
     """Sign s_p of Eq. (24) at local node i: +1 if n_p.d_p > -mu, else -1 (n_p from the corner)."""
     q = (i + 1) % nn
@@ -64,7 +78,7 @@ def _sign_quasi(xo, xn, conn_e, nn, i, mu):
     return -1.0
 
 
-@njit(cache=True, fastmath=_FM, inline="always")
+@njit(cache=True, fastmath=_FM_EXACT, inline="always")
 def _thickness_strain(xe, i, quasi, sign, norm_X):
     """eps_zz at local node i (Eq. 5 / Eq. 15) in displacement form: x.x/2 - X.X/2 = v.(x - v/2)
     (Green) or, for Eq. (24), s|x| - |X| with |x| - |X| = v.(2x - v)/(|x| + |X|) (v = U_n)."""
@@ -79,7 +93,7 @@ def _thickness_strain(xe, i, quasi, sign, norm_X):
     return -nx - norm_X
 
 
-@njit(cache=True, fastmath=_FM, error_model="numpy")
+@njit(cache=True, fastmath=_FM_EXACT, error_model="numpy")
 def _element_force(e, xo, xn, U, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_z,
                    quasi, mu, fe, gs, gz, zs, at, dt, xe):
     """Energy of element e; its force into fe (nn,6).  Workspaces: gs (nt,), gz, zs (nn,),
@@ -217,7 +231,7 @@ def _force_workspace(nn, nt):
     return np.empty(m), np.empty(nn), np.empty(nn), np.empty((m, 3)), np.empty((m, 3)), np.empty((nn, 12))
 
 
-@njit(cache=True, parallel=True, fastmath=_FM)
+@njit(cache=True, parallel=True, fastmath=_FM_EXACT)
 def energy_force(xo, xn, U, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_z, quasi, mu, f_out,
                  w_out, nth):
     """Element energies into w_out (M,) and element forces into f_out (M, nn, 6), all elements.
@@ -242,11 +256,6 @@ def energy_force(xo, xn, U, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_z, quasi,
                                       r_z, quasi, mu, f_out[e], gs, gz, zs, at, dt, xe)
 
 
-_FM_ORDERED = {"nsz", "arcp", "contract"}
-"""_FM without reassoc: for the material sums of the tangent, written as chains in the order the
-element matrix has always summed them (see _add_bt_d_gp)."""
-
-
 @njit(cache=True, inline="always")
 def _row_end(a, nd, half):
     """Columns 0.._row_end-1 of row a are formed: all of them, or with ``half`` those left of and in
@@ -254,7 +263,7 @@ def _row_end(a, nd, half):
     return 6 * (a // 6) + 6 if half else nd
 
 
-@njit(cache=True, fastmath=_FM_ORDERED)
+@njit(cache=True, fastmath=_FM_EXACT)
 def _add_bt_d_gp(Ke, B, D, gp_membrane, half):
     """Ke[a, b] += B[r, a] D[r, b] for the strain rows r = 0..5 of one integration point, in that
     order for every entry (membrane rows only on U_o dofs and with gp_membrane; columns as
@@ -262,7 +271,7 @@ def _add_bt_d_gp(Ke, B, D, gp_membrane, half):
     node's U_o or U_n dofs), each entry one chain of six or three terms: the loop overhead and the
     loads of D, not the flops, were the cost of one pass per row and strain row (six rows per
     pass measured 6 % slower than three: more runtime alias checks per pass).  Without
-    reassociation (_FM_ORDERED) each chain is summed exactly as the separate passes summed it."""
+    reassociation (_FM_EXACT) each chain is summed exactly as the separate passes summed it."""
     nd = Ke.shape[1]
     for a in range(0, nd, 3):
         nb = _row_end(a, nd, half)
@@ -289,7 +298,7 @@ def _add_bt_d_gp(Ke, B, D, gp_membrane, half):
                 Ke[a + 2, b] = ((Ke[a + 2, b] + z3 * d3) + z4 * d4) + z5 * d5
 
 
-@njit(cache=True, fastmath=_FM_ORDERED)
+@njit(cache=True, fastmath=_FM_EXACT)
 def _tying_d(D, B, Cs_e, nt):
     """D[t, b] = sum_u Cs_e[t, u] B[u, b] for the tying rows, the sum over u in order for every
     entry: one pass over b per (t, u) (vectorised over b) instead of a short sum per entry."""
@@ -303,7 +312,7 @@ def _tying_d(D, B, Cs_e, nt):
                 D[t, b] = D[t, b] + c * B[u, b]
 
 
-@njit(cache=True, fastmath=_FM_ORDERED)
+@njit(cache=True, fastmath=_FM_EXACT)
 def _add_bt_d_tying(Ke, B, D, nt, half, tk):
     """Ke[a, b] += B[t, a] D[t, b] for the tying rows t = 0..nt-1 in that order (columns as
     _row_end), three rows of Ke and one tying row per pass (_add_bt_d_gp says why).  A tying
@@ -330,7 +339,7 @@ def _add_bt_d_tying(Ke, B, D, nt, half, tk):
                 Ke[a + 2, b] = Ke[a + 2, b] + z * d
 
 
-@njit(cache=True, fastmath=_FM, error_model="numpy")
+@njit(cache=True, fastmath=_FM_EXACT, error_model="numpy")
 def _element_tangent(e, xo, xn, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_z,
                      quasi, mu, gp_membrane, slot, half, Ke, B, D, oo, on, nz, gs, gz, zs, at, dt, v4,
                      xe, tk):
@@ -518,7 +527,7 @@ def _tangent_workspace(nn, nt):
             np.empty((nn, 3, 3)), np.empty((10, 6)), np.empty(m, dtype=np.int64))
 
 
-@njit(cache=True, parallel=True, fastmath=_FM)
+@njit(cache=True, parallel=True, fastmath=_FM_EXACT)
 def force_tangent(xo, xn, U, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_z, quasi, mu,
                   gp_membrane, f_out, w_out, K_out, nth, half=False):
     """Energies, forces (M,nn,6) and tangents (M,nd,nd) of all elements.  ``gp_membrane``: some

@@ -22,12 +22,12 @@ import numpy as np
 def tangent(density):
     from solidshell.scenes.build import build_problem, build_scene_mesh
     from solidshell.scenes import load
-    from solidshell.solvers.static import _System
+    from solidshell.solvers.static.system import System
 
     sc = load("square-pedestal")
     mesh = build_scene_mesh(sc, density)[0]
     pb = build_problem(sc, mesh)
-    sys_ = _System(pb.model, pb.fixed, pb.loads, pb.prescribed, pb.contact, None, "cholmod")
+    sys_ = System(pb.model, pb.fixed, pb.loads, pb.prescribed, pb.contact, None, "cholmod")
     return sys_.free_tangent(np.zeros(6 * mesh.n_nodes))[1]
 
 

@@ -55,6 +55,8 @@ class SolveResult:
     message   : one line saying how it ended (why it stopped, when it did not converge)
     info      : plain JSON-able numbers for summary.json (iterations, linear_solves, residual, ...)
     frames    : list of (time or load factor, (N,6) U) kept for output (time series, load path)
+    path      : the same list, by the static solver's name for it (each converged load step or
+                arc-length point)
     """
 
     U: np.ndarray
@@ -62,6 +64,10 @@ class SolveResult:
     message: str = ""
     info: dict = field(default_factory=dict)
     frames: list = field(default_factory=list)
+
+    @property
+    def path(self) -> list:
+        return self.frames
 
 
 Progress = Callable[[float, str], None]

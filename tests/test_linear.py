@@ -69,12 +69,12 @@ def test_pardiso_and_cholmod_agree_on_a_drape_tangent_and_repeat_bit_for_bit():
     and PARDISO, sequential, gives the same bits on a repeated factorisation."""
     from solidshell.scenes.build import build_problem, build_scene_mesh
     from solidshell.scenes import load
-    from solidshell.solvers.static import _System
+    from solidshell.solvers.static.system import System
 
     sc = load("square-pedestal")
     mesh = build_scene_mesh(sc, "12x4x4")[0]
     pb = build_problem(sc, mesh)
-    sys_ = _System(pb.model, pb.fixed, pb.loads, pb.prescribed, pb.contact, None, "pardiso")
+    sys_ = System(pb.model, pb.fixed, pb.loads, pb.prescribed, pb.contact, None, "pardiso")
     U = np.zeros((mesh.n_nodes, 6))
     U[:, 2] = -0.05 * np.hypot(mesh.nodes[:, 0], mesh.nodes[:, 1])       # a sag, 0.7 cm at the corners
     _, A = sys_.free_tangent(U.ravel())
@@ -97,12 +97,12 @@ import numpy as np, numba
 from solidshell.scenes.build import build_problem, build_scene_mesh
 from solidshell.scenes import load
 from solidshell.solvers import pardiso
-from solidshell.solvers.static import _System
+from solidshell.solvers.static.system import System
 
 sc = load("square-pedestal")
 mesh = build_scene_mesh(sc, "12x4x4")[0]
 pb = build_problem(sc, mesh)
-sys_ = _System(pb.model, pb.fixed, pb.loads, pb.prescribed, pb.contact, None, "pardiso")
+sys_ = System(pb.model, pb.fixed, pb.loads, pb.prescribed, pb.contact, None, "pardiso")
 U = np.zeros((mesh.n_nodes, 6))
 U[:, 2] = -0.05 * np.hypot(mesh.nodes[:, 0], mesh.nodes[:, 1])
 _, A = sys_.free_tangent(U.ravel())
@@ -222,6 +222,34 @@ def test_pardiso_ldl_leaves_a_singular_matrix_to_superlu():
     assert PardisoLDL().ldl(N.tocsc()) is None
     with pytest.raises(RuntimeError, match="Factor is exactly singular"):      # SuperLU's message
         ldl_inertia(N.tocsc())
+
+
+@pytest.mark.skipif(not pardiso.available(), reason=str(pardiso.unavailable_reason()))
+def test_the_static_systems_ldl_is_pardisos_on_a_pardiso_solve():
+    """static.system.System.ldl -- the LDL^T of the paper's scheme and of the arc-length method on
+    indefinite tangents -- is PARDISO's where the solve's factorisation is: on the sagged,
+    indefinite square-pedestal 12x4x4 tangent its negative-pivot count is SuperLU's (Sylvester: both
+    count the negative eigenvalues) and it solves to the backward-stable bound."""
+    from solidshell.scenes import load
+    from solidshell.scenes.build import build_problem, build_scene_mesh
+    from solidshell.solvers.pardiso import PardisoLDL
+    from solidshell.solvers.static.system import System
+
+    sc = load("square-pedestal")
+    mesh = build_scene_mesh(sc, "12x4x4")[0]
+    pb = build_problem(sc, mesh)
+    sys_ = System(pb.model, pb.fixed, pb.loads, pb.prescribed, pb.contact, None, "pardiso")
+    U = np.zeros((mesh.n_nodes, 6))
+    U[:, 2] = -0.05 * np.hypot(mesh.nodes[:, 0], mesh.nodes[:, 1])
+    _, A = sys_.free_tangent(U.ravel())
+    lu, neg = sys_.ldl(A)
+    assert isinstance(sys_._ldl, PardisoLDL)
+    assert neg == ldl_inertia(linear.as_csc(A))[1] and neg > 0
+    b = np.random.default_rng(4).standard_normal(A.shape[0])
+    dense = A.toarray()
+    # a backward-stable solve: residual ~ eps * cond(A) |b|, with a factor 100 for the pivoting
+    cond = np.linalg.cond(dense)
+    assert np.linalg.norm(dense @ lu.solve(b) - b) <= 100 * 2.2e-16 * cond * np.linalg.norm(b)
 
 
 def test_ldl_inertia_counts_negative_eigenvalues():

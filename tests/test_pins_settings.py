@@ -13,7 +13,7 @@ from solidshell import cli
 from solidshell.adapt.settings import AdaptSettings
 from solidshell.errors import InputError
 from solidshell.settings import parse
-from solidshell.solvers.static_settings import StaticSettings
+from solidshell.solvers.static.settings import StaticSettings
 from verification.checks import CHECKS, record
 from verification.checks.runner import run_checks
 
@@ -96,8 +96,8 @@ def test_load_steps_with_load_factors_is_refused():
     with pytest.raises(InputError, match=r"solver\.static: give load_steps or load_factors, not both"):
         parse(StaticSettings, {"load_steps": 2, "load_factors": [0.5, 1.0]}, "solver.static")
     # either one alone is accepted and gives the same factors
-    a = parse(StaticSettings, {"load_steps": 2}, "solver.static").solver_kwargs()["load_factors"]
-    b = parse(StaticSettings, {"load_factors": [0.5, 1.0]}, "solver.static").solver_kwargs()["load_factors"]
+    a = parse(StaticSettings, {"load_steps": 2}, "solver.static").factors()
+    b = parse(StaticSettings, {"load_factors": [0.5, 1.0]}, "solver.static").factors()
     assert a == b == [0.5, 1.0]
 
 

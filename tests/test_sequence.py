@@ -75,12 +75,14 @@ def test_prolong_is_the_coarse_bilinear_field_on_a_nested_mesh():
 
 def test_static_settings_sequence_and_start_state_are_checked():
     from solidshell.settings import parse
-    from solidshell.solvers.static_settings import StaticSettings
+    from solidshell.solvers.static import StaticSettings, solve_static
 
     assert parse(StaticSettings, {}, "s").sequence == 0        # off unless a scene asks
     assert load("square-pedestal").solver_settings("static")["sequence"] == "auto"
     assert parse(StaticSettings, {"sequence": 2}, "s").sequence == 2
-    assert "sequence" not in parse(StaticSettings, {"sequence": 2}, "s").solver_kwargs()
+    # a run's setting (the mesh sequence is built from the scene): one solve refuses it by name
+    with pytest.raises(InputError, match=r"^solve_static: 'sequence' is a setting of a scene run"):
+        solve_static(None, None, None, sequence=2)
     for bad in (-1, "coarse", True, 1.5):
         with pytest.raises(InputError, match="sequence"):
             parse(StaticSettings, {"sequence": bad}, "s")
@@ -116,10 +118,10 @@ def test_the_sequenced_fine_mesh_takes_cg_steps_to_the_same_equilibrium(monkeypa
     factorisation; thresholds lowered so that square-pedestal 12x4x4 from 6x2x4 qualifies) and ends
     on the equilibrium of the exact-step solve."""
     from solidshell.run import run_scene
-    from solidshell.solvers import static
+    from solidshell.solvers.static import newton
 
     monkeypatch.setattr(sequence, "MIN_ELEMENTS", 40)
-    monkeypatch.setattr(static, "PCG_MIN_DOFS", 0)
+    monkeypatch.setattr(newton, "PCG_MIN_DOFS", 0)
     cg = run_scene("square-pedestal", mesh="12x4x4", solver="static", out_dir=None, progress=False,
                    sequence=1)
     exact = run_scene("square-pedestal", mesh="12x4x4", solver="static", out_dir=None,

@@ -209,13 +209,31 @@ def test_bad_settings_are_one_line_input_errors(bad):
         validate("static", bad)
 
 
-def test_settings_defaults_are_the_solver_defaults():
-    import inspect
-    s = validate("static", {})
-    sig = inspect.signature(solve_static).parameters
-    for k, v in s.solver_kwargs().items():
-        if k in sig:
-            assert sig[k].default == v, k
+@pytest.mark.parametrize("bad", [{"tol": -1}, {"max_iter": 0}, {"load_factors": []}, {"cc": 0.01},
+                                 {"line_search": "wolfe"}])
+def test_solve_static_options_are_the_settings(bad):
+    """solve_static's keyword options are StaticSettings' fields, checked by that one model: a bad
+    value or an unknown key is one InputError line naming it, before any work."""
+    mesh, model, fixed, P, _ = wool_like_strip("gf-cm", 1.0)
+    words = rf"^solve_static: (setting |unknown setting '){re.escape(next(iter(bad)))}\b"
+    with pytest.raises(InputError, match=words) as e:
+        solve_static(model, fixed, P, **bad)
+    assert "\n" not in str(e.value)
+
+
+def test_settings_and_options_give_the_same_solve():
+    """The same settings given as keyword options, as a dict or as a parsed StaticSettings give the
+    same solve, and an explicit argument overrides ``settings``."""
+    mesh, model, fixed, P, _ = wool_like_strip("gf-cm", 1.0)
+    a = solve_static(model, fixed, P, method="paper", c=2e-2)
+    b = solve_static(model, fixed, P, settings={"method": "paper", "c": 2e-2})
+    c = solve_static(model, fixed, P, settings=validate("static", {"c": 2e-2}), method="paper")
+    assert a.converged and a.info["method"] == "paper" and a.info["c"] == 2e-2
+    for r in (b, c):
+        assert r.info["method"] == "paper" and r.info["iterations"] == a.info["iterations"]
+        assert np.array_equal(r.U, a.U)
+    d = solve_static(model, fixed, P, settings={"method": "paper"}, method="newton")
+    assert d.converged and d.info["method"] == "newton"
 
 
 # ----------------------------------------------------------------------------- arc-length
@@ -271,14 +289,14 @@ def test_fine_arclength_path_matches_displacement_control():
 
 def test_extended_shifted_steps_reach_the_same_minimum(monkeypatch):
     """circle-pedestal 10x40 meets shifted Newton steps along which Pi is nearly linear (rho >= 1.8
-    at alpha 1): they are doubled while Pi falls (static.EXTEND_RHO).  The run ends on the minimum of
+    at alpha 1): they are doubled while Pi falls (static.newton.EXTEND_RHO).  The run ends on the minimum of
     the run without extensions, in fewer factorisations (measured 84 iterations and 97
     factorisations with 4 extensions, against 86 and 105)."""
     from solidshell.run import run_scene
-    from solidshell.solvers import static
+    from solidshell.solvers.static import newton
 
     ext = run_scene("circle-pedestal", mesh="10x40", out_dir=None, progress=False)
-    monkeypatch.setattr(static, "EXTEND_RHO", np.inf)
+    monkeypatch.setattr(newton, "EXTEND_RHO", np.inf)
     plain = run_scene("circle-pedestal", mesh="10x40", out_dir=None, progress=False)
     assert ext.converged and plain.converged and ext.summary["positive_definite"]
     assert ext.summary["extended_steps"] > 0 and plain.summary["extended_steps"] == 0

@@ -39,7 +39,7 @@ class Kind:
 
 
 KINDS: dict[str, Kind] = {k.name: k for k in (
-    Kind("static", "solidshell.solvers.static:run", "solidshell.solvers.static_settings:StaticSettings"),
+    Kind("static", "solidshell.solvers.static.driver:run", "solidshell.solvers.static.settings:StaticSettings"),
     Kind("explicit", "solidshell.solvers.explicit:run", "solidshell.solvers.explicit.settings:ExplicitSettings"),
     Kind("relax", "solidshell.solvers.explicit:run_relax", "solidshell.solvers.explicit.settings:RelaxSettings"),
 )}

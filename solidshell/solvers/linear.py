@@ -16,7 +16,7 @@ Two factorisations, for two jobs:
     any symmetric non-singular matrix, with its inertia (the number of negative pivots equals the
     number of negative eigenvalues, Sylvester's law).  The paper's scheme (Eq. 17 solves with an
     indefinite K_t as well) and the arc-length method (which counts negative eigenvalues along the
-    path) need it.  With PARDISO, ``static._System.ldl`` uses PARDISO's LDL^T
+    path) need it.  With PARDISO, ``static.system.System.ldl`` uses PARDISO's LDL^T
     (pardiso.PardisoLDL) instead wherever it needs no perturbed pivot.
 """
 

@@ -2,7 +2,7 @@
 first, and start the requested mesh from the prolonged coarse equilibrium.
 
 Why: the energy Newton spends most of its iterations in the global phase, carrying the flat sheet
-to its folded shape with trust-region-limited steps (static.py's module notes).  On a coarse mesh
+to its folded shape with trust-region-limited steps (static/newton.py's module notes).  On a coarse mesh
 those iterations cost a fraction (factorisation ~ dofs^1.2-1.5, kernels ~ elements); the fine mesh
 then only has to settle the folds it resolves better (iteration counts: docs/solvers.md, section 6).
 
@@ -53,10 +53,10 @@ FINE_PCG_ITERATIONS = 6
 give one): square-pedestal 48x16x4, 35-39 factorisations instead of 59 on the fine mesh and 10-19 %
 less process CPU in interleaved runs at load ~6 (3 gave 49 and 13 %); one CG iteration (a
 back-substitution and a product) costs ~1/9 of a factorisation there.  From the flat sheet the same
-steps cost more than they save (static._newton_level)."""
+steps cost more than they save (static/newton.py, ``_cg_step``)."""
 
 COARSE_TOLERANCES = dict(tol=1e-5, energy_tol=1e-8, disp_tol=1e-6)
-"""Convergence of a coarse level (static.py's tol, energy_tol, disp_tol): its state is only the
+"""Convergence of a coarse level (static/settings.py's tol, energy_tol, disp_tol): its state is only the
 start of the next level, which differs from it by the discretisation (~1 cm on square-pedestal
 24x8x4 -> 48x16x4), so the last quadratic Newton iterations of a coarse level buy nothing."""
 
@@ -299,7 +299,7 @@ def solve_sequenced(run, problem, settings: dict, progress, scene, density, make
     if prev is not None:
         s.update(U0=prolong(prev[0], prev[1], mesh), predictor=False)
         # settling a prolonged equilibrium, the tangent changes slowly: inexact Newton steps by CG
-        # preconditioned with the last factorisation pay here (static._newton_level)
+        # preconditioned with the last factorisation pay here (static/newton.py, ``_cg_step``)
         s.setdefault("pcg_iterations", FINE_PCG_ITERATIONS)
     t = time.perf_counter()
     res = run(problem, s, lambda f, text="": progress((n - 1 + f) / n, f"mesh {density}: {text}"))

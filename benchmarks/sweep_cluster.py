@@ -135,12 +135,12 @@ class HandCluster:
 
 def speed(spec, out, rep):
     """1, 2, 2, 1 workers (ABBA: a load that drifts linearly during the four sweeps cancels out)."""
-    from solidshell.sweep.engine import run_sweep
+    from solidshell.sweep.engine import Cluster, run_sweep
     res = {}
     for n, tag in ((1, "local1"), (2, "local2"), (2, "local2b"), (1, "local1b")):
         before = load()
         t0 = time.perf_counter()
-        r = run_sweep(spec, out / tag, workers=n, progress=False)
+        r = run_sweep(spec, out / tag, Cluster(workers=n), progress=False)
         wall = time.perf_counter() - t0
         assert r.recorded == 16 and not r.failed, r
         rw = rows(out / tag, spec).values()
@@ -166,14 +166,14 @@ def speed_sessions(spec, out, rep):
     LocalCluster's client, scheduler and workers -- shares that session's one slice, so a second
     local worker cannot add CPU time.  Workers started apart (as on a real cluster, one per
     machine or per login) each get a slice; this measures the sweep's scaling in that setting."""
-    from solidshell.sweep.engine import run_sweep
+    from solidshell.sweep.engine import Cluster, run_sweep
     res = {}
     for n, tag in ((1, "sess1"), (2, "sess2"), (2, "sess2b"), (1, "sess1b")):
         hc = HandCluster(n, out, sessions=True)
         try:
             before = load()
             t0 = time.perf_counter()
-            r = run_sweep(spec, out / tag, scheduler=hc.addr, progress=False)
+            r = run_sweep(spec, out / tag, Cluster(scheduler=hc.addr), progress=False)
             wall = time.perf_counter() - t0
         finally:
             hc.close()
@@ -211,7 +211,7 @@ def scheduler(spec, out, rep):
 
 
 def kill_worker(spec, out, rep):
-    from solidshell.sweep.engine import run_sweep
+    from solidshell.sweep.engine import Cluster, run_sweep
     import threading
 
     hc = HandCluster(2, out)
@@ -242,7 +242,7 @@ def kill_worker(spec, out, rep):
     try:
         th.start()
         t0 = time.perf_counter()
-        r = run_sweep(spec, out / "killw", scheduler=hc.addr, progress=False)
+        r = run_sweep(spec, out / "killw", Cluster(scheduler=hc.addr), progress=False)
         wall = time.perf_counter() - t0
         th.join(5)
         after = hc.worker_pids()

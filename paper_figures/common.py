@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from solidshell.render import bodies_of, colorbar, draw_view, height_norm, scene_warp_deg
+from solidshell.render import ViewStyle, bodies_of, colorbar, draw_view, height_norm, scene_warp_deg
 
 
 def mpl():
@@ -64,12 +64,13 @@ def frame_at(out, t):
     return float(times[j]), mesh, positions(mesh, frames[j][1])
 
 
-def panel(ax, out_or_mesh, X, view, scene=None, norm=None, title=None, **kw):
-    """One view (solidshell.render.draw_view) with the scene's bodies and warp labels."""
+def panel(ax, out_or_mesh, X, view, scene=None, norm=None, title=None, zoom=None, extent=None, **style):
+    """One view (solidshell.render.draw_view) with the scene's bodies and warp labels; ``style``:
+    the fields of solidshell.render.ViewStyle (labels, mesh_lines, ...)."""
     mesh = out_or_mesh.mesh if hasattr(out_or_mesh, "mesh") else out_or_mesh
     sc = scene if scene is not None else getattr(out_or_mesh, "scene", None)
     sm = draw_view(ax, mesh, X, view, bodies=bodies_of(sc), norm=norm or height_norm(X),
-                   warp_deg=scene_warp_deg(sc), **kw)
+                   warp_deg=scene_warp_deg(sc), zoom=zoom, extent=extent, style=ViewStyle(**style))
     if title:
         ax.set_title(title, fontsize=9)
     return sm

@@ -179,7 +179,7 @@ def _cmd_run(args) -> int:
     from .scenes import parse_overrides
 
     out_dir = args.out or _default_out(args.scene)
-    extra = {k: getattr(args, k) for k in ("checkpoint", "restart") if getattr(args, k)}
+    extra = {k: v for k, v in (("checkpoint", args.checkpoint), ("restart", args.restart)) if v}
     overrides = parse_overrides(args.set)
     if args.no_pictures:
         overrides.update({"output.pictures": [], "output.snapshots": []})
@@ -222,18 +222,17 @@ def _cmd_sweep(args) -> int:
     from .sweep.engine import require_dask
 
     require_dask()                      # before the sweep is parsed: the one thing to install first
-    from .sweep.engine import describe, run_sweep
+    from .sweep.engine import Cluster, describe, run_sweep
     from .sweep.report import sweep_group, write_report
 
     spec = load_spec(args.sweep)
     out = args.out or f"runs/sweep-{spec.name}"
     group = sweep_group(spec)
-    for k in ("retries", "limit"):
-        v = getattr(args, k)
+    for k, v in (("retries", args.retries), ("limit", args.limit)):
         if v is not None and v < 0:
             raise InputError(f"--{k} must be >= 0, got {v}")
-    res = run_sweep(spec, out, scheduler=args.scheduler, workers=args.workers, threads=args.threads,
-                    retries=args.retries, progress=not args.no_progress, group=group, limit=args.limit)
+    cluster = Cluster(scheduler=args.scheduler, workers=args.workers, threads=args.threads, retries=args.retries)
+    res = run_sweep(spec, out, cluster, progress=not args.no_progress, group=group, limit=args.limit)
     rep = write_report(spec, out, group)
     print(f"sweep {spec.name}: {res.recorded} run(s) recorded now, {res.skipped} before, "
           f"{len(res.failed)} failed now, {len(res.failed_before)} before, {res.total} in all; "
@@ -298,7 +297,7 @@ def main(argv=None) -> int:
         _say(f"solidshell: I/O error: {e}")
         return EXIT_IO
     except OSError as e:
-        where = f" {e.filename}:" if getattr(e, "filename", None) else ""
+        where = f" {e.filename}:" if e.filename else ""
         _say(f"solidshell: I/O error:{where} {e.strerror or e}")
         return EXIT_IO
     except SolverError as e:

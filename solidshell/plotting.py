@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from .render.geometry import CAMERAS, bodies_of
-from .render.panel import colorbar, draw_view, height_norm, scene_warp_deg
+from .render.panel import ViewStyle, colorbar, draw_view, height_norm, scene_warp_deg
 
 VIEWS = ("top", "iso", "side", "side_yz")
 _VIEW_NAMES = {"top": "top view", "iso": "isometric view", "side": "side view (x-z projection)",
@@ -48,8 +48,8 @@ def render(path, mesh, U=None, view: str = "iso", title: str | None = None, scen
         X = X + np.asarray(U, float).reshape(-1, 6)[:, :3]
     fig = _figure((7.0, 6.0))
     ax = fig.add_subplot(111)
-    sm = draw_view(ax, mesh, X, view, bodies=bodies_of(scene), norm=height_norm(X),
-                   mesh_lines=mesh_lines, warp_deg=scene_warp_deg(scene))
+    sm = draw_view(ax, mesh, X, view, bodies=bodies_of(scene), norm=height_norm(X), warp_deg=scene_warp_deg(scene),
+                   style=ViewStyle(mesh_lines=mesh_lines))
     colorbar(fig, ax, sm)
     head = title or "solidshell"
     sub = _VIEW_NAMES[view] + (f" -- {subtitle}" if subtitle else "")

@@ -13,7 +13,7 @@ from scipy.spatial.transform import Rotation
 
 from solidshell import Fabric, ShellMesh
 from solidshell.adapt import criteria as C
-from solidshell.adapt.transfer import dk_midedge, fill_new_nodes, linear_midedge, serendipity_centre
+from solidshell.adapt.transfer import Edges, dk_midedge, fill_new_nodes, linear_midedge, serendipity_centre
 from solidshell.errors import InputError
 from solidshell.model import Model
 from solidshell.adapt.settings import parse_adapt
@@ -47,7 +47,7 @@ def test_dk_rigid_motion_is_exact_for_any_geometry():
                                np.einsum("kij,kj->ki", Q, Xn) - Xn], axis=-1)
     UA, UB, UE = move(XoA, XnA), move(XoB, XnB), move(XoE, XnA)
     for stretch in ("length", "paper"):
-        UM = dk_midedge(XoA, XoB, XoE, XoM, XnA, XnB, XnM, UA, UB, UE, stretch=stretch)
+        UM = dk_midedge(Edges(XoA, XoB, XoE, XoM, XnA, XnB, XnM), UA, UB, UE, stretch=stretch)
         # the exact rigid image of M and its director; measured 1e-14 on lengths ~10
         err = np.abs(UM - move(XoM, XnM)).max()
         assert err < 1e-12 * 10.0, (stretch, err)
@@ -57,7 +57,7 @@ def test_dk_zero_state_gives_zero():
     XoA, XoB, XoE = np.eye(3)[None, [0, 1, 2]].transpose(1, 0, 2)
     Xn = np.array([[0.0, 0.0, 1.0]])
     Z = np.zeros((1, 6))
-    UM = dk_midedge(XoA, XoB, np.array([[0.3, 0.9, 0.0]]), 0.5 * (XoA + XoB), Xn, Xn, Xn, Z, Z, Z)
+    UM = dk_midedge(Edges(XoA, XoB, np.array([[0.3, 0.9, 0.0]]), 0.5 * (XoA + XoB), Xn, Xn, Xn), Z, Z, Z)
     assert np.abs(UM).max() < 1e-15
 
 
@@ -104,8 +104,8 @@ def test_dk_reduces_to_eq32_in_the_papers_frame(size):
             [[0.1, -0.2, 0.3, 0.2, -0.1, 0.05], [-0.1, 0.3, 0.2, -0.3, 0.2, -0.1],
              [0.2, 0.1, -0.3, 0.0, 0.0, 0.0]]) * scale
         ref = _paper_formulas(XoA, XoB, XoE, Xn, Xn, UA, UB, UE)
-        args = (XoA[None], XoB[None], XoE[None], 0.5 * (XoA + XoB)[None], Xn[None], Xn[None],
-                Xn[None], UA[None], UB[None], UE[None])
+        args = (Edges(XoA[None], XoB[None], XoE[None], 0.5 * (XoA + XoB)[None], Xn[None], Xn[None], Xn[None]),
+                UA[None], UB[None], UE[None])
         paper = dk_midedge(*args, stretch="paper")[0]
         length = dk_midedge(*args)[0]
         # round-off of O(1) numbers (measured ~1e-16)
@@ -137,8 +137,7 @@ def _bend_states(kappa, L):
 def _bend_errors(kappa, L, method):
     P, Xn, U = _bend_states(kappa, L)
     if method == "dk":
-        UM = dk_midedge(P[[0]], P[[1]], P[[2]], P[[3]], Xn[[0]], Xn[[1]], Xn[[3]],
-                        U[[0]], U[[1]], U[[2]])[0]
+        UM = dk_midedge(Edges(P[[0]], P[[1]], P[[2]], P[[3]], Xn[[0]], Xn[[1]], Xn[[3]]), U[[0]], U[[1]], U[[2]])[0]
     else:
         UM = linear_midedge(U[[0]], U[[1]])[0]
     return np.linalg.norm(UM[:3] - U[3, :3]), np.linalg.norm(UM[3:] - U[3, 3:])
@@ -171,7 +170,7 @@ def test_dk_literal_eq32_shortens_the_director_on_a_bend():
     as a shrink: |x_nM| = cos(k L / 2), as linear transfer; the default keeps the length."""
     kappa, L = 2.0, 0.4
     P, Xn, U = _bend_states(kappa, L)
-    args = (P[[0]], P[[1]], P[[2]], P[[3]], Xn[[0]], Xn[[1]], Xn[[3]], U[[0]], U[[1]], U[[2]])
+    args = (Edges(P[[0]], P[[1]], P[[2]], P[[3]], Xn[[0]], Xn[[1]], Xn[[3]]), U[[0]], U[[1]], U[[2]])
     paper = dk_midedge(*args, stretch="paper")[0]
     length = dk_midedge(*args)[0]
     assert np.linalg.norm(Xn[3] + paper[3:]) == pytest.approx(np.cos(kappa * L / 2), abs=1e-14)
@@ -187,7 +186,7 @@ def test_dk_averages_the_director_stretch():
     UA = np.array([[0, 0, 0, 0, 0, 0.1]])
     UB = np.array([[0, 0, 0, 0, 0, 0.3]])
     for stretch in ("length", "paper"):
-        UM = dk_midedge(XoA, XoB, XoE, XoM, Xn, Xn, Xn, UA, UB, 0 * UA, stretch=stretch)
+        UM = dk_midedge(Edges(XoA, XoB, XoE, XoM, Xn, Xn, Xn), UA, UB, 0 * UA, stretch=stretch)
         assert np.allclose(UM, [[0, 0, 0, 0, 0, 0.2]], atol=1e-15)
 
 
@@ -257,8 +256,8 @@ def test_fill_new_nodes_bend_uses_dk_and_serendipity():
     got = fill_new_nodes(bg, U, np.arange(4, 9), centre="serendipity")
     mids = np.arange(4, 8)
     A, B, E = bg.mid_parent[mids].T
-    want = dk_midedge(X[A], X[B], X[E], X[mids], bg.Xn[A], bg.Xn[B], bg.Xn[mids], exact[A],
-                      exact[B], exact[E])
+    want = dk_midedge(Edges(X[A], X[B], X[E], X[mids], bg.Xn[A], bg.Xn[B], bg.Xn[mids]), exact[A], exact[B],
+                      exact[E])
     assert np.array_equal(got[mids], want)
     cp = bg.centre_parent[8]
     assert np.allclose(got[8], serendipity_centre(got[cp[:4]][None], got[cp[4:]][None])[0], atol=1e-15)

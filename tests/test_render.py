@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from solidshell.mesh import ShellMesh
-from solidshell.render import axis_labels, draw_view, height_norm, renderer, scene_warp_deg
+from solidshell.render import ViewStyle, axis_labels, draw_view, height_norm, renderer, scene_warp_deg
 from solidshell.render import vtk_backend
 
 
@@ -38,7 +38,7 @@ def _centre_pixel(backend, monkeypatch, tmp_path, view, body):
     ax = fig.add_axes([0, 0, 1, 1])
     # the sheet sits at the top of the colour scale: yellow in viridis, far from the body's grey
     draw_view(ax, mesh, mesh.nodes, view, bodies=[body], norm=height_norm(mesh.nodes - [0, 0, 1], mesh.nodes),
-              labels=False, height_px=200)
+              style=ViewStyle(labels=False, height_px=200))
     ax.set_axis_off()
     p = tmp_path / f"{backend}-{view}.png"
     fig.savefig(p, dpi=80)

@@ -11,7 +11,7 @@ pytest.importorskip("pyarrow", reason="pyarrow not installed (pip install 'solid
 from solidshell import cli  # noqa: E402
 from solidshell.run import run_scene  # noqa: E402
 from solidshell.sweep import load_spec  # noqa: E402
-from solidshell.sweep.engine import run_sweep  # noqa: E402
+from solidshell.sweep.engine import Cluster, run_sweep  # noqa: E402
 from solidshell.sweep.ledger import Ledger  # noqa: E402
 
 SWEEP = """
@@ -30,7 +30,7 @@ def test_local_cluster_sweep_and_resume(tmp_path, capsys):
     f.write_text(SWEEP)
     spec = load_spec(f)
     out = tmp_path / "out"
-    res = run_sweep(spec, out, workers=1, progress=False)
+    res = run_sweep(spec, out, Cluster(workers=1), progress=False)
     assert (res.recorded, res.skipped, res.failed, res.workers) == (2, 0, [], 1)
     rows = Ledger(out, spec).read().to_pylist()
     assert [r["material.bending_warp"] for r in rows] == [0.06, 0.083]

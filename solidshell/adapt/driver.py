@@ -451,7 +451,6 @@ class AdaptiveRun:
 
     def summary_info(self) -> dict:
         counts = [h[1] for h in self.history]
-        wall = self.integ.result_wall() if hasattr(self.integ, "result_wall") else None
         return {
             "adaptive": True,
             "adapt_levels": int(self.adapt.levels), "adapt_const": float(self.adapt.const),

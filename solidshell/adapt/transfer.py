@@ -58,9 +58,11 @@ Measured (verification/out/adapt_transfer.md, static drapes refined 1-to-4 every
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
-__all__ = ["dk_midedge", "linear_midedge", "serendipity_centre", "kirchhoff_centre_director",
+__all__ = ["Edges", "dk_midedge", "linear_midedge", "serendipity_centre", "kirchhoff_centre_director",
            "fill_new_nodes", "to_new_mesh", "STRETCH_MODES", "METHODS", "CENTRE_MODES"]
 
 STRETCH_MODES = ("length", "paper")
@@ -97,14 +99,33 @@ def _edge_frame(A, B, E, dirs, side=None):
     return np.stack([np.cross(y, z), y, z], axis=-1), side
 
 
-def dk_midedge(XoA, XoB, XoE, XoM, XnA, XnB, XnM, UA, UB, UE, *, stretch: str = "length"):
+@dataclass(frozen=True)
+class Edges:
+    """The initial geometry of K edges A-B with their mid-edge nodes M (the reference state
+    :func:`dk_midedge` transfers from): XoA, XoB, XoE, XoM (K,3) initial positions of A, B, E (a
+    third corner of an element owning the edge, fixing the co-rotated frame) and M [length];
+    XnA, XnB, XnM (K,3) initial directors of A, B, M."""
+
+    XoA: np.ndarray
+    XoB: np.ndarray
+    XoE: np.ndarray
+    XoM: np.ndarray
+    XnA: np.ndarray
+    XnB: np.ndarray
+    XnM: np.ndarray
+
+    @classmethod
+    def of(cls, Xo, Xn, A, B, E, M) -> Edges:
+        """The edges of node index arrays A, B, E, M (K,) into initial positions Xo and directors Xn."""
+        return cls(Xo[A], Xo[B], Xo[E], Xo[M], Xn[A], Xn[B], Xn[M])
+
+
+def dk_midedge(edges: Edges, UA, UB, UE, *, stretch: str = "length"):
     """Discrete-Kirchhoff state of K mid-edge nodes M of edges A-B (Eqs. 27-34, §5.4).
 
     Parameters
     ----------
-    XoA, XoB, XoE, XoM : (K,3) initial positions of A, B, E (a third corner of an element owning
-        the edge, fixing the co-rotated frame) and M [length]
-    XnA, XnB, XnM : (K,3) initial directors of A, B, M
+    edges : the edges' initial geometry (:class:`Edges`)
     UA, UB, UE : (K,6) states [U_o | U_n] of A, B, E (only U_o of E is used)
     stretch : "length" (default: the director length of M is the average of A's and B's stretches)
         or "paper" (Eq. 32's w_nM = (w_nA + w_nB)/2 literally); see the module docstring.
@@ -115,7 +136,9 @@ def dk_midedge(XoA, XoB, XoE, XoM, XnA, XnB, XnM, UA, UB, UE, *, stretch: str = 
     """
     if stretch not in STRETCH_MODES:
         raise ValueError(f"stretch must be one of {STRETCH_MODES}, got {stretch!r}")
-    XoA, XoB, XoE, XoM, XnA, XnB, XnM = (np.asarray(a, float) for a in (XoA, XoB, XoE, XoM, XnA, XnB, XnM))
+    e = edges
+    XoA, XoB, XoE, XoM, XnA, XnB, XnM = (np.asarray(a, float) for a in (e.XoA, e.XoB, e.XoE, e.XoM, e.XnA, e.XnB,
+                                                                        e.XnM))
     UA, UB, UE = (np.asarray(a, float) for a in (UA, UB, UE))
     xA, xB, xE = XoA + UA[:, :3], XoB + UB[:, :3], XoE + UE[:, :3]
     xnA, xnB = XnA + UA[:, 3:], XnB + UB[:, 3:]
@@ -206,9 +229,7 @@ def kirchhoff_centre_director(Xo_c, Xn_c, Xo_m, U_m, U_c, stretch_c):
 def _midedge_values(bg, U, A, B, E, M, method, stretch):
     if method == "linear":
         return linear_midedge(U[A], U[B])
-    Xo, Xn = bg.Xo, bg.Xn
-    return dk_midedge(Xo[A], Xo[B], Xo[E], Xo[M], Xn[A], Xn[B], Xn[M], U[A], U[B], U[E],
-                      stretch=stretch)
+    return dk_midedge(Edges.of(bg.Xo, bg.Xn, A, B, E, M), U[A], U[B], U[E], stretch=stretch)
 
 
 def fill_new_nodes(bg, Ubg, new_nodes, method: str = "dk", known=None, *, stretch: str = "length",

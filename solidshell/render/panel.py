@@ -13,9 +13,11 @@ from __future__ import annotations
 
 import logging
 import os
+from dataclasses import dataclass
 
 import numpy as np
 
+from ..material import Fabric
 from . import mpl_backend, vtk_backend
 from .geometry import CAMERAS, Camera, scene_surfaces, screen_extent
 
@@ -60,7 +62,7 @@ def scene_warp_deg(scene) -> float | None:
     if scene is None:
         return None
     m = scene.material_object()
-    if type(m).__name__ != "Fabric":
+    if not isinstance(m, Fabric):
         return None
     return float(np.degrees(m.warp_angle_rad))
 
@@ -83,26 +85,42 @@ def _edge_width(n_elements: int, vtk: bool) -> float:
     return 0.35 if n_elements <= 1500 else 0.15
 
 
-def draw_view(ax, mesh, X, view="iso", bodies=(), norm=None, cmap=CMAP, mesh_lines=True, zoom=None,
-              warp_deg=None, labels=True, height_px=900, cover_pedestal=True, extent=None):
+@dataclass(frozen=True)
+class ViewStyle:
+    """How :func:`draw_view` draws: the colour map of the heights, the mesh lines, axis labels (or
+    the orientation triad of an oblique view), the VTK image height [px], and whether a pedestal's
+    top is drawn over the sheet's clamped part."""
+
+    cmap: str = CMAP
+    mesh_lines: bool = True
+    labels: bool = True
+    height_px: int = 900
+    cover_pedestal: bool = True
+
+
+def draw_view(ax, mesh, X, view="iso", bodies=(), norm=None, warp_deg=None, zoom=None, extent=None,
+              style: ViewStyle = ViewStyle()):
     """Draw the sheet at positions X (N,3) [cm] with the bodies into ``ax``; returns a
     ScalarMappable for a colour bar of height z [cm].
 
     view   : a name of solidshell.render.geometry.CAMERAS or a Camera
+    warp_deg : the fabric's warp angle [deg] (axis labels name the yarns); None: isotropic
     zoom   : (xmin, xmax, ymin, ymax) of the screen [cm] to show (Fig. 12c); None: everything
     extent : a fixed screen rectangle instead of the fitted one (the same frame across panels)
+    style  : colour map, mesh lines, labels, image height, pedestal cover (:class:`ViewStyle`)
     """
     import matplotlib.cm as mcm
 
+    cmap, labels = style.cmap, style.labels
     cam = CAMERAS[view] if isinstance(view, str) else view
     X = np.asarray(X, float)
     norm = norm or height_norm(X)
-    surfaces = scene_surfaces(mesh, X, list(bodies), mesh_lines=mesh_lines, cover_pedestal=cover_pedestal)
+    surfaces = scene_surfaces(mesh, X, list(bodies), mesh_lines=style.mesh_lines, cover_pedestal=style.cover_pedestal)
     ext = zoom or extent or screen_extent(surfaces, cam)
     use_vtk = renderer() == "vtk"
     ew = _edge_width(mesh.n_elements, use_vtk)
     if use_vtk:
-        img = vtk_backend.render_image(surfaces, cam, ext, norm, cmap, height_px=height_px, edge_width=ew)
+        img = vtk_backend.render_image(surfaces, cam, ext, norm, cmap, height_px=style.height_px, edge_width=ew)
         ax.imshow(img, extent=ext, origin="upper", interpolation="antialiased", zorder=1)
     else:
         mpl_backend.draw(ax, surfaces, cam, norm, cmap, edge_width=ew)

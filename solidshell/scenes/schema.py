@@ -17,7 +17,7 @@ import re
 from types import UnionType
 from typing import Annotated, Optional, Union, get_args, get_origin
 
-from pydantic import (AfterValidator, BeforeValidator, Discriminator, Field, PlainValidator, Tag,
+from pydantic import (AfterValidator, BaseModel, BeforeValidator, Discriminator, Field, PlainValidator, Tag,
                       ValidationError, create_model, model_validator)
 
 from .. import meshing
@@ -76,7 +76,8 @@ def _strip(t):
 
 
 def _tag(member):
-    return next((m.tag for m in getattr(member, "__metadata__", ()) if isinstance(m, Tag)), None)
+    meta = get_args(member)[1:] if get_origin(member) is Annotated else ()
+    return next((m.tag for m in meta if isinstance(m, Tag)), None)
 
 
 def _key(loc, model) -> str:
@@ -91,7 +92,7 @@ def _key(loc, model) -> str:
             t = next((m for m in get_args(t) if _tag(m) == p), None)
         else:
             key = _join(key, p)
-            f = t.model_fields.get(p) if isinstance(t, type) and hasattr(t, "model_fields") else None
+            f = t.model_fields.get(p) if isinstance(t, type) and issubclass(t, BaseModel) else None
             t = f.annotation if f is not None else None
     return key
 
@@ -382,7 +383,8 @@ class LoadsTable(Table):
 
     def given(self) -> dict:
         return {"gravity": self.gravity, "gravity_direction": self.gravity_direction,
-                **{k: [x.given() for x in getattr(self, k)] for k in ("point", "line", "surface")}}
+                "point": [x.given() for x in self.point], "line": [x.given() for x in self.line],
+                "surface": [x.given() for x in self.surface]}
 
 
 class Body(Table):
@@ -413,10 +415,11 @@ class Pedestal(Body):
 
     @model_validator(mode="after")
     def _extent(self):
+        given = {"size": self.size, "diameter": self.diameter}
         need, other = ("size", "diameter") if self.shape == "square" else ("diameter", "size")
-        if getattr(self, need) is None:
+        if given[need] is None:
             raise Bad(need, f"required for a {self.shape} pedestal [cm]; missing")
-        if getattr(self, other) is not None:
+        if given[other] is not None:
             raise Bad(other, f"does not apply to a {self.shape} pedestal")
         return self
 
@@ -515,7 +518,8 @@ class SceneDoc(Table):
     @model_validator(mode="after")
     def _densities(self):
         """The mesh densities fit the recipe (its number of counts); a mesh file takes none."""
-        recipe, m = getattr(self.geometry, "recipe", None), self.mesh
+        recipe = self.geometry.recipe if isinstance(self.geometry, RecipeGeometry) else None   # a file: none
+        m = self.mesh
         for key, d in (("density", m.density), *((f"paper_meshes[{i}]", d) for i, d in enumerate(m.paper_meshes)),
                        ("adaptive_level0", m.adaptive_level0)):
             problem = d is not None and _density_problem(d, recipe)

@@ -70,9 +70,24 @@ _WARM_NOISE = 0.05
 """Weight of the random vector added to a given start vector (relative, both normalised)."""
 
 
-def estimate_omega_max(force, mass, free, U=None, *, method: str = "lanczos", fd_step: float = 1e-7,
-                       tol: float = 1e-6, maxiter: int | None = None, seed: int = 0, tangent=None,
-                       v0=None, difference: str = "central") -> OmegaEstimate:
+@dataclass(frozen=True)
+class Iteration:
+    """How :func:`estimate_omega_max` iterates (defaults that no caller in the package changes).
+
+    fd_step : the largest component of the perturbation e v in the directional derivative
+              (in the dofs' own units; 1e-7 is far below the sheet's thickness and director length
+              and, with a central difference, far above round-off in F)
+    maxiter : iteration cap (None: 2000 Lanczos restarts, 5000 power steps, 10 n for "tangent")
+    seed    : the start vector is drawn from this seed, so the estimate is reproducible
+    """
+
+    fd_step: float = 1e-7
+    maxiter: int | None = None
+    seed: int = 0
+
+
+def estimate_omega_max(force, mass, free, U=None, *, method: str = "lanczos", tol: float = 1e-6, tangent=None,
+                       v0=None, difference: str = "central", iteration: Iteration = Iteration()) -> OmegaEstimate:
     """Highest natural frequency of M^-1 K on the free dofs.
 
     force   : callable U (N,6) -> internal force (N,6) (``model.internal_force``)
@@ -81,17 +96,18 @@ def estimate_omega_max(force, mass, free, U=None, *, method: str = "lanczos", fd
     U       : state at which K is taken (default zero)
     method  : "lanczos" (matrix-free ARPACK, default), "power" (matrix-free power iteration), or
               "tangent" (ARPACK on ``tangent(U)``, a callable returning the sparse (6N,6N) matrix)
-    fd_step : the largest component of the perturbation e v in the directional derivative
-              (in the dofs' own units; 1e-7 is far below the sheet's thickness and director length
-              and, with a central difference, far above round-off in F)
     tol     : relative accuracy of the eigenvalue omega^2
-    seed    : the start vector is drawn from this seed, so the estimate is reproducible
+    v0      : a start vector (6N,), e.g. the top mode of an earlier estimate (some of the seeded
+              random vector is added to it)
     difference : "central" (K v from F(U + e v) - F(U - e v): two force evaluations per product,
               error O(e^2)) or "forward" (F(U + e v) - F(U), F(U) evaluated once: one evaluation
               per product, error O(e) -- ~1e-6 of omega^2 at fd_step 1e-7, far inside the step's
               safety factor; what an adaptive run's re-estimate after each remesh uses)
+    iteration : the difference step, iteration cap and seed (:class:`Iteration`)
     """
-    from scipy.sparse.linalg import LinearOperator, eigsh
+    from scipy.sparse.linalg import ArpackNoConvergence, LinearOperator, eigsh
+
+    fd_step, maxiter, seed = iteration.fd_step, iteration.maxiter, iteration.seed
 
     M = np.asarray(mass, dtype=float)
     shape = M.shape
@@ -167,9 +183,8 @@ def estimate_omega_max(force, mass, free, U=None, *, method: str = "lanczos", fd
             try:
                 lam, vec = eigsh(op, k=1, which="LA", tol=tol, v0=start, ncv=ncv, maxiter=maxiter or 2000)
                 lam, vec, conv = float(lam[0]), vec[:, 0], True
-            except Exception as exc:  # ArpackNoConvergence: keep the best Ritz value, say so
-                ev = getattr(exc, "eigenvalues", None)
-                evec = getattr(exc, "eigenvectors", None)
+            except ArpackNoConvergence as exc:  # keep the best Ritz value, say so
+                ev, evec = exc.eigenvalues, exc.eigenvectors
                 if ev is None or len(ev) == 0:
                     raise
                 lam, vec, conv = float(np.max(ev)), evec[:, int(np.argmax(ev))], False

@@ -18,13 +18,14 @@ import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TextIO
 
 from ..errors import InputError
 from .ledger import Ledger
 from .spec import SweepSpec
 from .task import make_task, run_task
 
-__all__ = ["run_sweep", "SweepResult", "require_dask", "describe", "INSTALL_HINT"]
+__all__ = ["run_sweep", "Cluster", "SweepResult", "require_dask", "describe", "INSTALL_HINT"]
 
 INSTALL_HINT = "pip install 'solidshell[sweep]'  (or: pip install 'dask[distributed]' pyarrow)"
 
@@ -82,14 +83,30 @@ def _client(scheduler, workers, threads):
     return Client(cluster), cluster
 
 
+@dataclass(frozen=True)
+class Cluster:
+    """Where the runs go and what each gets.
+
+    scheduler : "tcp://HOST:PORT" of a running scheduler; None starts a LocalCluster of ``workers``
+                processes (default: the CPU count / threads) on 127.0.0.1
+    threads   : threads per run (numba kernels, BLAS)
+    retries   : extra attempts of a task that raised
+    """
+
+    scheduler: str | None = None
+    workers: int | None = None
+    threads: int = 1
+    retries: int = 2
+
+
 class _Progress:
     """A tqdm bar on a terminal, else one line per finished run (on ``stream``)."""
 
-    def __init__(self, total, done, enabled, stream):
+    def __init__(self, total, done, enabled, stream: TextIO):
         self.stream = stream
         self.total, self.n = total, done
         self.bar = None
-        if enabled and hasattr(stream, "isatty") and stream.isatty():
+        if enabled and stream.isatty():
             from tqdm import tqdm
             self.bar = tqdm(total=total, initial=done, desc="sweep", unit="run", file=stream, smoothing=0.0)
         self.enabled = enabled
@@ -126,21 +143,18 @@ def _label(row) -> str:
     return f"{row['key']}: {dc_s}, {row.get('fold_count')} folds, {row.get('wall_time_s', 0):.0f} s{conv}"
 
 
-def run_sweep(spec: SweepSpec, out, *, scheduler: str | None = None, workers: int | None = None,
-              threads: int = 1, retries: int = 2, progress: bool = True, group: str = "C1",
-              pictures=("top",), stream=None, limit: int | None = None) -> SweepResult:
+def run_sweep(spec: SweepSpec, out, cluster: Cluster = Cluster(), *, progress: bool = True, group: str = "C1",
+              pictures=("top",), stream: TextIO | None = None, limit: int | None = None) -> SweepResult:
     """Run the sweep's runs missing from ``out``'s ledger on a Dask cluster (module docstring).
 
-    scheduler : "tcp://HOST:PORT" of a running scheduler; None starts a LocalCluster of ``workers``
-                processes (default: the CPU count / threads) on 127.0.0.1
-    threads   : threads per run (numba kernels, BLAS)
-    retries   : extra attempts of a task that raised
+    cluster   : the scheduler or local workers, threads per run, retries (:class:`Cluster`)
     group     : the symmetry group of the fingerprints (solidshell.sweep.states.symmetry_group)
     limit     : submit at most this many of the missing runs (a partial sweep; resumable)
     """
     require_dask()
     from distributed import as_completed
 
+    scheduler, workers, threads, retries = cluster.scheduler, cluster.workers, cluster.threads, cluster.retries
     stream = stream or sys.stderr
     if threads < 1:
         raise InputError(f"--threads must be >= 1, got {threads}")

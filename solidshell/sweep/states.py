@@ -44,7 +44,7 @@ def symmetry_group(scene) -> str:
         return "C1@0"
     m = scene.material_object()
     Cm, Cb = np.asarray(m.C_m, float), np.asarray(m.C_b, float)
-    warp = math.degrees(float(getattr(m, "warp_angle_rad", 0.0)))
+    warp = math.degrees(float(m.warp_angle_rad))   # Fabric's angle; 0 for an IsotropicShell
 
     def differs(C):
         return abs(C[0, 0] - C[1, 1]) > 1e-9 * max(abs(C[0, 0]), abs(C[1, 1]), 1e-300)

@@ -29,7 +29,7 @@ import cvxopt.cholmod as _cholmod
 
 __all__ = ["Cholesky", "LowerCSC", "PatternFactor", "SuperLUDefinite", "as_csc", "ldl_inertia", "pcg",
            "SINGULAR_PIVOT", "FACTORIZATIONS", "CHOLESKY_KINDS", "PARDISO_MIN_DOFS",
-           "resolve_factorization", "positive_definite_factor"]
+           "resolve_factorization", "positive_definite_factor", "arpack_start"]
 
 FACTORIZATIONS = ("auto", "cholmod", "pardiso", "superlu")
 """The static solvers' ``factorization`` setting: "auto" is "pardiso" where MKL is installed (on
@@ -44,6 +44,16 @@ PARDISO_MIN_DOFS = 1000
 millisecond either way, and loading MKL (~50 ms and 13.6 MB for its library and first call) would
 not be repaid: the 20-element strip's start-up (issue 13) stays as it was.  Square-pedestal 12x4x4
 (1 152 free dofs, 85 factorisations of 1.2 against 2.0 ms) already repays it."""
+
+
+def arpack_start(n: int) -> np.ndarray:
+    """ARPACK's start vector for an n x n problem: the same on every call and in every process.
+
+    Without one, ``eigsh`` draws a random start in each process, and the eigenvector it returns
+    (its sign, and its direction within a cluster of near-equal eigenvalues) differs from run to
+    run: a saddle escape along it, or a modal damping set from it, would then leave the same drape
+    in another state or on another path (issue 34: same answer on every machine and every run)."""
+    return np.random.default_rng(20150101).standard_normal(n)
 
 
 def resolve_factorization(kind: str, n_free: int | None = None) -> str:

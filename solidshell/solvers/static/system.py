@@ -44,7 +44,7 @@ import math
 import numpy as np
 
 from ...errors import InputError
-from ..linear import (CHOLESKY_KINDS, Cholesky, LowerCSC, as_csc, ldl_inertia,
+from ..linear import (CHOLESKY_KINDS, Cholesky, LowerCSC, arpack_start, as_csc, ldl_inertia,
                       positive_definite_factor)
 
 __all__ = ["ROUNDOFF", "System", "converged", "energy_scale", "free_length", "iteration_report",
@@ -351,11 +351,11 @@ def stability(sys, D, eig_max_dofs, known=None):
                 # A itself is positive definite: shift-invert about 0 with its Cholesky factor (A
                 # is only an operator here: ARPACK's mode 3 applies nothing but OPinv)
                 vals = eigsh(LinearOperator((n, n), matvec=lambda x: A @ x, dtype=float), k=1,
-                             sigma=0.0, which="LM", return_eigenvectors=False, tol=1e-8,
+                             sigma=0.0, which="LM", return_eigenvectors=False, tol=1e-8, v0=arpack_start(n),
                              maxiter=2000, OPinv=LinearOperator((n, n), matvec=chol.solve, dtype=float))
             else:
                 vals = eigsh(as_csc(A), k=1, sigma=-s, which="LM", return_eigenvectors=False,
-                             tol=1e-8, maxiter=2000)
+                             tol=1e-8, maxiter=2000, v0=arpack_start(n))
             lmin = float(vals[0])
         except Exception:  # noqa: BLE001 - a diagnostic, never fatal
             lmin = None
@@ -377,7 +377,7 @@ def _lowest_mode(A, k_max=6):
     from scipy.sparse.linalg import eigsh
     s = 1e-10 * float(np.abs(A.diagonal()).mean())
     try:
-        w, V = eigsh(A, k=min(k_max, n - 2), sigma=-s, which="LM", tol=1e-8, maxiter=5000)
+        w, V = eigsh(A, k=min(k_max, n - 2), sigma=-s, which="LM", tol=1e-8, maxiter=5000, v0=arpack_start(n))
         i = int(np.argmin(w))
         if w[i] < 0.0:
             return float(w[i]), V[:, i]

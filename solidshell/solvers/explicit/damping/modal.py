@@ -33,6 +33,8 @@ def omega_min(view: DampingView, D) -> float | None:
     import scipy.sparse as sp
     from scipy.sparse.linalg import eigsh
 
+    from ...linear import arpack_start
+
     K = view.stiffness(D)
     idx = view.dofs.free_idx
     K = K[idx][:, idx].tocsc()
@@ -40,7 +42,8 @@ def omega_min(view: DampingView, D) -> float | None:
     m = view.dofs.Mf[idx]
     zero = 1e-10 * float(np.max(K.diagonal() / m))
     try:
-        lam = eigsh(K, k=6, M=sp.diags(m).tocsc(), sigma=-zero, which="LM", return_eigenvectors=False)
+        lam = eigsh(K, k=6, M=sp.diags(m).tocsc(), sigma=-zero, which="LM", return_eigenvectors=False,
+                    v0=arpack_start(K.shape[0]))
     except Exception:   # ArpackNoConvergence, a singular shift: keep the previous alpha
         return None
     pos = np.sort(lam[lam > zero])

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import MISSING, dataclass, field, fields
+from typing import Any
 
 import numpy as np
 
@@ -110,8 +111,8 @@ class Fabric:
     @classmethod
     def wool(cls, **overrides) -> "Fabric":
         """The wool fabric of Table 1 (Kang & Yu [10]), gf-cm-s units; keywords override fields."""
-        data = dict(tensile_warp=1118.2, tensile_weft=759.5, shear=41.8, bending_warp=0.083,
-                    bending_weft=0.063, torsion=0.027, weight=0.019, thickness=0.0593, name="wool")
+        data: dict[str, Any] = dict(tensile_warp=1118.2, tensile_weft=759.5, shear=41.8, bending_warp=0.083,
+                                    bending_weft=0.063, torsion=0.027, weight=0.019, thickness=0.0593, name="wool")
         data.update(overrides)
         return cls(**data)
 

@@ -259,9 +259,9 @@ class Model:
         self.blocks = [_Block(quad4, mesh.quads[a:b], Xo, Xn, material, m, constants) for a, b, m in runs]
         if len(mesh.tris):
             self.blocks.append(_Block(tri3, mesh.tris, Xo, Xn, material, "full", constants))
-        self._pattern = None
-        self._mass = None
-        self._areas = None
+        self._pattern: SparsePattern | None = None
+        self._mass: np.ndarray | None = None
+        self._areas: np.ndarray | None = None
 
     def around(self, nodes) -> "Model":
         """This model with only the elements that touch ``nodes`` (indices): the same mesh, node

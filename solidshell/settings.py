@@ -11,7 +11,7 @@ Which model belongs to which solver kind is the solver registry's (``solidshell.
 from __future__ import annotations
 
 import math
-from typing import Annotated, Any, Optional
+from typing import Annotated, Any, Optional, TypeVar
 
 import numpy as np
 
@@ -67,6 +67,9 @@ class SettingsModel(BaseModel):
         return {k: getattr(self, k) for k in type(self).model_fields}
 
 
+M = TypeVar("M", bound=SettingsModel)
+
+
 def _one_line(exc: ValidationError, where: str, model: type[SettingsModel]) -> str:
     parts = []
     for e in exc.errors():
@@ -85,8 +88,7 @@ def _one_line(exc: ValidationError, where: str, model: type[SettingsModel]) -> s
     return f"{where}: " + "; ".join(parts)
 
 
-def parse(model: type[SettingsModel], settings: dict | None, where: str = "settings", *,
-          explain=_one_line) -> SettingsModel:
+def parse(model: type[M], settings: dict | None, where: str = "settings", *, explain=_one_line) -> M:
     """``model`` built from ``settings`` (None: all defaults); InputError (one line) if invalid.
     ``explain(exc, where, model)`` words that line (the scene schema names file and dotted key)."""
     if isinstance(settings, model):

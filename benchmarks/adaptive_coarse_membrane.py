@@ -35,14 +35,21 @@ def one(scene, variant, t_max, extra, folder):
         lanes_ans.covers = lambda c: False
     try:
         t = time.perf_counter()
-        out = run_scene(scene, solver="relax", out_dir=folder, progress=False, overrides=over, adaptive=True,
-                        force=True)
+        out = run_scene(
+            scene, solver="relax", out_dir=folder, progress=False, overrides=over, adaptive=True, force=True
+        )
         wall = time.perf_counter() - t
     finally:
         lanes_ans.covers = covers
     s = out.summary
-    return dict(wall=wall, steps=s.get("steps"), t=s.get("t_final"), nodes=s.get("max_active_nodes"),
-                dc=s.get("drape_coefficient"), status=out.result.info.get("status"))
+    return dict(
+        wall=wall,
+        steps=s.get("steps"),
+        t=s.get("t_final"),
+        nodes=s.get("max_active_nodes"),
+        dc=s.get("drape_coefficient"),
+        status=out.result.info.get("status"),
+    )
 
 
 def main(argv=None):
@@ -55,23 +62,32 @@ def main(argv=None):
     args = ap.parse_args(argv)
     extra = parse_overrides(args.set)
     import numba
+
     with tempfile.TemporaryDirectory() as tmp:
         for p in range(args.passes):
-            print(f"pass {p + 1}: {args.scene}, relax to t_max = {args.t_max} s, numba threads "
-                  f"{numba.config.NUMBA_NUM_THREADS}, load average {os.getloadavg()}", flush=True)
+            print(
+                f"pass {p + 1}: {args.scene}, relax to t_max = {args.t_max} s, numba threads "
+                f"{numba.config.NUMBA_NUM_THREADS}, load average {os.getloadavg()}",
+                flush=True,
+            )
             rows = {}
             for v in args.variants.split(","):
                 rows[v] = r = one(args.scene, v, args.t_max, extra, os.path.join(tmp, v))
                 per = r["wall"] / max(r["steps"], 1)
-                print(f"  {v:9s} {r['status']:>12s} steps {r['steps']:6d} t {r['t']:.4f} s  max nodes "
-                      f"{r['nodes']:5d}  DC {r['dc']:.6f}  wall {r['wall']:6.1f} s  {per * 1e3:6.3f} ms/step  "
-                      f"{per / r['nodes'] * 1e6:5.2f} us/step/node", flush=True)
+                print(
+                    f"  {v:9s} {r['status']:>12s} steps {r['steps']:6d} t {r['t']:.4f} s  max nodes "
+                    f"{r['nodes']:5d}  DC {r['dc']:.6f}  wall {r['wall']:6.1f} s  {per * 1e3:6.3f} ms/step  "
+                    f"{per / r['nodes'] * 1e6:5.2f} us/step/node",
+                    flush=True,
+                )
             if "scene" in rows:
                 base = rows["scene"]
                 for v, r in rows.items():
                     if v != "scene":
-                        print(f"  {v} / scene: wall {r['wall'] / base['wall']:.2f}, per step "
-                              f"{r['wall'] / r['steps'] / (base['wall'] / base['steps']):.2f}")
+                        print(
+                            f"  {v} / scene: wall {r['wall'] / base['wall']:.2f}, per step "
+                            f"{r['wall'] / r['steps'] / (base['wall'] / base['steps']):.2f}"
+                        )
             print(f"  load average after the pass {os.getloadavg()}", flush=True)
 
 

@@ -55,12 +55,25 @@ def measure(prob: Problem, dtc: float, steps: int, repeats: int, threads: int) -
     vals, walls = [], []
     for _ in range(repeats):
         t0 = time.perf_counter()
-        r = explicit.run(prob, {"t_end": steps * 0.9 * dtc, "critical_time_step": dtc, "threads": threads,
-                                "sample_every": 100, "recheck_every": 0})
+        r = explicit.run(
+            prob,
+            {
+                "t_end": steps * 0.9 * dtc,
+                "critical_time_step": dtc,
+                "threads": threads,
+                "sample_every": 100,
+                "recheck_every": 0,
+            },
+        )
         walls.append(time.perf_counter() - t0)
         vals.append(r.info["element_steps_per_second"])
-    return dict(threads=threads, steps=r.info["steps"], element_steps_per_s=statistics.median(vals),
-                all_repeats=vals, wall_s=walls)
+    return dict(
+        threads=threads,
+        steps=r.info["steps"],
+        element_steps_per_s=statistics.median(vals),
+        all_repeats=vals,
+        wall_s=walls,
+    )
 
 
 def main(argv=None):
@@ -85,16 +98,24 @@ def main(argv=None):
             default = 1 if ne < explicit.SMALL_MESH_ELEMENTS else nthr
             for thr in sorted({1, nthr}):
                 r = measure(probs[n], dtcs[n], a.steps, a.repeats, thr)
-                r.update(pass_=p + 1, n=n, elements=ne, solver_default_threads=default,
-                         critical_time_step_s=dtcs[n])
+                r.update(pass_=p + 1, n=n, elements=ne, solver_default_threads=default, critical_time_step_s=dtcs[n])
                 rows.append(r)
-                print(f"pass {p + 1}  {n}x{n} ({ne} quads) {thr} thread(s){' [default]' if thr == default else ''}: "
-                      f"{r['element_steps_per_s']:.3g} element-steps/s (median of {a.repeats}: "
-                      f"{', '.join(f'{v:.3g}' for v in r['all_repeats'])})", flush=True)
+                print(
+                    f"pass {p + 1}  {n}x{n} ({ne} quads) {thr} thread(s){' [default]' if thr == default else ''}: "
+                    f"{r['element_steps_per_s']:.3g} element-steps/s (median of {a.repeats}: "
+                    f"{', '.join(f'{v:.3g}' for v in r['all_repeats'])})",
+                    flush=True,
+                )
         loads[-1]["after"] = uptime()
         print(f"pass {p + 1} load: before [{loads[-1]['before']}]  after [{loads[-1]['after']}]", flush=True)
-    res = dict(numba_threads=nthr, cpu_count=os.cpu_count(), target_element_steps_per_s=1.5e6, rows=rows,
-               uptime=loads, date=time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime()))
+    res = dict(
+        numba_threads=nthr,
+        cpu_count=os.cpu_count(),
+        target_element_steps_per_s=1.5e6,
+        rows=rows,
+        uptime=loads,
+        date=time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime()),
+    )
     Path(a.json).parent.mkdir(parents=True, exist_ok=True)
     with open(a.json, "w") as fh:
         json.dump(res, fh, indent=1)

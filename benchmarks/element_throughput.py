@@ -55,8 +55,11 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--elements", type=int, default=10000)
     ap.add_argument("--repeats", type=int, default=7)
-    ap.add_argument("--membrane", default="full,ans",
-                    help="quadrilateral membrane variants to measure (solidshell/elements/quad4.py)")
+    ap.add_argument(
+        "--membrane",
+        default="full,ans",
+        help="quadrilateral membrane variants to measure (solidshell/elements/quad4.py)",
+    )
     ap.add_argument("--passes", type=int, default=1)
     args = ap.parse_args(argv)
     for p in range(args.passes):
@@ -76,9 +79,15 @@ def lane_comparison(mesh, model, U, repeats, mod=lanes):
     xs, fs, ws = np.empty((pk["B"], 12 * nn * L)), np.empty((pk["B"], 6 * nn * L)), np.empty((pk["B"], L))
     nth = get_num_threads()
     kernel = lanes_tri.tri_forces if mod is lanes_tri else mod.quad_forces
-    old = lambda: core.energy_force(*b.args(xo, xn, Uc, False, 0.5), fe, we, nth)
-    new = lambda: kernel(mesh.nodes, mesh.directors, Uc, pk["conn"], pk["Cmb"], pk["Cs"], pk["Cz"],
-                         pk["r_z"], False, 0.5, xs, fs, ws)
+
+    def old():
+        return core.energy_force(*b.args(xo, xn, Uc, False, 0.5), fe, we, nth)
+
+    def new():
+        return kernel(
+            mesh.nodes, mesh.directors, Uc, pk["conn"], pk["Cmb"], pk["Cs"], pk["Cz"], pk["r_z"], False, 0.5, xs, fs, ws
+        )
+
     old()
     new()
     t = {"core": [], "lanes": []}
@@ -92,10 +101,14 @@ def lane_comparison(mesh, model, U, repeats, mod=lanes):
     diff = np.abs(mod.unpack_forces(fs, M) - fe).max() / np.abs(fe).max()
     for k in t:
         tw, tc = float(np.median(t[k])), float(np.median(c[k]))
-        print(f"  {k:5s} force kernel   {M / tw / 1e6:8.3f} M elem/s wall, {M / tc / 1e6:6.3f} M elem/s per CPU-s"
-              + (f", {mod.FLOPS_PER_ELEMENT * M / tw / 1e9:5.2f} GFLOP/s wall" if k == "lanes" else ""))
-    print(f"  lanes / core: {np.median(t['core']) / np.median(t['lanes']):.2f} (wall), "
-          f"{np.median(c['core']) / np.median(c['lanes']):.2f} (CPU); max |f_lanes - f_core| / max |f| = {diff:.1e}")
+        print(
+            f"  {k:5s} force kernel   {M / tw / 1e6:8.3f} M elem/s wall, {M / tc / 1e6:6.3f} M elem/s per CPU-s"
+            + (f", {mod.FLOPS_PER_ELEMENT * M / tw / 1e9:5.2f} GFLOP/s wall" if k == "lanes" else "")
+        )
+    print(
+        f"  lanes / core: {np.median(t['core']) / np.median(t['lanes']):.2f} (wall), "
+        f"{np.median(c['core']) / np.median(c['lanes']):.2f} (CPU); max |f_lanes - f_core| / max |f| = {diff:.1e}"
+    )
 
 
 def interleaved(fns, repeats):
@@ -129,37 +142,59 @@ def ans_comparison(mesh, U, repeats):
         pk = mod.pack(b.conn, b.c, b.c["r_zq"])
         xs, fs, ws = np.empty((pk["B"], 48 * L)), np.empty((pk["B"], 24 * L)), np.empty((pk["B"], L))
         out[mod.__name__] = fs
-        return lambda: mod.quad_forces(mesh.nodes, mesh.directors, Uc, pk["conn"], pk["Cmb"], pk["Cs"], pk["Cz"],
-                                       pk["r_z"], False, 0.5, xs, fs, ws)
+        return lambda: mod.quad_forces(
+            mesh.nodes, mesh.directors, Uc, pk["conn"], pk["Cmb"], pk["Cs"], pk["Cz"], pk["r_z"], False, 0.5, xs, fs, ws
+        )
 
     args = ba.args(xo, xn, Uc, False, 0.5)
     Cs = np.zeros((M, 26, 26))
     Cs[:, :4, :4] = ba.c["Cs"][:, :4, :4]
     Cs[:, 4:, 4:] = quad4.dense_membrane(mesh.nodes[ba.conn], ba.c, sec.C_m)
-    dense = args[:5] + (np.vstack([quad4.ALPHA, quad4.M_ALPHA]), np.vstack([quad4.BETA, quad4.M_BETA]),
-                        np.vstack([quad4.TIE, quad4.M_TIE]), args[8], Cs) + args[10:]
+    dense = (
+        args[:5]
+        + (
+            np.vstack([quad4.ALPHA, quad4.M_ALPHA]),
+            np.vstack([quad4.BETA, quad4.M_BETA]),
+            np.vstack([quad4.TIE, quad4.M_TIE]),
+            args[8],
+            Cs,
+        )
+        + args[10:]
+    )
     fc, fd, w = np.empty((M, 4, 6)), np.empty((M, 4, 6)), np.empty(M)
     nth = get_num_threads()
-    fns = {"full lanes": lane_call(lanes, bf), "ans lanes": lane_call(lanes_ans, ba),
-           "ans core": lambda: core.energy_force(*args, fc, w, nth),
-           "ans core dense": lambda: core.energy_force(*dense, fd, w, nth)}
+    fns = {
+        "full lanes": lane_call(lanes, bf),
+        "ans lanes": lane_call(lanes_ans, ba),
+        "ans core": lambda: core.energy_force(*args, fc, w, nth),
+        "ans core dense": lambda: core.energy_force(*dense, fd, w, nth),
+    }
     res = interleaved(fns, repeats)
     flops = {"full lanes": lanes.FLOPS_PER_ELEMENT, "ans lanes": lanes_ans.FLOPS_PER_ELEMENT}
     print(f"quad4 M={M:6d}: membrane=ans force kernels beside the full lane kernel (interleaved)")
     for k, (tw, tc) in res.items():
-        print(f"  {k:15s} {M / tw / 1e6:8.3f} M elem/s wall, {M / tc / 1e6:6.3f} per CPU-s, "
-              f"{tw / res['full lanes'][0]:5.2f} x full lanes' time"
-              + (f", {flops[k] * M / tw / 1e9:5.2f} GFLOP/s" if k in flops else ""))
+        print(
+            f"  {k:15s} {M / tw / 1e6:8.3f} M elem/s wall, {M / tc / 1e6:6.3f} per CPU-s, "
+            f"{tw / res['full lanes'][0]:5.2f} x full lanes' time"
+            + (f", {flops[k] * M / tw / 1e9:5.2f} GFLOP/s" if k in flops else "")
+        )
     scale = np.abs(fc).max()
-    print(f"  max |f - f_ans core| / max |f|: ans lanes "
-          f"{np.abs(lanes.unpack_forces(out[lanes_ans.__name__], M) - fc).max() / scale:.1e}, "
-          f"ans core dense {np.abs(fd - fc).max() / scale:.1e}")
+    print(
+        f"  max |f - f_ans core| / max |f|: ans lanes "
+        f"{np.abs(lanes.unpack_forces(out[lanes_ans.__name__], M) - fc).max() / scale:.1e}, "
+        f"ans core dense {np.abs(fd - fc).max() / scale:.1e}"
+    )
     # the static solver's kernel: force + tangent (core.force_tangent), the three forms
     K = np.empty((M, 24, 24))
     fargs = bf.args(xo, xn, Uc, False, 0.5)
-    res = interleaved({"full": lambda: core.force_tangent(*fargs, True, fc, w, K, nth),
-                       "ans": lambda: core.force_tangent(*args, False, fc, w, K, nth),
-                       "ans dense": lambda: core.force_tangent(*dense, False, fd, w, K, nth)}, repeats)
+    res = interleaved(
+        {
+            "full": lambda: core.force_tangent(*fargs, True, fc, w, K, nth),
+            "ans": lambda: core.force_tangent(*args, False, fc, w, K, nth),
+            "ans dense": lambda: core.force_tangent(*dense, False, fd, w, K, nth),
+        },
+        repeats,
+    )
     print("  force+tangent (core.force_tangent, interleaved):")
     for k, (tw, tc) in res.items():
         print(f"  {k:15s} {M / tw / 1e3:8.1f} k elem/s wall, {tw / res['full'][0]:5.2f} x full's time")
@@ -185,7 +220,9 @@ def one_pass(args):
         model.force_and_tangent(U)
         first = time.perf_counter() - t0
         tf = median_time(lambda: core.energy_force(*b.args(xo, xn, Uc, False, 0.5), fe, we, nth), args.repeats)
-        tk = median_time(lambda: core.force_tangent(*b.args(xo, xn, Uc, False, 0.5), b.gp_membrane, fe, we, Ke, nth), args.repeats)
+        tk = median_time(
+            lambda: core.force_tangent(*b.args(xo, xn, Uc, False, 0.5), b.gp_membrane, fe, we, Ke, nth), args.repeats
+        )
         tF = median_time(lambda: model.internal_force(U), args.repeats)
         tA = median_time(lambda: model.force_and_tangent(U), args.repeats)
         name = "tri3 " if tri else f"quad4 membrane={membrane}"

@@ -85,19 +85,31 @@ def run_one(case: str, variant: str, max_wall: float) -> tuple[dict, np.ndarray]
     if variant == "static":
         out = run_scene(scene, mesh=mesh, solver="static", out_dir=None, progress=False)
     else:
-        out = run_scene(scene, mesh=mesh, solver="relax", out_dir=None, progress=False,
-                        max_wall_time=max_wall, **VARIANTS[variant])
+        out = run_scene(
+            scene, mesh=mesh, solver="relax", out_dir=None, progress=False, max_wall_time=max_wall, **VARIANTS[variant]
+        )
     total = time.perf_counter() - t0
     s = out.summary
-    row = dict(case=case, variant=variant, settings=VARIANTS[variant], converged=s.get("converged"),
-               steps=s.get("steps") or s.get("iterations"), dt=s.get("dt"), critical_dt=s.get("critical_time_step"),
-               t_sim=s.get("t_final"), wall_s=(s.get("wall_time_s") or s.get("timings", {}).get("solve")
-                                               or total), total_s=total,
-               element_steps_per_s=s.get("element_steps_per_second"),
-               drape_coefficient=s.get("drape_coefficient"), fold_count=s.get("fold_count"),
-               max_interpenetrated_nodes=s.get("max_interpenetrated_nodes"),
-               energy_balance_error=s.get("energy_balance_error"), message=s.get("message"),
-               load_before=load0, load_after=uptime())
+    row = dict(
+        case=case,
+        variant=variant,
+        settings=VARIANTS[variant],
+        converged=s.get("converged"),
+        steps=s.get("steps") or s.get("iterations"),
+        dt=s.get("dt"),
+        critical_dt=s.get("critical_time_step"),
+        t_sim=s.get("t_final"),
+        wall_s=(s.get("wall_time_s") or s.get("timings", {}).get("solve") or total),
+        total_s=total,
+        element_steps_per_s=s.get("element_steps_per_second"),
+        drape_coefficient=s.get("drape_coefficient"),
+        fold_count=s.get("fold_count"),
+        max_interpenetrated_nodes=s.get("max_interpenetrated_nodes"),
+        energy_balance_error=s.get("energy_balance_error"),
+        message=s.get("message"),
+        load_before=load0,
+        load_after=uptime(),
+    )
     return row, np.asarray(out.U)[:, :3]
 
 
@@ -111,8 +123,16 @@ def profile(case: str, variant: str, steps: int, top: int = 12) -> list[dict]:
     st = pstats.Stats(pr, stream=io.StringIO())
     total = sum(v[2] for v in st.stats.values())
     items = sorted(st.stats.items(), key=lambda kv: -kv[1][2])[:top]
-    return [dict(function=f"{Path(f).name}:{line}({name})", calls=v[1], own_s=v[2], cumulative_s=v[3],
-                 own_fraction=v[2] / total) for (f, line, name), v in items]
+    return [
+        dict(
+            function=f"{Path(f).name}:{line}({name})",
+            calls=v[1],
+            own_s=v[2],
+            cumulative_s=v[3],
+            own_fraction=v[2] / total,
+        )
+        for (f, line, name), v in items
+    ]
 
 
 def _fmt(x, f="{:.4g}"):
@@ -121,38 +141,70 @@ def _fmt(x, f="{:.4g}"):
 
 def write_md(res: dict, path: Path) -> str:
     rows = res["rows"]
-    lines = ["# Dynamic relaxation: wall time to steady state (issues 5 and 13)", "",
-             "`python benchmarks/explicit_relaxation.py " + "`, then `".join(res["argv"]) + f"` (last on {res['date']}), "
-             f"{res['cpu_count']} CPUs (shared; the 1/5/15-min load averages before and after each run are "
-             "given).  wall = the solver's own time (after a warm-up that compiled the kernels); "
-             "|Δx| = largest node-position difference from the first variant's steady state in the same pass; "
-             "runs taken from the log of an interrupted invocation (`--import-log`) lack the fields it did not print (–).",
-             "",
-             "| case | variant | pass | steady | steps | dt [s] | t_sim [s] | wall [s] | element-steps/s | DC | folds "
-             "| max interp. | energy err | abs Δx [cm] | load before → after |",
-             "|" + "---|" * 15]
+    lines = [
+        "# Dynamic relaxation: wall time to steady state (issues 5 and 13)",
+        "",
+        "`python benchmarks/explicit_relaxation.py " + "`, then `".join(res["argv"]) + f"` (last on {res['date']}), "
+        f"{res['cpu_count']} CPUs (shared; the 1/5/15-min load averages before and after each run are "
+        "given).  wall = the solver's own time (after a warm-up that compiled the kernels); "
+        "|Δx| = largest node-position difference from the first variant's steady state in the same pass; "
+        "runs taken from the log of an interrupted invocation (`--import-log`) lack the fields it did not print (–).",
+        "",
+        "| case | variant | pass | steady | steps | dt [s] | t_sim [s] | wall [s] | element-steps/s | DC | folds "
+        "| max interp. | energy err | abs Δx [cm] | load before → after |",
+        "|" + "---|" * 15,
+    ]
     for r in rows:
-        lines.append("| " + " | ".join([
-            r["case"], r["variant"], str(r["pass_"]), _fmt(r.get("converged")), _fmt(r.get("steps"), "{}"),
-            _fmt(r.get("dt"), "{:.3e}"), _fmt(r.get("t_sim"), "{:.3f}"), _fmt(r.get("wall_s"), "{:.1f}"),
-            _fmt(r.get("element_steps_per_s"), "{:.3g}"), _fmt(r.get("drape_coefficient")), _fmt(r.get("fold_count"), "{}"),
-            _fmt(r.get("max_interpenetrated_nodes"), "{}"), _fmt(r.get("energy_balance_error"), "{:.1e}"),
-            _fmt(r.get("max_position_difference_cm"), "{:.2e}"),
-            f"{r['load_before']} → {r['load_after']}"]) + " |")
-    lines += ["", "Medians over the passes (target from issue 5):", "",
-              "| case | variant | median wall [s] | target [s] | meets | wall / first variant (per pass) |",
-              "|---|---|---|---|---|---|"]
+        lines.append(
+            "| "
+            + " | ".join(
+                [
+                    r["case"],
+                    r["variant"],
+                    str(r["pass_"]),
+                    _fmt(r.get("converged")),
+                    _fmt(r.get("steps"), "{}"),
+                    _fmt(r.get("dt"), "{:.3e}"),
+                    _fmt(r.get("t_sim"), "{:.3f}"),
+                    _fmt(r.get("wall_s"), "{:.1f}"),
+                    _fmt(r.get("element_steps_per_s"), "{:.3g}"),
+                    _fmt(r.get("drape_coefficient")),
+                    _fmt(r.get("fold_count"), "{}"),
+                    _fmt(r.get("max_interpenetrated_nodes"), "{}"),
+                    _fmt(r.get("energy_balance_error"), "{:.1e}"),
+                    _fmt(r.get("max_position_difference_cm"), "{:.2e}"),
+                    f"{r['load_before']} → {r['load_after']}",
+                ]
+            )
+            + " |"
+        )
+    lines += [
+        "",
+        "Medians over the passes (target from issue 5):",
+        "",
+        "| case | variant | median wall [s] | target [s] | meets | wall / first variant (per pass) |",
+        "|---|---|---|---|---|---|",
+    ]
     for m in res["medians"]:
-        lines.append(f"| {m['case']} | {m['variant']} | {m['median_wall_s']:.1f} | {_fmt(m['target_s'], '{:.0f}')} | "
-                     f"{_fmt(m['meets_target'])} | {', '.join(f'{x:.2f}' for x in m['ratios'])} |")
+        lines.append(
+            f"| {m['case']} | {m['variant']} | {m['median_wall_s']:.1f} | {_fmt(m['target_s'], '{:.0f}')} | "
+            f"{_fmt(m['meets_target'])} | {', '.join(f'{x:.2f}' for x in m['ratios'])} |"
+        )
     if res.get("profile"):
         pf = res["profile"]
-        lines += ["", f"Profile (cProfile) of {pf['steps']} steps of {pf['case']} / {pf['variant']}, top items "
-                  "by own time (numba kernels count as their Python caller's own time):", "",
-                  "| function | calls | own [s] | own share | cumulative [s] |", "|---|---|---|---|---|"]
+        lines += [
+            "",
+            f"Profile (cProfile) of {pf['steps']} steps of {pf['case']} / {pf['variant']}, top items "
+            "by own time (numba kernels count as their Python caller's own time):",
+            "",
+            "| function | calls | own [s] | own share | cumulative [s] |",
+            "|---|---|---|---|---|",
+        ]
         for it in pf["top"]:
-            lines.append(f"| `{it['function']}` | {it['calls']} | {it['own_s']:.2f} | {100 * it['own_fraction']:.1f} % "
-                         f"| {it['cumulative_s']:.2f} |")
+            lines.append(
+                f"| `{it['function']}` | {it['calls']} | {it['own_s']:.2f} | {100 * it['own_fraction']:.1f} % "
+                f"| {it['cumulative_s']:.2f} |"
+            )
     text = "\n".join(lines) + "\n"
     path.write_text(text)
     return text
@@ -164,10 +216,16 @@ def main(argv=None):
     ap.add_argument("--variants", nargs="+", default=["uniform", "director"], choices=list(VARIANTS))
     ap.add_argument("--passes", type=int, default=2)
     ap.add_argument("--max-wall", type=float, default=1800.0, help="wall-time limit per run [s]")
-    ap.add_argument("--profile-steps", type=int, default=5000,
-                    help="profile this many steps of the first case and variant (0: no profile)")
+    ap.add_argument(
+        "--profile-steps",
+        type=int,
+        default=5000,
+        help="profile this many steps of the first case and variant (0: no profile)",
+    )
     ap.add_argument("--append", action="store_true", help="add to OUT.json's runs (passes numbered on)")
-    ap.add_argument("--import-log", default=None, help="also take the runs printed in this log of an earlier invocation")
+    ap.add_argument(
+        "--import-log", default=None, help="also take the runs printed in this log of an earlier invocation"
+    )
     ap.add_argument("--out", default=str(OUT / "explicit_relaxation"), help="writes OUT.md and OUT.json")
     a = ap.parse_args(argv)
     for c in a.cases:
@@ -178,8 +236,15 @@ def main(argv=None):
         if v == "static":
             run_scene("square-pedestal", mesh="6x2x4", solver="static", out_dir=None, progress=False)
         elif v != "modal100":
-            run_scene("square-pedestal", mesh="6x2x4", solver="relax", out_dir=None, progress=False, max_steps=50,
-                      **VARIANTS[v])
+            run_scene(
+                "square-pedestal",
+                mesh="6x2x4",
+                solver="relax",
+                out_dir=None,
+                progress=False,
+                max_steps=50,
+                **VARIANTS[v],
+            )
     out = Path(a.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     res = dict(profile=None, argv=[], rows=[])
@@ -200,23 +265,31 @@ def main(argv=None):
                     first = x
                 row["max_position_difference_cm"] = float(np.max(np.linalg.norm(x - first, axis=1)))
                 rows.append(row)
-                print(f"pass {p} {case:<24} {v:<9} {'steady' if row['converged'] else 'NOT steady'} "
-                      f"{row['steps'] or 0:>7} steps of {row['dt'] or 0:.3e} s  t_sim {row['t_sim'] or 0:.3f} s  "
-                      f"wall {row['wall_s']:7.1f} s  {row['element_steps_per_s'] or 0:.3g} el-steps/s  "
-                      f"DC {row['drape_coefficient']:.4f}  folds {row['fold_count']}  "
-                      f"|dx| {row['max_position_difference_cm']:.2e} cm  load [{row['load_before']}] -> "
-                      f"[{row['load_after']}]", flush=True)
-                save(res, out)   # after every run: a long benchmark stopped half-way keeps what it measured
+                print(
+                    f"pass {p} {case:<24} {v:<9} {'steady' if row['converged'] else 'NOT steady'} "
+                    f"{row['steps'] or 0:>7} steps of {row['dt'] or 0:.3e} s  t_sim {row['t_sim'] or 0:.3f} s  "
+                    f"wall {row['wall_s']:7.1f} s  {row['element_steps_per_s'] or 0:.3g} el-steps/s  "
+                    f"DC {row['drape_coefficient']:.4f}  folds {row['fold_count']}  "
+                    f"|dx| {row['max_position_difference_cm']:.2e} cm  load [{row['load_before']}] -> "
+                    f"[{row['load_after']}]",
+                    flush=True,
+                )
+                save(res, out)  # after every run: a long benchmark stopped half-way keeps what it measured
     if a.profile_steps:
-        res["profile"] = dict(case=a.cases[0], variant=a.variants[0], steps=a.profile_steps,
-                              top=profile(a.cases[0], a.variants[0], a.profile_steps))
+        res["profile"] = dict(
+            case=a.cases[0],
+            variant=a.variants[0],
+            steps=a.profile_steps,
+            top=profile(a.cases[0], a.variants[0], a.profile_steps),
+        )
     print(save(res, out))
 
 
 LOG_LINE = re.compile(
     r"pass (?P<pass_>\d+) (?P<case>\S+)\s+(?P<variant>\S+)\s+(?P<steady>steady|NOT steady)\s+(?P<steps>\d+) steps of "
     r"(?P<dt>\S+) s\s+t_sim (?P<t_sim>\S+) s\s+wall\s+(?P<wall_s>\S+) s\s+(?P<eps>\S+) el-steps/s\s+DC (?P<dc>\S+)\s+"
-    r"folds (?P<folds>\d+)\s+\|dx\| (?P<dx>\S+) cm\s+load \[(?P<lb>[^]]*)\] -> \[(?P<la>[^]]*)\]")
+    r"folds (?P<folds>\d+)\s+\|dx\| (?P<dx>\S+) cm\s+load \[(?P<lb>[^]]*)\] -> \[(?P<la>[^]]*)\]"
+)
 
 
 def import_log(path: str) -> list[dict]:
@@ -227,12 +300,25 @@ def import_log(path: str) -> list[dict]:
         m = LOG_LINE.match(line.strip())
         if m:
             g = m.groupdict()
-            rows.append(dict(case=g["case"], variant=g["variant"], pass_=int(g["pass_"]),
-                             converged=g["steady"] == "steady", steps=int(g["steps"]), dt=float(g["dt"]),
-                             t_sim=float(g["t_sim"]), wall_s=float(g["wall_s"]), element_steps_per_s=float(g["eps"]),
-                             drape_coefficient=float(g["dc"]), fold_count=int(g["folds"]),
-                             max_position_difference_cm=float(g["dx"]), load_before=g["lb"], load_after=g["la"],
-                             from_log=str(path)))
+            rows.append(
+                dict(
+                    case=g["case"],
+                    variant=g["variant"],
+                    pass_=int(g["pass_"]),
+                    converged=g["steady"] == "steady",
+                    steps=int(g["steps"]),
+                    dt=float(g["dt"]),
+                    t_sim=float(g["t_sim"]),
+                    wall_s=float(g["wall_s"]),
+                    element_steps_per_s=float(g["eps"]),
+                    drape_coefficient=float(g["dc"]),
+                    fold_count=int(g["folds"]),
+                    max_position_difference_cm=float(g["dx"]),
+                    load_before=g["lb"],
+                    load_after=g["la"],
+                    from_log=str(path),
+                )
+            )
     return rows
 
 
@@ -246,13 +332,26 @@ def save(res: dict, out: Path) -> str:
             rs = [r for r in rows if r["case"] == case and r["variant"] == v]
             ratios = []
             for r in rs:
-                ref = [q["wall_s"] for q in rows if q["case"] == case and q["pass_"] == r["pass_"] and q["variant"] == first_v]
+                ref = [
+                    q["wall_s"]
+                    for q in rows
+                    if q["case"] == case and q["pass_"] == r["pass_"] and q["variant"] == first_v
+                ]
                 if ref:
                     ratios.append(r["wall_s"] / ref[0])
             med = statistics.median(r["wall_s"] for r in rs)
             tgt = TARGETS.get(case)
-            medians.append(dict(case=case, variant=v, runs=len(rs), median_wall_s=med, target_s=tgt, ratios=ratios,
-                                meets_target=(None if tgt is None else bool(med < tgt and all(r["converged"] for r in rs)))))
+            medians.append(
+                dict(
+                    case=case,
+                    variant=v,
+                    runs=len(rs),
+                    median_wall_s=med,
+                    target_s=tgt,
+                    ratios=ratios,
+                    meets_target=(None if tgt is None else bool(med < tgt and all(r["converged"] for r in rs))),
+                )
+            )
     res.update(medians=medians, cpu_count=os.cpu_count(), date=time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()))
     with open(out.with_suffix(".json"), "w") as fh:
         json.dump(res, fh, indent=1, default=str)

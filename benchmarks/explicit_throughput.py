@@ -55,10 +55,12 @@ def measure(n: int, steps: int, repeats: int, threads):
     dtc = s0.info["critical_time_step"]
     loop, kern = [], []
     import numba
+
     old = numba.get_num_threads()
     for _ in range(repeats):
-        r = explicit.run(prob, {"t_end": steps * 0.9 * dtc, "critical_time_step": dtc, "threads": threads,
-                                "sample_every": 100})
+        r = explicit.run(
+            prob, {"t_end": steps * 0.9 * dtc, "critical_time_step": dtc, "threads": threads, "sample_every": 100}
+        )
         loop.append(r.info["element_steps_per_second"])
         numba.set_num_threads(r.info["threads"])
         t = time.perf_counter()
@@ -66,11 +68,16 @@ def measure(n: int, steps: int, repeats: int, threads):
             passes.element_pass(U)
         kern.append(m.mesh.n_elements * steps / (time.perf_counter() - t))
         numba.set_num_threads(old)
-    return dict(elements=m.mesh.n_elements, steps=steps, threads=r.info["threads"],
-                loop_element_steps_per_s=statistics.median(loop),
-                kernel_element_evals_per_s=statistics.median(kern),
-                loop_over_kernel=statistics.median(loop) / statistics.median(kern),
-                critical_time_step_s=dtc, time_step_force_evals=s0.info["time_step_force_evals"])
+    return dict(
+        elements=m.mesh.n_elements,
+        steps=steps,
+        threads=r.info["threads"],
+        loop_element_steps_per_s=statistics.median(loop),
+        kernel_element_evals_per_s=statistics.median(kern),
+        loop_over_kernel=statistics.median(loop) / statistics.median(kern),
+        critical_time_step_s=dtc,
+        time_step_force_evals=s0.info["time_step_force_evals"],
+    )
 
 
 def compare(n: int, steps: int, rounds: int, threads):
@@ -80,6 +87,7 @@ def compare(n: int, steps: int, rounds: int, threads):
     import numba
 
     from solidshell.solvers.explicit import Integrator
+
     prob = hung_sheet(n)
     dtc = explicit.run(prob, {"t_end": 1e-5, "threads": threads}).info["critical_time_step"]
     s = {"t_end": 10 * steps * rounds * dtc, "critical_time_step": dtc, "sample_every": 100}
@@ -87,9 +95,9 @@ def compare(n: int, steps: int, rounds: int, threads):
     if threads:
         numba.set_num_threads(threads)
     integ = {"old": Integrator(prob, s), "fused": Integrator(prob, s)}
-    integ["old"].forces.fused = None          # the previous path: model.internal_force + central_step
+    integ["old"].forces.fused = None  # the previous path: model.internal_force + central_step
     for it in integ.values():
-        it.advance(2)                          # compile / warm
+        it.advance(2)  # compile / warm
     wall = {k: [] for k in integ}
     cpu = {k: [] for k in integ}
     for _ in range(rounds):
@@ -104,11 +112,21 @@ def compare(n: int, steps: int, rounds: int, threads):
     M = prob.model.mesh.n_elements
     rate = {k: M * steps / statistics.median(wall[k]) for k in integ}
     rate_cpu = {k: M * steps / statistics.median(cpu[k]) for k in integ}
-    return dict(elements=M, steps_per_round=steps, rounds=rounds, threads=numba.get_num_threads() if not threads else threads,
-                old_el_steps_per_s=rate["old"], fused_el_steps_per_s=rate["fused"],
-                old_el_steps_per_cpu_s=rate_cpu["old"], fused_el_steps_per_cpu_s=rate_cpu["fused"],
-                ratio_wall=rate["fused"] / rate["old"], ratio_cpu=rate_cpu["fused"] / rate_cpu["old"],
-                state_rel_diff=diff, total_steps=integ["old"].state.step, loadavg=os.getloadavg())
+    return dict(
+        elements=M,
+        steps_per_round=steps,
+        rounds=rounds,
+        threads=numba.get_num_threads() if not threads else threads,
+        old_el_steps_per_s=rate["old"],
+        fused_el_steps_per_s=rate["fused"],
+        old_el_steps_per_cpu_s=rate_cpu["old"],
+        fused_el_steps_per_cpu_s=rate_cpu["fused"],
+        ratio_wall=rate["fused"] / rate["old"],
+        ratio_cpu=rate_cpu["fused"] / rate_cpu["old"],
+        state_rel_diff=diff,
+        total_steps=integ["old"].state.step,
+        loadavg=os.getloadavg(),
+    )
 
 
 def main(argv=None):
@@ -123,21 +141,26 @@ def main(argv=None):
     ap.add_argument("--rounds", type=int, default=5, help="--compare: interleaved rounds per pass")
     a = ap.parse_args(argv)
     import solidshell
+
     print(f"solidshell from {solidshell.__file__}", flush=True)
     out = []
     if a.compare:
         import os
+
         for p in range(a.passes):
             for n in a.sizes:
                 print(f"load average before: {os.getloadavg()}", flush=True)
                 r = compare(n, a.steps, a.rounds, a.threads)
                 r["pass"] = p + 1
                 out.append(r)
-                print(f"pass {p + 1}  {n}x{n} ({r['elements']} quads, {r['threads']} thr, {r['total_steps']} steps each): "
-                      f"old {r['old_el_steps_per_s']:.3g} / fused {r['fused_el_steps_per_s']:.3g} el-steps/s "
-                      f"(ratio {r['ratio_wall']:.2f}); per CPU-second old {r['old_el_steps_per_cpu_s']:.3g} / fused "
-                      f"{r['fused_el_steps_per_cpu_s']:.3g} (ratio {r['ratio_cpu']:.2f}); max |D_fused - D_old| / "
-                      f"max |D_old| = {r['state_rel_diff']:.2e}; load {r['loadavg'][0]:.1f}", flush=True)
+                print(
+                    f"pass {p + 1}  {n}x{n} ({r['elements']} quads, {r['threads']} thr, {r['total_steps']} steps each): "
+                    f"old {r['old_el_steps_per_s']:.3g} / fused {r['fused_el_steps_per_s']:.3g} el-steps/s "
+                    f"(ratio {r['ratio_wall']:.2f}); per CPU-second old {r['old_el_steps_per_cpu_s']:.3g} / fused "
+                    f"{r['fused_el_steps_per_cpu_s']:.3g} (ratio {r['ratio_cpu']:.2f}); max |D_fused - D_old| / "
+                    f"max |D_old| = {r['state_rel_diff']:.2e}; load {r['loadavg'][0]:.1f}",
+                    flush=True,
+                )
         if a.json:
             with open(a.json, "w") as fh:
                 json.dump(out, fh, indent=1)
@@ -147,10 +170,12 @@ def main(argv=None):
             r = measure(n, a.steps, a.repeats, a.threads)
             r["pass"] = p + 1
             out.append(r)
-            print(f"pass {p + 1}  {n:>3}x{n:<3} ({r['elements']:>5} quads, {r['threads']} thr): loop "
-                  f"{r['loop_element_steps_per_s']:.3g} el-steps/s, kernel {r['kernel_element_evals_per_s']:.3g} "
-                  f"el/s, loop/kernel {r['loop_over_kernel']:.2f}, dt_crit {r['critical_time_step_s']:.3g} s",
-                  flush=True)
+            print(
+                f"pass {p + 1}  {n:>3}x{n:<3} ({r['elements']:>5} quads, {r['threads']} thr): loop "
+                f"{r['loop_element_steps_per_s']:.3g} el-steps/s, kernel {r['kernel_element_evals_per_s']:.3g} "
+                f"el/s, loop/kernel {r['loop_over_kernel']:.2f}, dt_crit {r['critical_time_step_s']:.3g} s",
+                flush=True,
+            )
     if a.json:
         with open(a.json, "w") as fh:
             json.dump(out, fh, indent=1)

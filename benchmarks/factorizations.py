@@ -20,8 +20,8 @@ import numpy as np
 
 
 def tangent(density):
-    from solidshell.scenes.build import build_problem, build_scene_mesh
     from solidshell.scenes import load
+    from solidshell.scenes.build import build_problem, build_scene_mesh
     from solidshell.solvers.static.system import System
 
     sc = load("square-pedestal")
@@ -43,8 +43,11 @@ def main(argv=None):
     if len(kinds) == 1:
         print(f"PARDISO not compared: {pardiso.unavailable_reason()}")
     print(f"load average before: {' '.join(open('/proc/loadavg').read().split()[:3])}")
-    print("| free dofs (mesh) | " + " | ".join(f"{k} factor / solve [ms]" for k in kinds)
-          + " | factor ratio | max |dx| / |x| |")
+    print(
+        "| free dofs (mesh) | "
+        + " | ".join(f"{k} factor / solve [ms]" for k in kinds)
+        + " | factor ratio | max |dx| / |x| |"
+    )
     print("|---" * (len(kinds) + 3) + "|")
     for d in a.meshes:
         A = tangent(d)
@@ -68,11 +71,16 @@ def main(argv=None):
         med = {k: (1e3 * np.median(tf[k]), 1e3 * np.median(ts[k])) for k in kinds}
         ratio = med[kinds[-1]][0] / med["cholmod"][0]
         dx = max(np.abs(x[k] - x["cholmod"]).max() for k in kinds) / np.abs(x["cholmod"]).max()
-        print(f"| {n} ({d}) | " + " | ".join(f"{med[k][0]:.2f} / {med[k][1]:.2f}" for k in kinds)
-              + f" | {ratio:.2f} | {dx:.1e} |")
-    print(f"load average after: {' '.join(open('/proc/loadavg').read().split()[:3])}; "
-          f"threads: NUMBA_NUM_THREADS={os.environ.get('NUMBA_NUM_THREADS', 'default')}, "
-          "PARDISO sequential")
+        print(
+            f"| {n} ({d}) | "
+            + " | ".join(f"{med[k][0]:.2f} / {med[k][1]:.2f}" for k in kinds)
+            + f" | {ratio:.2f} | {dx:.1e} |"
+        )
+    print(
+        f"load average after: {' '.join(open('/proc/loadavg').read().split()[:3])}; "
+        f"threads: NUMBA_NUM_THREADS={os.environ.get('NUMBA_NUM_THREADS', 'default')}, "
+        "PARDISO sequential"
+    )
 
 
 if __name__ == "__main__":

@@ -26,8 +26,8 @@ from numba import get_num_threads
 from solidshell.adapt.background import BackgroundMesh
 from solidshell.adapt.forest import AdaptiveMesh
 from solidshell.elements import core, lanes_tri
-from solidshell.scenes.build import build_problem, build_scene_mesh
 from solidshell.scenes import load
+from solidshell.scenes.build import build_problem, build_scene_mesh
 from solidshell.solvers.explicit.fused import FusedForces
 
 
@@ -42,7 +42,7 @@ def adapted_problem():
         f.split(sel[rng.random(len(sel)) < 0.45])
     act = f.active_mesh()
     m = act.mesh
-    coarse = act.elem_leaf[:len(m.quads), 0] < 3
+    coarse = act.elem_leaf[: len(m.quads), 0] < 3
     prob = build_problem(sc, m, membrane=np.where(coarse, "ans", "full").tolist())
     D6 = np.zeros((m.n_nodes, 6))
     D6[:, 2] = -0.01 * rng.random(m.n_nodes)
@@ -64,13 +64,33 @@ def part_timers(ff, D6):
     for (kind, b, pk, _, _), (fe, we) in zip(ff.parts, ff.views):
         if kind == "lanes":
             label = pk["kernel"].__name__
-            fn = (lambda pk=pk, fe=fe, we=we: pk["kernel"](
-                ff.X, ff.Xn, D6, pk["conn"], pk["Cmb"], pk["Cs"], pk["Cz"], pk["r_z"], ff.quasi, ff.mu, pk["xs"],
-                pk["fe"], we, pk["bounds"], pk["dest"], ff.F_all, False))
+
+            def fn(pk=pk, fe=fe, we=we):
+                return pk["kernel"](
+                    ff.X,
+                    ff.Xn,
+                    D6,
+                    pk["conn"],
+                    pk["Cmb"],
+                    pk["Cs"],
+                    pk["Cz"],
+                    pk["r_z"],
+                    ff.quasi,
+                    ff.mu,
+                    pk["xs"],
+                    pk["fe"],
+                    we,
+                    pk["bounds"],
+                    pk["dest"],
+                    ff.F_all,
+                    False,
+                )
         else:
             label = f"core({b.module.__name__.rsplit('.', 1)[1]})"
-            fn = lambda b=b, fe=fe, we=we: core.energy_force(*b.args(xo, xn, Uc, ff.quasi, ff.mu), fe, we,
-                                                              get_num_threads())
+
+            def fn(b=b, fe=fe, we=we):
+                return core.energy_force(*b.args(xo, xn, Uc, ff.quasi, ff.mu), fe, we, get_num_threads())
+
         out.append((label, len(b.conn), fn))
     return out
 
@@ -90,10 +110,14 @@ def main():
         ff.element_pass(D6)
     F0, E0 = ff_core.internal(D6.ravel(), True)
     F1, E1 = ff_lanes.internal(D6.ravel(), True)
-    print(f"nodes {m.n_nodes}, quads {len(m.quads)}, triangles {len(m.tris)}, numba threads {get_num_threads()}, "
-          f"load before {os.getloadavg()}")
-    print(f"lanes vs core triangles: |dF| / |F| = {np.abs(F1 - F0).max() / np.abs(F0).max():.1e}, "
-          f"dE / E = {abs(E1 - E0) / abs(E0):.1e}")
+    print(
+        f"nodes {m.n_nodes}, quads {len(m.quads)}, triangles {len(m.tris)}, numba threads {get_num_threads()}, "
+        f"load before {os.getloadavg()}"
+    )
+    print(
+        f"lanes vs core triangles: |dF| / |F| = {np.abs(F1 - F0).max() / np.abs(F0).max():.1e}, "
+        f"dE / E = {abs(E1 - E0) / abs(E0):.1e}"
+    )
     rows = {}
     timers = {name: part_timers(ff, D6) for name, ff in (("core", ff_core), ("lanes", ff_lanes))}
     for _ in range(a.passes):

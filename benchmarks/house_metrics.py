@@ -95,6 +95,7 @@ def _cycles(graph: dict[str, set[str]]) -> list[list[str]]:
                 out.append(sorted(comp))
 
     import sys
+
     sys.setrecursionlimit(10000)
     for v in graph:
         if v not in index:
@@ -121,8 +122,14 @@ def measure(root: Path) -> dict:
                 nparams = len(a.posonlyargs) + len(a.args) + len(a.kwonlyargs)
                 if a.args and a.args[0].arg in ("self", "cls"):
                     nparams -= 1
-                funcs.append({"where": f"{rel}:{node.lineno}", "name": node.name,
-                              "lines": node.end_lineno - node.lineno + 1, "params": nparams})
+                funcs.append(
+                    {
+                        "where": f"{rel}:{node.lineno}",
+                        "name": node.name,
+                        "lines": node.end_lineno - node.lineno + 1,
+                        "params": nparams,
+                    }
+                )
             elif isinstance(node, ast.Call) and getattr(node.func, "id", None) in ("hasattr", "getattr"):
                 probes.append(f"{rel}:{node.lineno}")
             elif isinstance(node, (ast.Tuple, ast.List, ast.Set)):
@@ -131,8 +138,7 @@ def measure(root: Path) -> dict:
                     kind_lists.append(f"{rel}:{node.lineno}")
     funcs.sort(key=lambda f: -f["lines"])
     out_dir = root / "benchmarks" / "out"
-    docs = {str(p.relative_to(root)): len(p.read_text().splitlines())
-            for p in sorted((root / "docs").rglob("*.md"))}
+    docs = {str(p.relative_to(root)): len(p.read_text().splitlines()) for p in sorted((root / "docs").rglob("*.md"))}
     return {
         "longest_functions": funcs[:15],
         "functions_over_100_lines": sum(f["lines"] > 100 for f in funcs),
@@ -162,14 +168,19 @@ def main(argv=None) -> int:
     for f in m["functions_over_10_params"]:
         print(f"  {f['params']:2d} params  {f['name']}  ({f['where']})")
     print(f"hasattr/getattr calls: {m['hasattr_getattr_calls']}")
-    print(f"places the solver-kind list appears: {len(m['solver_kind_list_places'])}  "
-          + " ".join(m["solver_kind_list_places"]))
+    print(
+        f"places the solver-kind list appears: {len(m['solver_kind_list_places'])}  "
+        + " ".join(m["solver_kind_list_places"])
+    )
     print(f"import cycles: {len(m['import_cycles'])}")
     for c in m["import_cycles"]:
         print("  " + " <-> ".join(c))
     print(f"files under benchmarks/out: {m['benchmarks_out_files']}")
-    print("docs lines: " + ", ".join(f"{Path(k).name} {v}" for k, v in m["docs_lines"].items())
-          + f"; total {sum(m['docs_lines'].values())}")
+    print(
+        "docs lines: "
+        + ", ".join(f"{Path(k).name} {v}" for k, v in m["docs_lines"].items())
+        + f"; total {sum(m['docs_lines'].values())}"
+    )
     if a.json:
         Path(a.json).write_text(json.dumps(m, indent=1))
     return 0

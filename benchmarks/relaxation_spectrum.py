@@ -21,8 +21,8 @@ from scipy.sparse.linalg import eigsh
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from solidshell.run import run_scene  # noqa: E402
-from solidshell.scenes.build import build_problem, build_scene_mesh  # noqa: E402
 from solidshell.scenes import load  # noqa: E402
+from solidshell.scenes.build import build_problem, build_scene_mesh  # noqa: E402
 from solidshell.solvers.explicit import scaled_mass  # noqa: E402
 
 

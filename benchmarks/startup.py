@@ -37,8 +37,12 @@ def one(tree: Path, extra: list[str]) -> tuple[float, float]:
     out = tempfile.mkdtemp(prefix="startup_")
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
-    p = subprocess.run([sys.executable, "-m", "solidshell", "run", "strip-warp", "--out", out,
-                        "--no-progress", *extra], cwd=str(tree), capture_output=True, text=True)
+    p = subprocess.run(
+        [sys.executable, "-m", "solidshell", "run", "strip-warp", "--out", out, "--no-progress", *extra],
+        cwd=str(tree),
+        capture_output=True,
+        text=True,
+    )
     wall = time.perf_counter() - t0
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     shutil.rmtree(out, ignore_errors=True)
@@ -60,7 +64,7 @@ def floor(repeats: int) -> dict:
     """Median wall / CPU of the FLOOR snippets and of the strip run, interleaved ``repeats`` times."""
     d = Path(tempfile.mkdtemp(prefix="startup_floor_"))
     (d / "kernel.py").write_text(KERNEL)
-    subprocess.run([sys.executable, "-c", FLOOR["+ one cached kernel"]], cwd=d, check=True)   # cache it
+    subprocess.run([sys.executable, "-c", FLOOR["+ one cached kernel"]], cwd=d, check=True)  # cache it
 
     def snippet(code):
         before = resource.getrusage(resource.RUSAGE_CHILDREN)
@@ -69,8 +73,10 @@ def floor(repeats: int) -> dict:
         after = resource.getrusage(resource.RUSAGE_CHILDREN)
         return time.perf_counter() - t0, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
 
-    runs = {**{k: (lambda c=c: snippet(c)) for k, c in FLOOR.items()},
-            "strip-warp --no-pictures": lambda: one(ROOT, ["--no-pictures"])}
+    runs = {
+        **{k: (lambda c=c: snippet(c)) for k, c in FLOOR.items()},
+        "strip-warp --no-pictures": lambda: one(ROOT, ["--no-pictures"]),
+    }
     runs["strip-warp --no-pictures"]()
     res = {k: [] for k in runs}
     for i in range(repeats):
@@ -96,10 +102,12 @@ def main(argv=None):
         return floor(a.repeats)
     A, B = Path(a.a).resolve(), Path(a.b).resolve()
     variants = {
-        "A pictures": (A, []), "B pictures": (B, []),
-        "A no pictures": (A, ["--set", "output.pictures=[]"]), "B --no-pictures": (B, ["--no-pictures"]),
+        "A pictures": (A, []),
+        "B pictures": (B, []),
+        "A no pictures": (A, ["--set", "output.pictures=[]"]),
+        "B --no-pictures": (B, ["--no-pictures"]),
     }
-    one(B, ["--no-pictures"])                      # compile/cache warm-up of both trees' kernels
+    one(B, ["--no-pictures"])  # compile/cache warm-up of both trees' kernels
     one(A, ["--set", "output.pictures=[]"])
     res = {k: [] for k in variants}
     for i in range(a.repeats):
@@ -107,8 +115,10 @@ def main(argv=None):
             load = os.getloadavg()
             w, c = one(tree, extra)
             res[k].append((w, c))
-            print(f"run {i + 1} {k:16s} wall {w:6.2f} s  cpu {c:5.2f} s  load {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}",
-                  flush=True)
+            print(
+                f"run {i + 1} {k:16s} wall {w:6.2f} s  cpu {c:5.2f} s  load {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}",
+                flush=True,
+            )
     med = {k: (statistics.median(w for w, _ in v), statistics.median(c for _, c in v)) for k, v in res.items()}
     print(f"\nA = {A}\nB = {B}")
     for k, (w, c) in med.items():

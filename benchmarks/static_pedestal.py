@@ -43,29 +43,41 @@ def main(argv=None):
     model = Model(mesh, Fabric.wool())
     fixed, P = clamp(mesh, "clamped"), gravity_loads(model)
     ped = np.pi * 12.7**2 / 4
-    model.force_and_tangent(np.zeros((mesh.n_nodes, 6)))    # warm-up (numba), not timed
+    model.force_and_tangent(np.zeros((mesh.n_nodes, 6)))  # warm-up (numba), not timed
     rows = []
     t_ref = None
     print(f"disc 25.4 on pedestal 12.7 cm, mesh {a.mesh} ({mesh.n_elements} quads)")
-    print(f"{'solver':26} {'conv':>5} {'iters':>6} {'factor':>6} {'time [s]':>8} {'x dflt':>6} "
-          f"{'PD':>5} {'min eig':>9} {'DC':>6} {'folds':>5}")
+    print(
+        f"{'solver':26} {'conv':>5} {'iters':>6} {'factor':>6} {'time [s]':>8} {'x dflt':>6} "
+        f"{'PD':>5} {'min eig':>9} {'DC':>6} {'folds':>5}"
+    )
     for name, kw in SETTINGS:
         t0 = time.perf_counter()
         r = solve_static(model, fixed, P, **kw)
         wall = time.perf_counter() - t0
         t_ref = wall if t_ref is None else t_ref
         s = drape_summary(mesh, r.U, pedestal_area=ped, center=(0.0, 0.0))
-        row = dict(solver=name, converged=r.converged, iterations=r.info["iterations"],
-                   factorizations=r.info["factorizations"], wall_time_s=wall,
-                   time_ratio_to_default=wall / t_ref, positive_definite=r.info.get("positive_definite"),
-                   min_tangent_eigenvalue=r.info.get("min_tangent_eigenvalue"),
-                   drape_coefficient=s["drape_coefficient"], fold_count=s["fold_count"])
+        row = dict(
+            solver=name,
+            converged=r.converged,
+            iterations=r.info["iterations"],
+            factorizations=r.info["factorizations"],
+            wall_time_s=wall,
+            time_ratio_to_default=wall / t_ref,
+            positive_definite=r.info.get("positive_definite"),
+            min_tangent_eigenvalue=r.info.get("min_tangent_eigenvalue"),
+            drape_coefficient=s["drape_coefficient"],
+            fold_count=s["fold_count"],
+        )
         rows.append(row)
         me = row["min_tangent_eigenvalue"]
-        print(f"{name:26} {str(r.converged):>5} {row['iterations']:6d} {row['factorizations']:6d} "
-              f"{wall:8.2f} {wall / t_ref:6.2f} {str(row['positive_definite']):>5} "
-              f"{(me if me is not None else float('nan')):9.2e} {row['drape_coefficient']:6.3f} "
-              f"{row['fold_count']:5d}", flush=True)
+        print(
+            f"{name:26} {str(r.converged):>5} {row['iterations']:6d} {row['factorizations']:6d} "
+            f"{wall:8.2f} {wall / t_ref:6.2f} {str(row['positive_definite']):>5} "
+            f"{(me if me is not None else float('nan')):9.2e} {row['drape_coefficient']:6.3f} "
+            f"{row['fold_count']:5d}",
+            flush=True,
+        )
     if a.json:
         with open(a.json, "w") as fh:
             json.dump(rows, fh, indent=1)

@@ -33,7 +33,7 @@ def main(argv=None):
     ap.add_argument("--json", default=None)
     a = ap.parse_args(argv)
     ref = references.elastica_strip()["strip"]["warp"]["tip_z"]
-    solve_strip(a.meshes[0], "warp")     # warm-up: numba compilation / cache load, not timed
+    solve_strip(a.meshes[0], "warp")  # warm-up: numba compilation / cache load, not timed
     rows = []
     print(f"{'solver':42} {'mesh':>6} {'tip err':>9} {'iters':>6} {'solves':>6} {'time [s]':>8} {'x default':>9}")
     for n in a.meshes:
@@ -45,12 +45,24 @@ def main(argv=None):
             r = sol["result"]
             err = (sol["tip_z"] - ref) / ref
             t_default = wall if t_default is None else t_default
-            rows.append(dict(solver=name, mesh=f"{n}x1", rel_error=err, converged=r.converged,
-                             iterations=r.info["iterations"], linear_solves=r.info["linear_solves"],
-                             wall_time_s=wall, time_ratio_to_default=wall / t_default))
-            print(f"{name:42} {n:>4}x1 {err:9.2e} {r.info['iterations']:6d} "
-                  f"{r.info['linear_solves']:6d} {wall:8.2f} {wall / t_default:9.2f}"
-                  + ("" if r.converged else "  NOT CONVERGED"), flush=True)
+            rows.append(
+                dict(
+                    solver=name,
+                    mesh=f"{n}x1",
+                    rel_error=err,
+                    converged=r.converged,
+                    iterations=r.info["iterations"],
+                    linear_solves=r.info["linear_solves"],
+                    wall_time_s=wall,
+                    time_ratio_to_default=wall / t_default,
+                )
+            )
+            print(
+                f"{name:42} {n:>4}x1 {err:9.2e} {r.info['iterations']:6d} "
+                f"{r.info['linear_solves']:6d} {wall:8.2f} {wall / t_default:9.2f}"
+                + ("" if r.converged else "  NOT CONVERGED"),
+                flush=True,
+            )
     if a.json:
         with open(a.json, "w") as fh:
             json.dump(rows, fh, indent=1)

@@ -68,19 +68,32 @@ def run_once(args: list[str], out: str) -> dict:
     load = os.getloadavg()[0]
     steal0 = steal_seconds()
     t0 = time.perf_counter()
-    p = subprocess.run([sys.executable, "-m", "solidshell", "run", *args, "--no-pictures", "--no-progress",
-                        "--out", out], cwd=ROOT, capture_output=True, text=True)
+    p = subprocess.run(
+        [sys.executable, "-m", "solidshell", "run", *args, "--no-pictures", "--no-progress", "--out", out],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+    )
     wall = time.perf_counter() - t0
     steal1 = steal_seconds()
     steal = None if steal0 is None or steal1 is None else (steal1 - steal0) / (wall * (os.cpu_count() or 1))
     if p.returncode != 0:
-        raise SystemExit(f"solidshell run {' '.join(args)} exited with {p.returncode}: "
-                         f"{(p.stderr or p.stdout).strip().splitlines()[-1:]}")
+        raise SystemExit(
+            f"solidshell run {' '.join(args)} exited with {p.returncode}: "
+            f"{(p.stderr or p.stdout).strip().splitlines()[-1:]}"
+        )
     s = json.loads((Path(out) / "summary.json").read_text())
-    return {"process_s": wall, "load": load, "steal": steal, "wall_time_s": s["wall_time_s"],
-            "peak_memory_mb": s.get("peak_memory_mb"), "iterations": s.get("iterations"),
-            "steps": s.get("steps"), "drape_coefficient": s.get("drape_coefficient"),
-            "fold_count": s.get("fold_count")}
+    return {
+        "process_s": wall,
+        "load": load,
+        "steal": steal,
+        "wall_time_s": s["wall_time_s"],
+        "peak_memory_mb": s.get("peak_memory_mb"),
+        "iterations": s.get("iterations"),
+        "steps": s.get("steps"),
+        "drape_coefficient": s.get("drape_coefficient"),
+        "fold_count": s.get("fold_count"),
+    }
 
 
 def measure(name: str, repeats: int, tmp: str) -> dict:
@@ -89,15 +102,26 @@ def measure(name: str, repeats: int, tmp: str) -> dict:
     for k in range(repeats):
         r = run_once(args, os.path.join(tmp, f"{name}_{k}"))
         runs.append(r)
-        print(f"  {name} run {k + 1}: {key} {r[key]:.2f} s, process {r['process_s']:.2f} s, "
-              f"load {r['load']:.2f}, stolen {_pct(r['steal'])}", flush=True)
+        print(
+            f"  {name} run {k + 1}: {key} {r[key]:.2f} s, process {r['process_s']:.2f} s, "
+            f"load {r['load']:.2f}, stolen {_pct(r['steal'])}",
+            flush=True,
+        )
     med = statistics.median(r[key] for r in runs)
-    row = {"case": name, "command": "solidshell run " + " ".join(args) + " --no-pictures", "figure": key,
-           "limit": limit, "median": med, "runs": runs, "met": med < limit}
+    row = {
+        "case": name,
+        "command": "solidshell run " + " ".join(args) + " --no-pictures",
+        "figure": key,
+        "limit": limit,
+        "median": med,
+        "runs": runs,
+        "met": med < limit,
+    }
     if name in MEMORY_LIMIT_MB:
         peak = max(r["peak_memory_mb"] for r in runs)
-        row.update(peak_memory_mb=peak, memory_limit_mb=MEMORY_LIMIT_MB[name],
-                   met=row["met"] and peak < MEMORY_LIMIT_MB[name])
+        row.update(
+            peak_memory_mb=peak, memory_limit_mb=MEMORY_LIMIT_MB[name], met=row["met"] and peak < MEMORY_LIMIT_MB[name]
+        )
     return row
 
 
@@ -112,8 +136,10 @@ def state(r: dict) -> str:
 
 
 def table(rows: list[dict]) -> str:
-    lines = ["| case | command | target | median | runs (load before, CPU time stolen during) | state | met |",
-             "|---|---|---|---|---|---|---|"]
+    lines = [
+        "| case | command | target | median | runs (load before, CPU time stolen during) | state | met |",
+        "|---|---|---|---|---|---|---|",
+    ]
     for row in rows:
         target = f"{row['figure']} < {row['limit']:g} s"
         runs = ", ".join(f"{r[row['figure']]:.2f} ({r['load']:.2f}, {_pct(r['steal'])})" for r in row["runs"])
@@ -121,8 +147,10 @@ def table(rows: list[dict]) -> str:
             target += f", memory < {row['memory_limit_mb']:g} MB"
             runs += f"; peak {row['peak_memory_mb']:.1f} MB"
         states = "; ".join(sorted({state(r) for r in row["runs"]}))
-        lines.append(f"| {row['case']} | `{row['command']}` | {target} | {row['median']:.2f} s | {runs} | "
-                     f"{states} | {'yes' if row['met'] else 'no'} |")
+        lines.append(
+            f"| {row['case']} | `{row['command']}` | {target} | {row['median']:.2f} s | {runs} | "
+            f"{states} | {'yes' if row['met'] else 'no'} |"
+        )
     return "\n".join(lines)
 
 
@@ -135,8 +163,7 @@ def main(argv=None) -> int:
     names = [c.strip() for c in a.cases.split(",") if c.strip()]
     bad = [c for c in names if c not in CASES]
     if bad or a.repeats < 1:
-        print(f"unknown case(s) {bad}; known: {', '.join(CASES)}" if bad else "--repeats must be >= 1",
-              file=sys.stderr)
+        print(f"unknown case(s) {bad}; known: {', '.join(CASES)}" if bad else "--repeats must be >= 1", file=sys.stderr)
         return 2
     started = time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime())
     rows = []
@@ -144,8 +171,10 @@ def main(argv=None) -> int:
         for name in names:
             print(f"{name}:", flush=True)
             rows.append(measure(name, a.repeats, tmp))
-    md = (f"Issue 13 targets, {started}, {a.repeats} runs each, numba threads "
-          f"{os.environ.get('NUMBA_NUM_THREADS', 'default')}\n\n{table(rows)}\n")
+    md = (
+        f"Issue 13 targets, {started}, {a.repeats} runs each, numba threads "
+        f"{os.environ.get('NUMBA_NUM_THREADS', 'default')}\n\n{table(rows)}\n"
+    )
     print("\n" + md)
     out = Path(a.out)
     out.parent.mkdir(parents=True, exist_ok=True)

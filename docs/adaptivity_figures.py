@@ -16,7 +16,6 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.patches import Polygon  # noqa: E402
 
-from solidshell.adapt import AdaptiveMesh, BackgroundMesh  # noqa: E402
 from solidshell.adapt.transition import CENTRE, PATTERN_NAMES, TABLE, choose_variant, element_quality, local_points  # noqa: E402
 from solidshell.meshing import build_mesh  # noqa: E402
 
@@ -55,9 +54,15 @@ def patterns():
         lean = CENTRE not in np.ravel(q) and CENTRE not in np.ravel(t)
         axes[1, j].set_title(f"{pid}: variant {v + 1}" + (" (no centre)" if lean else ""), fontsize=10)
     axes[0, 6].axis("off")
-    axes[0, 6].text(0.0, 0.5, "refined edges get their\nmid-edge node (dots);\ntriangles in red;\n"
-                    "numbers: min angle\nof each element;\n\"no centre\": the\nvariants adapt.transitions\n= fewest_nodes takes", fontsize=9, va="center",
-                    transform=axes[0, 6].transAxes)
+    axes[0, 6].text(
+        0.0,
+        0.5,
+        "refined edges get their\nmid-edge node (dots);\ntriangles in red;\n"
+        'numbers: min angle\nof each element;\n"no centre": the\nvariants adapt.transitions\n= fewest_nodes takes',
+        fontsize=9,
+        va="center",
+        transform=axes[0, 6].transAxes,
+    )
     for j, (pid, mask) in enumerate(CANON.items()):
         # the rotation of each pattern whose chosen variant has the smallest angle on this parent
         best = None
@@ -68,32 +73,41 @@ def patterns():
             if best is None or a < best[0]:
                 best = (a, q, t)
         draw(axes[2, j], tp, best[1], best[2], COLOURS[pid], numbers=True)
-        axes[2, j].set_title(f"{pid}: worst rotation (\"quality\")", fontsize=9)
+        axes[2, j].set_title(f'{pid}: worst rotation ("quality")', fontsize=9)
     axes[2, 6].axis("off")
     for ax in axes.ravel():
         ax.autoscale_view()
-    fig.suptitle("Hybrid macro-transition elements (level i+1/2): rows 1-2 unit-square parent, "
-                 "row 3 the worst parent of the square-pedestal 6x2x4 mesh", fontsize=11)
+    fig.suptitle(
+        "Hybrid macro-transition elements (level i+1/2): rows 1-2 unit-square parent, "
+        "row 3 the worst parent of the square-pedestal 6x2x4 mesh",
+        fontsize=11,
+    )
     fig.subplots_adjust(left=0.01, right=0.99, top=0.9, bottom=0.02, hspace=0.25)
     fig.savefig(OUT / "transition_patterns.png", dpi=110)
 
 
 def adapted():
     import sys
+
     sys.path.insert(0, str(Path(__file__).parents[1] / "tests"))
     from test_adapt_mesh import FLAT8, every_pattern_state
+
     am, a = every_pattern_state(FLAT8)
     mesh = a.mesh
     fig, ax = plt.subplots(figsize=(6.5, 6.5))
     cells = list(mesh.quads) + list(mesh.tris)
     for c, k in zip(cells, a.elem_kind):
-        ax.add_patch(Polygon(mesh.nodes[c, :2], closed=True, fc=COLOURS[int(k)] if len(c) == 4 else "#fb6a4a",
-                             ec="k", lw=0.7))
+        ax.add_patch(
+            Polygon(mesh.nodes[c, :2], closed=True, fc=COLOURS[int(k)] if len(c) == 4 else "#fb6a4a", ec="k", lw=0.7)
+        )
     ax.set_aspect("equal")
     ax.autoscale_view()
     ax.axis("off")
-    ax.set_title("Adapted 8x8 jittered grid (levels 0-2) holding every pattern\n"
-                 "grey plain, blue 1, green 2, orange 3, purple 4, pink 5, red triangles", fontsize=10)
+    ax.set_title(
+        "Adapted 8x8 jittered grid (levels 0-2) holding every pattern\n"
+        "grey plain, blue 1, green 2, orange 3, purple 4, pink 5, red triangles",
+        fontsize=10,
+    )
     fig.tight_layout()
     fig.savefig(OUT / "adapted_mesh.png", dpi=110)
 
@@ -127,6 +141,7 @@ def series_frames(out: Path, runs: dict, times) -> None:
 
 if __name__ == "__main__":
     import argparse
+
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--series", metavar="OUT.png", help="frames of run folders instead (LABEL=DIR ...)")
     ap.add_argument("runs", nargs="*", help="LABEL=RUN_DIR, with --series")

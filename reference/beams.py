@@ -18,8 +18,9 @@ def second_moment(b: float, h: float) -> float:
     return b * h**3 / 12.0
 
 
-def timoshenko_tip_deflection(P: float, L: float, E: float, b: float, h: float, nu: float = 0.0,
-                              kappa: float = 5.0 / 6.0) -> float:
+def timoshenko_tip_deflection(
+    P: float, L: float, E: float, b: float, h: float, nu: float = 0.0, kappa: float = 5.0 / 6.0
+) -> float:
     """Tip deflection of a cantilever under an end shear force P (Timoshenko beam):
     delta = P L^3 / (3 E I) + P L / (kappa G A).
 
@@ -36,8 +37,9 @@ def euler_bernoulli_tip_deflection(P: float, L: float, E: float, b: float, h: fl
     return P * L**3 / (3.0 * E * second_moment(b, h))
 
 
-def discrete_timoshenko_tip_deflection(P: float, L: float, E: float, b: float, h: float, n: int,
-                                       nu: float = 0.0, kappa: float = 5.0 / 6.0) -> float:
+def discrete_timoshenko_tip_deflection(
+    P: float, L: float, E: float, b: float, h: float, n: int, nu: float = 0.0, kappa: float = 5.0 / 6.0
+) -> float:
     """Tip deflection of n equal 2-node Timoshenko beam elements with linear w, theta and a constant
     (one-point / mid-element tied) shear strain, under an end load.  Such a mesh is nodally exact for
     a Timoshenko beam whose shear flexibility is *reduced* by L_e^2 / (12 E I) per unit length:
@@ -51,8 +53,9 @@ def discrete_timoshenko_tip_deflection(P: float, L: float, E: float, b: float, h
     return timoshenko_tip_deflection(P, L, E, b, h, nu, kappa) - P * L * Le**2 / (12.0 * E * second_moment(b, h))
 
 
-def end_moment_small(M: float, L: float, E: float, b: float, h: float, nu: float = 0.0,
-                     anticlastic: str = "free") -> dict:
+def end_moment_small(
+    M: float, L: float, E: float, b: float, h: float, nu: float = 0.0, anticlastic: str = "free"
+) -> dict:
     """Small-deflection pure bending of a cantilever by an end moment M (total, about the width axis).
 
     anticlastic = "free": the width edges are free; the uniform moment state m_x = M/b, m_y = 0 is an
@@ -115,9 +118,14 @@ if __name__ == "__main__":
         t = timoshenko_tip_deflection(P, L, E, b, h)
         eb = euler_bernoulli_tip_deflection(P, L, E, b, h)
         d8 = discrete_timoshenko_tip_deflection(P, L, E, b, h, 8)
-        print(f"L/h={ratio:6d}: Timoshenko {t:.6e}  shear share {(t - eb) / t:.2e}  8-element beam / exact - 1 = {d8 / t - 1:+.4e}")
+        print(
+            f"L/h={ratio:6d}: Timoshenko {t:.6e}  shear share {(t - eb) / t:.2e}  8-element beam / exact - 1 = {d8 / t - 1:+.4e}"
+        )
     print("end moment, nu=0.3, free:", end_moment_small(M, L, E, b, 0.1, 0.3, "free"))
     print("end moment, nu=0.3, restrained:", end_moment_small(M, L, E, b, 0.1, 0.3, "restrained"))
-    print("thickness-locking factors nu=0.3 (free, restrained):", thickness_locking_factor(0.3),
-          thickness_locking_factor(0.3, "restrained"))
+    print(
+        "thickness-locking factors nu=0.3 (free, restrained):",
+        thickness_locking_factor(0.3),
+        thickness_locking_factor(0.3, "restrained"),
+    )
     print("circle, M = pi E I / L:", end_moment_circle(math.pi * E * second_moment(b, 0.1) / L, L, E, b, 0.1))

@@ -55,9 +55,12 @@ def _rhs(q, w, P, B, L):
     and dm/ds = -x'(s) (int_s^L w dsigma + P) = -(w (L - s) + P) cos phi  (Leibniz rule; the
     boundary term w (x(s) - x(s)) vanishes).  Boundary conditions: x = z = phi = 0 at s = 0
     (horizontal clamp), m(L) = 0 (free end)."""
+
     def f(s, y):
-        return np.vstack([np.cos(y[2]), -np.sin(y[2]), y[3] / B,
-                          -(w * (L - s) + P) * np.cos(y[2])]).reshape(np.shape(y))
+        return np.vstack([np.cos(y[2]), -np.sin(y[2]), y[3] / B, -(w * (L - s) + P) * np.cos(y[2])]).reshape(
+            np.shape(y)
+        )
+
     return f
 
 
@@ -78,9 +81,19 @@ def solve_bvp_elastica(w, P, B, L, n_out=101, tol=1e-10):
         raise RuntimeError(f"solve_bvp failed: {sol.message}")
     so = np.linspace(0.0, L, n_out)
     y = sol.sol(so)
-    return {"s": so, "x": y[0], "z": y[1], "phi": y[2], "m": y[3], "tip_x": float(y[0, -1]),
-            "tip_z": float(y[1, -1]), "tip_phi": float(y[2, -1]), "m0": float(y[3, 0]),
-            "max_rms_residual": float(np.max(sol.rms_residuals)), "n_nodes": int(sol.x.size)}
+    return {
+        "s": so,
+        "x": y[0],
+        "z": y[1],
+        "phi": y[2],
+        "m": y[3],
+        "tip_x": float(y[0, -1]),
+        "tip_z": float(y[1, -1]),
+        "tip_phi": float(y[2, -1]),
+        "m0": float(y[3, 0]),
+        "max_rms_residual": float(np.max(sol.rms_residuals)),
+        "n_nodes": int(sol.x.size),
+    }
 
 
 def solve_shooting_elastica(w, P, B, L, n_out=101, rtol=1e-12):
@@ -94,15 +107,25 @@ def solve_shooting_elastica(w, P, B, L, n_out=101, rtol=1e-12):
     f = fv
 
     def shoot(m0, dense=False):
-        return solve_ivp(f, (0.0, L), [0.0, 0.0, 0.0, m0], method="DOP853", rtol=rtol,
-                         atol=1e-14, t_eval=so if dense else None)
+        return solve_ivp(
+            f, (0.0, L), [0.0, 0.0, 0.0, m0], method="DOP853", rtol=rtol, atol=1e-14, t_eval=so if dense else None
+        )
 
     hi = 0.5 * w * L * L + P * L
     m0 = brentq(lambda m0: shoot(m0).y[3, -1], 0.0, hi, xtol=1e-15, rtol=1e-15, maxiter=200)
     r = shoot(m0, dense=True)
     y = r.y
-    return {"s": so, "x": y[0], "z": y[1], "phi": y[2], "m": y[3], "tip_x": float(y[0, -1]),
-            "tip_z": float(y[1, -1]), "tip_phi": float(y[2, -1]), "m0": float(m0)}
+    return {
+        "s": so,
+        "x": y[0],
+        "z": y[1],
+        "phi": y[2],
+        "m": y[3],
+        "tip_x": float(y[0, -1]),
+        "tip_z": float(y[1, -1]),
+        "tip_phi": float(y[2, -1]),
+        "m0": float(m0),
+    }
 
 
 def heavy_cantilever(B, w, L, n_out=101):
@@ -110,8 +133,7 @@ def heavy_cantilever(B, w, L, n_out=101):
     a = solve_bvp_elastica(w, 0.0, B, L, n_out)
     b = solve_shooting_elastica(w, 0.0, B, L, n_out)
     a["shooting"] = b
-    a["bvp_vs_shooting_max_abs"] = float(max(np.max(np.abs(a["x"] - b["x"])),
-                                             np.max(np.abs(a["z"] - b["z"]))))
+    a["bvp_vs_shooting_max_abs"] = float(max(np.max(np.abs(a["x"] - b["x"])), np.max(np.abs(a["z"] - b["z"]))))
     return a
 
 
@@ -128,6 +150,7 @@ def tip_load_elliptic(alpha):
       w/L = 1 - 2 (E(k) - E(psi1, k)) / sqrt(alpha)
       u/L = 1 - sqrt(2 sin phi0 / alpha)
     phi0 is found by brentq on the first equation (scipy's functions take m = k^2)."""
+
     def g(phi0):
         m = 0.5 * (1.0 + math.sin(phi0))
         psi1 = math.asin(min(1.0, 1.0 / math.sqrt(2.0 * m)))
@@ -157,10 +180,12 @@ def end_moment_cantilever(M, B, L, s=None):
 # ----------------------------------------------------------------------------------- generation
 def generate(path=JSON_PATH, n_out=101):
     out = {
-        "description": ("Planar inextensible elastica references (reference/elastica.py). Heavy "
-                        "cantilever: clamped horizontally at s=0, own weight w per length, bending "
-                        "rigidity B (per width x width). Coordinates: x along the strip, z up; "
-                        "tip_z < 0 is the droop. Units gf, cm."),
+        "description": (
+            "Planar inextensible elastica references (reference/elastica.py). Heavy "
+            "cantilever: clamped horizontally at s=0, own weight w per length, bending "
+            "rigidity B (per width x width). Coordinates: x along the strip, z up; "
+            "tip_z < 0 is the droop. Units gf, cm."
+        ),
         "equations": "x'=cos(phi), z'=-sin(phi), B phi'=m, m'=-(w(L-s)+P)cos(phi); x=z=phi=0 at s=0, m(L)=0",
         "method": "scipy.integrate.solve_bvp tol=1e-10, checked by shooting (solve_ivp DOP853 rtol=1e-12 + brentq)",
         "strip": {},
@@ -171,14 +196,19 @@ def generate(path=JSON_PATH, n_out=101):
         w = WOOL["weight"] * WOOL["width"]
         r = heavy_cantilever(Bw, w, WOOL["L"], n_out)
         out["strip"][cut] = {
-            "B": Bw, "w": w, "L": WOOL["L"], "width": WOOL["width"],
+            "B": Bw,
+            "w": w,
+            "L": WOOL["L"],
+            "width": WOOL["width"],
             "w_L3_over_B": w * WOOL["L"] ** 3 / Bw,
-            "tip_x": r["tip_x"], "tip_z": r["tip_z"], "tip_angle_rad": r["tip_phi"],
+            "tip_x": r["tip_x"],
+            "tip_z": r["tip_z"],
+            "tip_angle_rad": r["tip_phi"],
             "clamp_moment": r["m0"],
             "bvp_vs_shooting_max_abs": r["bvp_vs_shooting_max_abs"],
-            "tip_z_shooting": r["shooting"]["tip_z"], "tip_x_shooting": r["shooting"]["tip_x"],
-            "curve": {"s": r["s"].tolist(), "x": r["x"].tolist(), "z": r["z"].tolist(),
-                      "phi": r["phi"].tolist()},
+            "tip_z_shooting": r["shooting"]["tip_z"],
+            "tip_x_shooting": r["shooting"]["tip_x"],
+            "curve": {"s": r["s"].tolist(), "x": r["x"].tolist(), "z": r["z"].tolist(), "phi": r["phi"].tolist()},
         }
     for alpha, (u_t, w_t, p_t) in MATTIASSON_1981.items():
         r = tip_load_cantilever(alpha)
@@ -202,12 +232,16 @@ def load(path=JSON_PATH):
 if __name__ == "__main__":
     o = generate()
     for cut, d in o["strip"].items():
-        print(f"{cut}: wL^3/B = {d['w_L3_over_B']:.4f}  tip x = {d['tip_x']:.10f}  "
-              f"tip z = {d['tip_z']:.10f} cm  tip angle = {d['tip_angle_rad']:.8f} rad  "
-              f"|BVP - shooting| = {d['bvp_vs_shooting_max_abs']:.2e} cm")
+        print(
+            f"{cut}: wL^3/B = {d['w_L3_over_B']:.4f}  tip x = {d['tip_x']:.10f}  "
+            f"tip z = {d['tip_z']:.10f} cm  tip angle = {d['tip_angle_rad']:.8f} rad  "
+            f"|BVP - shooting| = {d['bvp_vs_shooting_max_abs']:.2e} cm"
+        )
     print("tip load: PL^2/EI  w/L (BVP, elliptic, Mattiasson)   u/L (BVP, elliptic, Mattiasson)")
     for k, d in o["tip_load"].items():
-        print(f"  {k:>4}  {d['bvp']['w_over_L']:.6f} {d['elliptic']['w_over_L']:.6f} "
-              f"{d['mattiasson_1981']['w_over_L']:.5f}   {d['bvp']['u_over_L']:.6f} "
-              f"{d['elliptic']['u_over_L']:.6f} {d['mattiasson_1981']['u_over_L']:.5f}")
+        print(
+            f"  {k:>4}  {d['bvp']['w_over_L']:.6f} {d['elliptic']['w_over_L']:.6f} "
+            f"{d['mattiasson_1981']['w_over_L']:.5f}   {d['bvp']['u_over_L']:.6f} "
+            f"{d['elliptic']['u_over_L']:.6f} {d['mattiasson_1981']['u_over_L']:.5f}"
+        )
     print(f"wrote {JSON_PATH}", file=sys.stderr)

@@ -45,8 +45,14 @@ NU = 0.3
 PUBLISHED = {
     "simply_supported": {"alpha": 0.00406, "source": "Timoshenko & Woinowsky-Krieger (1959), Table 8, b/a=1"},
     "clamped": {"alpha": 0.00126, "source": "Timoshenko & Woinowsky-Krieger (1959), Table 35, b/a=1"},
-    "clamped_8_digits": {"alpha": 0.00126532, "source": "Taylor & Govindjee (2004), Commun. Numer. Meth. Engng 20:757-765"},
-    "simply_supported_8_digits": {"alpha": 0.00406235, "source": "Navier/Levy series (quoted widely, e.g. Taylor & Govindjee 2004)"},
+    "clamped_8_digits": {
+        "alpha": 0.00126532,
+        "source": "Taylor & Govindjee (2004), Commun. Numer. Meth. Engng 20:757-765",
+    },
+    "simply_supported_8_digits": {
+        "alpha": 0.00406235,
+        "source": "Navier/Levy series (quoted widely, e.g. Taylor & Govindjee 2004)",
+    },
 }
 
 
@@ -122,22 +128,23 @@ def clamped_superposition_alpha(n_terms: int, n_quad: int = 2000) -> float:
 
     # w0 slope on y = a: Levy particular Yp = 4 q /(m pi D alpha^4), homogeneous with Y = Y'' = 0 at edges
     Yp = 4.0 / (ms * math.pi * al**4)
-    B0 = Yp / 2.0                                        # B cosh(beta)
-    A0 = -Yp - B0 * beta * np.tanh(beta)                 # A cosh(beta)
+    B0 = Yp / 2.0  # B cosh(beta)
+    A0 = -Yp - B0 * beta * np.tanh(beta)  # A cosh(beta)
     # Y'(a/2) = alpha [A sinh b + B (sinh b + b cosh b)] / with cosh scaling removed
     slope0 = al * (A0 * np.tanh(beta) + B0 * (np.tanh(beta) + beta))
-    w0c = np.sum(np.sin(al * a / 2) * (Yp + A0 / np.cosh(beta)))   # centre: Y(0) = Yp + A
+    w0c = np.sum(np.sin(al * a / 2) * (Yp + A0 / np.cosh(beta)))  # centre: Y(0) = Yp + A
     # w1 per unit E_m: slope at y = a (eta = a/2)
     Ap = -(-1.0 / (2 * al**2)) * beta * np.tanh(beta)
     Bp = -1.0 / (2 * al**2)
     slope1 = al * (Ap * np.tanh(beta) + Bp * (np.tanh(beta) + beta))
-    w1c = np.sin(al * a / 2) * Ap / np.cosh(beta)       # centre value per unit E_m
+    w1c = np.sin(al * a / 2) * Ap / np.cosh(beta)  # centre value per unit E_m
     # w2 per unit E_n: dw2/dy at y = a = alpha_n cos(alpha_n a) X_n(x - a/2), expanded in sin(alpha_m x)
-    Xn = (Ap[None, :] * ratio_cosh(al[None, :] * xi[:, None], beta[None, :])
-          + Bp[None, :] * al[None, :] * xi[:, None] * ratio_sinh(al[None, :] * xi[:, None], beta[None, :]))
-    g = (al * np.cos(al * a))[None, :] * Xn               # (q, n)
-    S = np.sin(np.outer(x, al))                          # (q, m)
-    C = (2.0 / a) * (S * w[:, None]).T @ g               # C[m, n]
+    Xn = Ap[None, :] * ratio_cosh(al[None, :] * xi[:, None], beta[None, :]) + Bp[None, :] * al[None, :] * xi[
+        :, None
+    ] * ratio_sinh(al[None, :] * xi[:, None], beta[None, :])
+    g = (al * np.cos(al * a))[None, :] * Xn  # (q, n)
+    S = np.sin(np.outer(x, al))  # (q, m)
+    C = (2.0 / a) * (S * w[:, None]).T @ g  # C[m, n]
     Amat = np.diag(slope1) + C
     E = np.linalg.solve(Amat, -slope0)
     return float(w0c + 2.0 * np.sum(w1c * E))
@@ -150,10 +157,16 @@ def skfem_plate(element: str, support: str, refine: int) -> dict:
     from skfem.helpers import dd, ddot, eye, trace
     from skfem.models.poisson import unit_load
 
-    m = MeshTri.init_symmetric().refined(refine).with_boundaries({
-        "xedge": lambda x: (np.abs(x[0]) < 1e-12) | (np.abs(x[0] - 1) < 1e-12),
-        "yedge": lambda x: (np.abs(x[1]) < 1e-12) | (np.abs(x[1] - 1) < 1e-12),
-    })
+    m = (
+        MeshTri.init_symmetric()
+        .refined(refine)
+        .with_boundaries(
+            {
+                "xedge": lambda x: (np.abs(x[0]) < 1e-12) | (np.abs(x[0] - 1) < 1e-12),
+                "yedge": lambda x: (np.abs(x[1]) < 1e-12) | (np.abs(x[1] - 1) < 1e-12),
+            }
+        )
+    )
     el = {"morley": ElementTriMorley, "argyris": ElementTriArgyris}[element]()
     intorder = 4 if element == "morley" else 10
     ib = Basis(m, el, intorder=intorder)
@@ -163,6 +176,7 @@ def skfem_plate(element: str, support: str, refine: int) -> dict:
         # M = D [(1-nu) K + nu tr(K) I] with D = 1: the plane-stress plate of skfem's ex02
         def C(T):
             return (1 - NU) * T + NU * eye(trace(T), 2)
+
         return ddot(C(dd(u)), dd(v))
 
     K = asm(bilinf, ib)
@@ -171,18 +185,25 @@ def skfem_plate(element: str, support: str, refine: int) -> dict:
         names_x = names_y = ["u", "u_n"] if support == "clamped" else ["u"]
     else:
         if support == "clamped":
-            names_x = ["u", "u_x", "u_y", "u_xy", "u_yy", "u_n"]   # w = w_n = 0 along x = const
+            names_x = ["u", "u_x", "u_y", "u_xy", "u_yy", "u_n"]  # w = w_n = 0 along x = const
             names_y = ["u", "u_x", "u_y", "u_xy", "u_xx", "u_n"]
         else:
-            names_x = ["u", "u_y", "u_yy"]                          # w = 0 along x = const
+            names_x = ["u", "u_y", "u_yy"]  # w = 0 along x = const
             names_y = ["u", "u_x", "u_xx"]
     Dof = np.unique(np.concatenate([ib.get_dofs("xedge").all(names_x), ib.get_dofs("yedge").all(names_y)]))
     x = solve(*condense(K, f, D=Dof))
     ic = int(np.argmin(np.sum((m.p - 0.5) ** 2, axis=0)))
     assert np.allclose(m.p[:, ic], 0.5)
     wc = float(x[ib.nodal_dofs[0, ic]])
-    return {"element": element, "support": support, "refine": refine, "n_triangles": int(m.t.shape[1]),
-            "h": float(1.0 / 2 ** refine), "n_dofs": int(K.shape[0]), "alpha": wc}
+    return {
+        "element": element,
+        "support": support,
+        "refine": refine,
+        "n_triangles": int(m.t.shape[1]),
+        "h": float(1.0 / 2**refine),
+        "n_dofs": int(K.shape[0]),
+        "alpha": wc,
+    }
 
 
 def convergence_table(element, support, refines, exact):
@@ -197,8 +218,10 @@ def convergence_table(element, support, refines, exact):
         else:
             row["rate"] = None
         rows.append(row)
-        print(f"  {element:8s} {support:16s} refine {r}  tris {row['n_triangles']:6d}  dofs {row['n_dofs']:7d}  "
-              f"alpha {row['alpha']:.9f}  rel.err {row['rel_error']:+.3e}  rate {row['rate'] if row['rate'] is None else round(row['rate'], 2)}")
+        print(
+            f"  {element:8s} {support:16s} refine {r}  tris {row['n_triangles']:6d}  dofs {row['n_dofs']:7d}  "
+            f"alpha {row['alpha']:.9f}  rel.err {row['rel_error']:+.3e}  rate {row['rate'] if row['rate'] is None else round(row['rate'], 2)}"
+        )
     return rows
 
 
@@ -246,14 +269,19 @@ def main(argv=None):
         "published": PUBLISHED,
         "marcus_moment_centre": marcus_moment_centre(4001),
         "mindlin_ss_shear_coefficient": mindlin_ss_shear_coefficient(),
-        "mindlin_note": ("hard simply supported Reissner-Mindlin plate, kappa = 5/6: "
-                         "w_c D/(q a^4) = alpha_SS + mindlin_ss_shear_coefficient * (h/a)^2"),
+        "mindlin_note": (
+            "hard simply supported Reissner-Mindlin plate, kappa = 5/6: "
+            "w_c D/(q a^4) = alpha_SS + mindlin_ss_shear_coefficient * (h/a)^2"
+        ),
         "skfem": tables,
         "morley_richardson": {
             sup: (4 * tables[f"morley_{sup}"][-1]["alpha"] - tables[f"morley_{sup}"][-2]["alpha"]) / 3
-            for sup in ("simply_supported", "clamped")},
-        "note": ("Argyris errors below ~1e-8 are round-off of the direct solve (they stop decreasing at "
-                 "refine 4-5); the series values are converged to ~1e-12 relative."),
+            for sup in ("simply_supported", "clamped")
+        },
+        "note": (
+            "Argyris errors below ~1e-8 are round-off of the direct solve (they stop decreasing at "
+            "refine 4-5); the series values are converged to ~1e-12 relative."
+        ),
     }
     for sup, v in out["morley_richardson"].items():
         print(f"  Morley Richardson (h^2) extrapolation, {sup}: {v:.9f}")

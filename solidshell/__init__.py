@@ -12,11 +12,26 @@ from .mesh import ShellMesh
 
 __version__ = "0.1.0"
 
-__all__ = ["ShellMesh", "Fabric", "IsotropicShell", "Model", "solve_static", "run_scene", "build_problem",
-           "InputError", "SolverError", "IOFailure", "__version__"]
+__all__ = [
+    "ShellMesh",
+    "Fabric",
+    "IsotropicShell",
+    "Model",
+    "solve_static",
+    "run_scene",
+    "build_problem",
+    "InputError",
+    "SolverError",
+    "IOFailure",
+    "__version__",
+]
 
-_LAZY = {"Model": "solidshell.model", "solve_static": "solidshell.solvers.static",
-         "run_scene": "solidshell.run.driver", "build_problem": "solidshell.scenes.build"}
+_LAZY = {
+    "Model": "solidshell.model",
+    "solve_static": "solidshell.solvers.static",
+    "run_scene": "solidshell.run.driver",
+    "build_problem": "solidshell.scenes.build",
+}
 
 
 def __getattr__(name):

@@ -45,8 +45,14 @@ import numpy as np
 from .errors import InputError
 
 __all__ = [
-    "boundary_loops", "polygon_area", "projected_boundary", "drape_coefficient", "radius_profile",
-    "fold_count", "asymmetry", "drape_summary",
+    "boundary_loops",
+    "polygon_area",
+    "projected_boundary",
+    "drape_coefficient",
+    "radius_profile",
+    "fold_count",
+    "asymmetry",
+    "drape_summary",
 ]
 
 
@@ -139,12 +145,12 @@ def radius_profile(polygon, center=(0.0, 0.0), n_theta: int = 720):
     p = np.asarray(polygon, dtype=float)[:, :2] - np.asarray(center, dtype=float)[:2]
     q = np.roll(p, -1, axis=0)
     theta = 2.0 * np.pi * np.arange(n_theta) / n_theta
-    d = np.column_stack([np.cos(theta), np.sin(theta)])             # (T,2)
-    s = q - p                                                       # (S,2)
+    d = np.column_stack([np.cos(theta), np.sin(theta)])  # (T,2)
+    s = q - p  # (S,2)
     # solve t d = p + u s  ->  t (d x s) ... use 2-D cross products
-    cross_ds = d[:, 0:1] * s[None, :, 1] - d[:, 1:2] * s[None, :, 0]   # (T,S) d x s
-    cross_ps = p[None, :, 0] * s[None, :, 1] - p[None, :, 1] * s[None, :, 0]   # p x s
-    cross_pd = p[None, :, 0] * d[:, 1:2] - p[None, :, 1] * d[:, 0:1]   # p x d
+    cross_ds = d[:, 0:1] * s[None, :, 1] - d[:, 1:2] * s[None, :, 0]  # (T,S) d x s
+    cross_ps = p[None, :, 0] * s[None, :, 1] - p[None, :, 1] * s[None, :, 0]  # p x s
+    cross_pd = p[None, :, 0] * d[:, 1:2] - p[None, :, 1] * d[:, 0:1]  # p x d
     with np.errstate(divide="ignore", invalid="ignore"):
         t = cross_ps / cross_ds
         u = cross_pd / cross_ds
@@ -174,7 +180,7 @@ def _prominent_peaks(x, min_prominence: float) -> np.ndarray:
     n = len(x)
     peaks = []
     i = 1
-    while i < n - 1:          # a scan of the n = 3 x 720 samples of r(theta), not of mesh entities
+    while i < n - 1:  # a scan of the n = 3 x 720 samples of r(theta), not of mesh entities
         if x[i - 1] < x[i]:
             j = i + 1
             while j < n - 1 and x[j] == x[i]:
@@ -186,12 +192,12 @@ def _prominent_peaks(x, min_prominence: float) -> np.ndarray:
     out = []
     for p in peaks:
         h = x[p]
-        left = x[:p + 1][::-1]
+        left = x[: p + 1][::-1]
         stop = np.flatnonzero(left > h)
-        lmin = left[:stop[0] if stop.size else None].min()
+        lmin = left[: stop[0] if stop.size else None].min()
         right = x[p:]
         stop = np.flatnonzero(right > h)
-        rmin = right[:stop[0] if stop.size else None].min()
+        rmin = right[: stop[0] if stop.size else None].min()
         if h - max(lmin, rmin) >= min_prominence:
             out.append(p)
     return np.asarray(out, dtype=np.intp)
@@ -203,8 +209,14 @@ def _smooth(r, smooth_deg: float):
     return _gaussian_wrap(r, sigma) if sigma > 0 else r.copy()
 
 
-def fold_count(polygon, center=(0.0, 0.0), n_theta: int = 720, smooth_deg: float = 2.0,
-               min_prominence: float = 0.01, return_angles: bool = False):
+def fold_count(
+    polygon,
+    center=(0.0, 0.0),
+    n_theta: int = 720,
+    smooth_deg: float = 2.0,
+    min_prominence: float = 0.01,
+    return_angles: bool = False,
+):
     """Number of folds: prominent local maxima of the smoothed r(theta) (see module docstring).
 
     Returns an int (and the fold angles in radians if ``return_angles``).  A circle returns 0.
@@ -215,7 +227,7 @@ def fold_count(polygon, center=(0.0, 0.0), n_theta: int = 720, smooth_deg: float
     if rbar <= 0.0:
         return (0, np.zeros(0)) if return_angles else 0
     n = len(rs)
-    tiled = np.concatenate([rs, rs, rs])       # periodic: peaks of the middle copy see both sides
+    tiled = np.concatenate([rs, rs, rs])  # periodic: peaks of the middle copy see both sides
     pk = _prominent_peaks(tiled, min_prominence * rbar)
     pk = pk[(pk >= n) & (pk < 2 * n)] - n
     return (int(pk.size), theta[pk]) if return_angles else int(pk.size)
@@ -230,17 +242,27 @@ def asymmetry(polygon, center=(0.0, 0.0), n_theta: int = 720) -> dict:
     if rbar <= 0.0:
         return {"mirror_x": 0.0, "mirror_y": 0.0, "rot90": 0.0}
     j = np.arange(n_theta)
-    mx = r[(-j) % n_theta]                     # r(-theta)
-    my = r[(n_theta // 2 - j) % n_theta]       # r(pi - theta)
-    r90 = r[(j + n_theta // 4) % n_theta]      # r(theta + pi/2)
-    return {"mirror_x": float(np.max(np.abs(r - mx)) / rbar),
-            "mirror_y": float(np.max(np.abs(r - my)) / rbar),
-            "rot90": float(np.max(np.abs(r - r90)) / rbar)}
+    mx = r[(-j) % n_theta]  # r(-theta)
+    my = r[(n_theta // 2 - j) % n_theta]  # r(pi - theta)
+    r90 = r[(j + n_theta // 4) % n_theta]  # r(theta + pi/2)
+    return {
+        "mirror_x": float(np.max(np.abs(r - mx)) / rbar),
+        "mirror_y": float(np.max(np.abs(r - my)) / rbar),
+        "rot90": float(np.max(np.abs(r - r90)) / rbar),
+    }
 
 
 # --------------------------------------------------------------------------- one-stop summary
-def drape_summary(mesh, U=None, pedestal_area: float = 0.0, center=None, sheet_area=None,
-                  n_theta: int = 720, smooth_deg: float = 2.0, min_prominence: float = 0.01) -> dict:
+def drape_summary(
+    mesh,
+    U=None,
+    pedestal_area: float = 0.0,
+    center=None,
+    sheet_area=None,
+    n_theta: int = 720,
+    smooth_deg: float = 2.0,
+    min_prominence: float = 0.01,
+) -> dict:
     """All drape measures of a deformed mesh as plain numbers (summary.json keys).
 
     pedestal_area : area of the pedestal top [length^2] (0 for no pedestal).
@@ -262,7 +284,7 @@ def drape_summary(mesh, U=None, pedestal_area: float = 0.0, center=None, sheet_a
         sheet_area = float(mesh.area()) + float(pedestal_area)
     A = polygon_area(poly)
     theta, r = radius_profile(poly, center, n_theta)
-    env = 0.5 * float(np.mean(r ** 2)) * 2.0 * np.pi
+    env = 0.5 * float(np.mean(r**2)) * 2.0 * np.pi
     nf, ang = fold_count(poly, center, n_theta, smooth_deg, min_prominence, return_angles=True)
     asym = asymmetry(poly, center, n_theta - n_theta % 4)
     return {

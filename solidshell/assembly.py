@@ -62,7 +62,7 @@ def _half_positions(conn, pos, to_lower, rows, cols, out):
     that order, ``pos`` (M, nd, nd) the full pattern's map in the local order."""
     M, nn = conn.shape
     nd = 6 * nn
-    local = np.empty(nd, dtype=np.int64)       # dof in the half matrix's order -> local dof
+    local = np.empty(nd, dtype=np.int64)  # dof in the half matrix's order -> local dof
     slot = np.empty(nn, dtype=np.int64)
     for e in range(M):
         half_slots(conn[e], slot)
@@ -109,7 +109,7 @@ def _node_block_positions(conn, nindptr, nindices, indptr, pos):
             deg = nindptr[i + 1] - lo
             for q in range(nn):
                 j = conn[e, q]
-                s = np.searchsorted(nindices[lo:lo + deg], j)
+                s = np.searchsorted(nindices[lo : lo + deg], j)
                 for ka in range(6):
                     base = indptr[6 * i + ka] + 6 * s
                     for kb in range(6):
@@ -127,9 +127,10 @@ class SparsePattern:
     def __init__(self, n_dofs: int, dof_blocks: list[np.ndarray]):
         self.n = n_dofs
         conns = [d[:, ::6] // 6 for d in dof_blocks]
-        self.conns = None           # the blocks' connectivities when their dofs are node-major
-        if n_dofs % 6 == 0 and all(d.shape[1] % 6 == 0 and np.array_equal(d, element_dofs(c))
-                                   for d, c in zip(dof_blocks, conns)):
+        self.conns = None  # the blocks' connectivities when their dofs are node-major
+        if n_dofs % 6 == 0 and all(
+            d.shape[1] % 6 == 0 and np.array_equal(d, element_dofs(c)) for d, c in zip(dof_blocks, conns)
+        ):
             self.conns = [np.ascontiguousarray(c, dtype=np.int64) for c in conns]
             self._from_nodes(n_dofs // 6, self.conns)
         else:
@@ -166,7 +167,7 @@ class SparsePattern:
         self.pos = []
         start = 0
         for d, k in zip(dof_blocks, keys):
-            self.pos.append(inv[start:start + len(k)].reshape(len(d), d.shape[1], d.shape[1]))
+            self.pos.append(inv[start : start + len(k)].reshape(len(d), d.shape[1], d.shape[1]))
             start += len(k)
         self.nnz = len(uniq)
 
@@ -234,10 +235,8 @@ class FreeLowerPattern:
         new[free] = np.arange(nf)
         # int32 maps where they fit, gathered straight into int32 (an int64 gather of the
         # (M, nd, nd) maps was the peak of the static set-up: +39 MB on square-pedestal 48x16x4)
-        to_lower = np.empty(pattern.indices.size,
-                            dtype=np.int32 if pattern.indices.size < 2**31 else np.int64)
-        lptr, self.indices = _lower_free(pattern.indptr.astype(np.int64), pattern.indices, new, nf,
-                                         to_lower)
+        to_lower = np.empty(pattern.indices.size, dtype=np.int32 if pattern.indices.size < 2**31 else np.int64)
+        lptr, self.indices = _lower_free(pattern.indptr.astype(np.int64), pattern.indices, new, nf, to_lower)
         if pattern.conns is None:
             raise ValueError("FreeLowerPattern needs a node-major pattern (dofs from element_dofs)")
         self.half_pos = []
@@ -267,6 +266,6 @@ class FreeLowerPattern:
         cc = new[(6 * np.arange(N))[:, None, None] + a[None, None, :]].repeat(3, axis=1)
         ok = (rr >= 0) & (cc >= 0) & (rr >= cc)
         node_pos = np.full((N, 3, 3), -1, dtype=np.int64)
-        keys = cols * nf + self.indices              # sorted: column-major order
+        keys = cols * nf + self.indices  # sorted: column-major order
         node_pos[ok] = np.searchsorted(keys, cc[ok] * nf + rr[ok])
         self.node_pos = node_pos

@@ -59,7 +59,7 @@ def _install_log_handler() -> None:
     log = logging.getLogger("solidshell")
     if _HANDLER not in log.handlers:
         log.addHandler(_HANDLER)
-    log.propagate = False        # one line per warning (not a second one from a root handler)
+    log.propagate = False  # one line per warning (not a second one from a root handler)
 
 
 class _Parser(argparse.ArgumentParser):
@@ -70,9 +70,13 @@ class _Parser(argparse.ArgumentParser):
 
 
 def _parser() -> argparse.ArgumentParser:
-    p = _Parser(prog="solidshell", description="Fabric drape with ANS solid-shell elements "
-                "(Xie, Sze & Zhou, FEAD 106 (2015) 85-102).  Units: cm, gf, s.")
+    p = _Parser(
+        prog="solidshell",
+        description="Fabric drape with ANS solid-shell elements "
+        "(Xie, Sze & Zhou, FEAD 106 (2015) 85-102).  Units: cm, gf, s.",
+    )
     from . import __version__
+
     p.add_argument("--version", action="version", version=f"solidshell {__version__}")
     sub = p.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
@@ -89,41 +93,67 @@ def _parser() -> argparse.ArgumentParser:
     r = sub.add_parser("run", help="run a scene and write the results")
     r.add_argument("scene", help="scene name or path of a .toml scene file")
     r.add_argument("--mesh", metavar="DENSITY", help="mesh density, e.g. 24x8x4 (default: the scene's)")
-    r.add_argument("--solver", choices=list(KINDS),
-                   help="solver (default: the scene's [solver] kind)")
-    r.add_argument("--set", metavar="KEY=VALUE", action="append", default=[],
-                   help="override a scene key, e.g. solver.static.c=2e-3 (repeatable)")
+    r.add_argument("--solver", choices=list(KINDS), help="solver (default: the scene's [solver] kind)")
+    r.add_argument(
+        "--set",
+        metavar="KEY=VALUE",
+        action="append",
+        default=[],
+        help="override a scene key, e.g. solver.static.c=2e-3 (repeatable)",
+    )
     r.add_argument("--out", metavar="DIR", help="output directory (default: runs/<scene>)")
-    r.add_argument("--checkpoint", metavar="FILE",
-                   help="explicit/relax: save the state to FILE while running (solver.<kind>.checkpoint)")
-    r.add_argument("--restart", metavar="FILE",
-                   help="explicit/relax: continue from the checkpoint FILE (solver.<kind>.restart)")
-    r.add_argument("--adaptive", action="store_true",
-                   help="reversible adaptive 1-to-4 subdivision (paper §5; explicit/relax only), from the "
-                        "scene's mesh.adaptive_level0 or --mesh; settings: --set adapt.KEY=VALUE")
+    r.add_argument(
+        "--checkpoint",
+        metavar="FILE",
+        help="explicit/relax: save the state to FILE while running (solver.<kind>.checkpoint)",
+    )
+    r.add_argument(
+        "--restart", metavar="FILE", help="explicit/relax: continue from the checkpoint FILE (solver.<kind>.restart)"
+    )
+    r.add_argument(
+        "--adaptive",
+        action="store_true",
+        help="reversible adaptive 1-to-4 subdivision (paper §5; explicit/relax only), from the "
+        "scene's mesh.adaptive_level0 or --mesh; settings: --set adapt.KEY=VALUE",
+    )
     r.add_argument("--no-progress", action="store_true", help="no progress bar")
-    r.add_argument("--no-pictures", action="store_true",
-                   help="write no PNG pictures (the same as --set output.pictures=[] --set "
-                        "output.snapshots=[]): a small run then never loads matplotlib")
+    r.add_argument(
+        "--no-pictures",
+        action="store_true",
+        help="write no PNG pictures (the same as --set output.pictures=[] --set "
+        "output.snapshots=[]): a small run then never loads matplotlib",
+    )
     _common(r)
 
-    w = sub.add_parser("sweep", help="an ensemble of runs on dask.distributed (solidshell.sweep); "
-                                     "results in a Parquet ledger, states and a figure")
+    w = sub.add_parser(
+        "sweep",
+        help="an ensemble of runs on dask.distributed (solidshell.sweep); "
+        "results in a Parquet ledger, states and a figure",
+    )
     w.add_argument("sweep", nargs="?", help="sweep .toml file or packaged study name (--list)")
-    w.add_argument("--scheduler", metavar="tcp://HOST:PORT", help="a running Dask scheduler "
-                   "(default: a local cluster on 127.0.0.1)")
-    w.add_argument("--workers", type=int, metavar="N", help="local cluster: worker processes "
-                   "(default: CPU count / threads)")
+    w.add_argument(
+        "--scheduler",
+        metavar="tcp://HOST:PORT",
+        help="a running Dask scheduler (default: a local cluster on 127.0.0.1)",
+    )
+    w.add_argument(
+        "--workers", type=int, metavar="N", help="local cluster: worker processes (default: CPU count / threads)"
+    )
     w.add_argument("--threads", type=int, default=1, metavar="N", help="threads per run (default 1)")
     w.add_argument("--retries", type=int, default=2, metavar="N", help="extra attempts of a failed task")
-    w.add_argument("--out", metavar="DIR", help="output folder (default: runs/sweep-<name>); "
-                   "run again with the same folder to resume")
+    w.add_argument(
+        "--out",
+        metavar="DIR",
+        help="output folder (default: runs/sweep-<name>); run again with the same folder to resume",
+    )
     w.add_argument("--limit", type=int, metavar="N", help="run at most N of the missing runs")
     w.add_argument("--list", action="store_true", help="list the packaged studies")
     w.add_argument("--no-progress", action="store_true", help="no progress bar or lines")
     from .verify_cli import add_parser as _add_verify
+
     _add_verify(sub)
     from .bench.cli import add_parser as _add_bench
+
     _add_bench(sub)
     f = sub.add_parser("figures", help="render the paper's figures (paper_figures/): Figs. 4-13, 19-22")
     f.add_argument("figs", nargs="*", metavar="FIG", help="figure numbers, e.g. 5 12 (default: all)")
@@ -133,10 +163,12 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def _common(p):
-    p.add_argument("--force", action="store_true",
-                   help="write into an output folder that holds files solidshell did not write")
-    p.add_argument("--allow-large", action="store_true",
-                   help="skip the size guard (estimated memory against the available memory)")
+    p.add_argument(
+        "--force", action="store_true", help="write into an output folder that holds files solidshell did not write"
+    )
+    p.add_argument(
+        "--allow-large", action="store_true", help="skip the size guard (estimated memory against the available memory)"
+    )
 
 
 def _cmd_scenes(args) -> int:
@@ -164,12 +196,21 @@ def _cmd_mesh(args) -> int:
     from .scenes import parse_overrides
 
     out_dir = args.out or _default_out(args.scene, "-mesh")
-    res = run_scene(args.scene, mesh=args.mesh, solver="none", out_dir=out_dir, progress=True,
-                    overrides=parse_overrides(args.set), force=args.force, allow_large=args.allow_large)
+    res = run_scene(
+        args.scene,
+        mesh=args.mesh,
+        solver="none",
+        out_dir=out_dir,
+        progress=True,
+        overrides=parse_overrides(args.set),
+        force=args.force,
+        allow_large=args.allow_large,
+    )
     c = res.summary["counts"]
-    print(f"{res.summary['scene']}: mesh {res.summary['mesh']}: {c['nodes']} nodes, {c['quads']} quads, "
-          f"{c['triangles']} triangles; node sets: "
-          + ", ".join(f"{k} ({v})" for k, v in c["node_sets"].items()))
+    print(
+        f"{res.summary['scene']}: mesh {res.summary['mesh']}: {c['nodes']} nodes, {c['quads']} quads, "
+        f"{c['triangles']} triangles; node sets: " + ", ".join(f"{k} ({v})" for k, v in c["node_sets"].items())
+    )
     print(f"wrote {res.out_dir}/: " + ", ".join(res.summary["files"]))
     return EXIT_OK
 
@@ -183,22 +224,38 @@ def _cmd_run(args) -> int:
     overrides = parse_overrides(args.set)
     if args.no_pictures:
         overrides.update({"output.pictures": [], "output.snapshots": []})
-    res = run_scene(args.scene, mesh=args.mesh, solver=args.solver, out_dir=out_dir,
-                    progress=not args.no_progress, overrides=overrides,
-                    force=args.force, allow_large=args.allow_large,
-                    adaptive=True if args.adaptive else None, **extra)
+    res = run_scene(
+        args.scene,
+        mesh=args.mesh,
+        solver=args.solver,
+        out_dir=out_dir,
+        progress=not args.no_progress,
+        overrides=overrides,
+        force=args.force,
+        allow_large=args.allow_large,
+        adaptive=True if args.adaptive else None,
+        **extra,
+    )
     s = res.summary
     c = s["counts"]
-    status = ("INTERRUPTED" if s.get("interrupted") else "converged" if s.get("converged")
-              else "NOT converged")
+    status = "INTERRUPTED" if s.get("interrupted") else "converged" if s.get("converged") else "NOT converged"
     line = f"{s['scene']}: {s['solver']} on mesh {s['mesh']} ({c['nodes']} nodes, {c['elements']} elements): {status}"
     if s.get("message"):
         line += f" -- {s['message']}"
     print(line)
-    extras = [f"{k} = {s[k]:.4g}" if isinstance(s[k], float) else f"{k} = {s[k]}"
-              for k in ("drape_coefficient", "fold_count", "interpenetrated_nodes", "max_displacement",
-                        "max_active_nodes", "remesh_count", "max_interpenetrated_nodes")
-              if s.get(k) is not None]
+    extras = [
+        f"{k} = {s[k]:.4g}" if isinstance(s[k], float) else f"{k} = {s[k]}"
+        for k in (
+            "drape_coefficient",
+            "fold_count",
+            "interpenetrated_nodes",
+            "max_displacement",
+            "max_active_nodes",
+            "remesh_count",
+            "max_interpenetrated_nodes",
+        )
+        if s.get(k) is not None
+    ]
     if extras:
         print("  " + ", ".join(extras))
     print(f"  {s['timings'].get('total', 0.0):.1f} s; wrote {res.out_dir}/: " + ", ".join(s["files"]))
@@ -221,7 +278,7 @@ def _cmd_sweep(args) -> int:
         raise InputError("solidshell sweep: give a sweep file or a packaged study name (--list)")
     from .sweep.engine import require_dask
 
-    require_dask()                      # before the sweep is parsed: the one thing to install first
+    require_dask()  # before the sweep is parsed: the one thing to install first
     from .sweep.engine import Cluster, describe, run_sweep
     from .sweep.report import sweep_group, write_report
 
@@ -234,29 +291,38 @@ def _cmd_sweep(args) -> int:
     cluster = Cluster(scheduler=args.scheduler, workers=args.workers, threads=args.threads, retries=args.retries)
     res = run_sweep(spec, out, cluster, progress=not args.no_progress, group=group, limit=args.limit)
     rep = write_report(spec, out, group)
-    print(f"sweep {spec.name}: {res.recorded} run(s) recorded now, {res.skipped} before, "
-          f"{len(res.failed)} failed now, {len(res.failed_before)} before, {res.total} in all; "
-          f"{res.wall_time_s:.1f} s")
+    print(
+        f"sweep {spec.name}: {res.recorded} run(s) recorded now, {res.skipped} before, "
+        f"{len(res.failed)} failed now, {len(res.failed_before)} before, {res.total} in all; "
+        f"{res.wall_time_s:.1f} s"
+    )
     for key, why in res.failed:
         _say(f"solidshell: {describe(spec, key)} failed: {why}")
     for key, why in res.failed_before:
         _say(f"solidshell: {describe(spec, key)} failed in an earlier invocation: {why}")
     freq = ", ".join(f"{k} folds {v:.0%}" for k, v in rep["fold_frequencies"].items())
-    print(f"  {len(rep['states'])} state(s) under {rep['group']}" + (f"; {freq}" if freq else "")
-          + (f"; {rep['unsettled']} unsettled" if rep["unsettled"] else ""))
+    print(
+        f"  {len(rep['states'])} state(s) under {rep['group']}"
+        + (f"; {freq}" if freq else "")
+        + (f"; {rep['unsettled']} unsettled" if rep["unsettled"] else "")
+    )
     print(f"  wrote {out}/: ledger/ (Parquet), " + ", ".join(Path(f).name for f in rep["files"]))
     if res.interrupted:
         return EXIT_INTERRUPTED
     # 1: a run failed (now or before: its error row stays in the ledger), or runs are missing (--limit)
     incomplete = res.recorded + len(res.failed) + res.skipped < res.total
     return EXIT_NOT_CONVERGED if res.failed or res.failed_before or incomplete else EXIT_OK
+
+
 def _cmd_figures(args) -> int:
     try:
         from paper_figures.registry import make_figures, module_name
     except ImportError:
-        raise InputError("the paper_figures package is not importable here: run from the source tree "
-                         "(or install it with pip install -e .)") from None
-    for f in args.figs:              # every name checked before any figure runs
+        raise InputError(
+            "the paper_figures package is not importable here: run from the source tree "
+            "(or install it with pip install -e .)"
+        ) from None
+    for f in args.figs:  # every name checked before any figure runs
         module_name(f)
     make_figures(args.figs, quick=args.quick, out_dir=args.out)
     return EXIT_OK
@@ -268,7 +334,7 @@ def main(argv=None) -> int:
     # let "--mesh -3x4" reach the density check (argparse would take -3x4 for an option)
     for i in range(len(argv) - 2, -1, -1):
         if argv[i] == "--mesh" and argv[i + 1].startswith("-") and argv[i + 1][1:2].isdigit():
-            argv[i:i + 2] = [f"--mesh={argv[i + 1]}"]
+            argv[i : i + 2] = [f"--mesh={argv[i + 1]}"]
     _install_log_handler()
     try:
         args = _parser().parse_args(argv)
@@ -280,11 +346,13 @@ def main(argv=None) -> int:
             return _cmd_sweep(args)
         if args.command == "verify":
             from .verify_cli import run as _cmd_verify
+
             return _cmd_verify(args)
         if args.command == "figures":
             return _cmd_figures(args)
         if args.command == "bench":
             from .bench.cli import run as _cmd_bench
+
             return _cmd_bench(args)
         return _cmd_run(args)
     except InputError as e:

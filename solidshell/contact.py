@@ -103,7 +103,7 @@ def _pos(v, name: str, allow_zero=False) -> float:
 
 def _params(*values) -> np.ndarray:
     out = np.zeros(ck.PARAMS)
-    out[:len(values)] = values
+    out[: len(values)] = values
     return out
 
 
@@ -121,7 +121,7 @@ class RigidBody:
     friction: float = 0.0  # Coulomb coefficient mu (0: frictionless, the default)
     lipschitz: float | None = None
 
-    code: int = -1                 # contact_kernels.SPHERE, PLANE, CYLINDER or BOX; -1: a user's body
+    code: int = -1  # contact_kernels.SPHERE, PLANE, CYLINDER or BOX; -1: a user's body
 
     @property
     def params(self) -> np.ndarray:
@@ -158,8 +158,9 @@ class RigidBody:
         x = np.ascontiguousarray(x, dtype=float).reshape(-1, 3)
         f = np.zeros_like(x)
         kk = np.ascontiguousarray(np.broadcast_to(np.asarray(k, dtype=float), (len(x),)))
-        e, _, _, _, _ = ck.body_forces(self.code, self.params, self.offset, 0.0, x, kk, kk, f, f, f, f,
-                                       *self.given_distances(x))
+        e, _, _, _, _ = ck.body_forces(
+            self.code, self.params, self.offset, 0.0, x, kk, kk, f, f, f, f, *self.given_distances(x)
+        )
         return f, e
 
     def active(self, x) -> np.ndarray:
@@ -170,7 +171,7 @@ class RigidBody:
 class Sphere(RigidBody):
     """Rigid solid sphere of ``radius`` about ``center`` (the paper's Ø10 cm sphere, Section 4.2)."""
 
-    lipschitz = 1.0   # |x - c| - R is a distance
+    lipschitz = 1.0  # |x - c| - R is a distance
 
     def __init__(self, center, radius, offset=0.0, friction=0.0):
         self.center = _vec3(center, "sphere center")
@@ -184,15 +185,17 @@ class Sphere(RigidBody):
         return _params(*self.center, self.radius)
 
     def __repr__(self):
-        return (f"Sphere(center={self.center.tolist()}, radius={self.radius}, offset={self.offset}, "
-                f"friction={self.friction})")
+        return (
+            f"Sphere(center={self.center.tolist()}, radius={self.radius}, offset={self.offset}, "
+            f"friction={self.friction})"
+        )
 
 
 class Plane(RigidBody):
     """Rigid half-space: the side of the plane through ``point`` opposite to ``normal`` is solid
     (a floor with normal (0,0,1))."""
 
-    lipschitz = 1.0   # (x - p).n with |n| = 1
+    lipschitz = 1.0  # (x - p).n with |n| = 1
 
     def __init__(self, point, normal=(0.0, 0.0, 1.0), offset=0.0, friction=0.0):
         self.point = _vec3(point, "plane point")
@@ -210,8 +213,10 @@ class Plane(RigidBody):
         return _params(*self.point, *self.normal)
 
     def __repr__(self):
-        return (f"Plane(point={self.point.tolist()}, normal={self.normal.tolist()}, offset={self.offset}, "
-                f"friction={self.friction})")
+        return (
+            f"Plane(point={self.point.tolist()}, normal={self.normal.tolist()}, offset={self.offset}, "
+            f"friction={self.friction})"
+        )
 
 
 class Pedestal(RigidBody):
@@ -236,8 +241,9 @@ class Pedestal(RigidBody):
     # inside) is 1-Lipschitz, and so is its composition with the 1-Lipschitz x -> (|x_xy|, z)
     lipschitz = 1.0
 
-    def __init__(self, top_center, radius=None, half_widths=None, height=None, edge_radius=0.0,
-                 offset=0.0, friction=0.0):
+    def __init__(
+        self, top_center, radius=None, half_widths=None, height=None, edge_radius=0.0, offset=0.0, friction=0.0
+    ):
         self.top_center = _vec3(top_center, "pedestal top_center")
         if (radius is None) == (half_widths is None):
             raise InputError("give a pedestal either radius (cylinder) or half_widths (box), not both")
@@ -267,8 +273,10 @@ class Pedestal(RigidBody):
 
     def __repr__(self):
         dims = f"radius={self.radius}" if self.kind == "cylinder" else f"half_widths={self.half_widths.tolist()}"
-        return (f"Pedestal({self.kind}, top_center={self.top_center.tolist()}, {dims}, height={self.height}, "
-                f"edge_radius={self.edge_radius}, offset={self.offset}, friction={self.friction})")
+        return (
+            f"Pedestal({self.kind}, top_center={self.top_center.tolist()}, {dims}, height={self.height}, "
+            f"edge_radius={self.edge_radius}, offset={self.offset}, friction={self.friction})"
+        )
 
 
 # ---------------------------------------------------------------------- all bodies at once
@@ -303,9 +311,20 @@ def frictional_contact(body: ContactBody, x, k, k_t, anchor):
     k = np.ascontiguousarray(np.broadcast_to(np.asarray(k, dtype=float), (N,)))
     k_t = np.ascontiguousarray(np.broadcast_to(np.asarray(k_t, dtype=float), (N,)))
     f, ft, new = np.zeros((N, 3)), np.zeros((N, 3)), np.full((N, 3), np.nan)
-    e_n, e_t, _, n_slip, _ = ck.body_forces(body.code, body.params, body.offset, body.friction, x, k, k_t,
-                                            np.ascontiguousarray(anchor, dtype=float).reshape(N, 3), f, ft, new,
-                                            *body.given_distances(x))
+    e_n, e_t, _, n_slip, _ = ck.body_forces(
+        body.code,
+        body.params,
+        body.offset,
+        body.friction,
+        x,
+        k,
+        k_t,
+        np.ascontiguousarray(anchor, dtype=float).reshape(N, 3),
+        f,
+        ft,
+        new,
+        *body.given_distances(x),
+    )
     idx = np.flatnonzero(~np.isnan(new[:, 0]))
     return f, e_n, idx, ft[idx], e_t, new, int(n_slip)
 

@@ -23,7 +23,7 @@ from numba import njit
 
 SPHERE, PLANE, CYLINDER, BOX = 0, 1, 2, 3
 PARAMS = 8
-_G0, _N0 = np.zeros(0), np.zeros((0, 3))     # "no given distances" (body_forces' g_in, n_in)
+_G0, _N0 = np.zeros(0), np.zeros((0, 3))  # "no given distances" (body_forces' g_in, n_in)
 
 
 @njit(cache=True)
@@ -59,13 +59,13 @@ def signed_distance(code, p, x0, x1, x2):
         r = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
         if r > 0.0:
             return r - p[3], d0 / r, d1 / r, d2 / r
-        return r - p[3], 0.0, 0.0, 1.0        # the centre itself: push up
+        return r - p[3], 0.0, 0.0, 1.0  # the centre itself: push up
     if code == PLANE:
         g = (x0 - p[0]) * p[3] + (x1 - p[1]) * p[4] + (x2 - p[2]) * p[5]
         return g, p[3], p[4], p[5]
-    er = p[4]                                  # a pedestal: the edge radius
+    er = p[4]  # a pedestal: the edge radius
     d0, d1 = x0 - p[0], x1 - p[1]
-    zc = (x2 - p[2]) + 0.5 * p[3]              # z about the pedestal's mid-height
+    zc = (x2 - p[2]) + 0.5 * p[3]  # z about the pedestal's mid-height
     if code == CYLINDER:
         rho = math.hypot(d0, d1)
         g, ga0, ga1, _ = _box(rho, zc, 0.0, p[5] - er, 0.5 * p[3] - er, 0.0, 2)
@@ -93,7 +93,7 @@ def distances(code, p, x):
 def _stick(mu, kp, kt, x0, x1, x2, n0, n1, n2, a0, a1, a2):
     """Coulomb friction of one node in contact (contact.py): the trial stick force -k_t (I - n n^T)(x - a)
     return-mapped onto |f_t| <= mu k p.  (f_t (3), slipped)."""
-    if a0 != a0:                                # first touch: the anchor is where the node is
+    if a0 != a0:  # first touch: the anchor is where the node is
         a0, a1, a2 = x0, x1, x2
     d0, d1, d2 = x0 - a0, x1 - a1, x2 - a2
     dn = d0 * n0 + d1 * n1 + d2 * n2
@@ -135,8 +135,9 @@ def body_forces(code, p, offset, mu, x, k, kt, anchor, f, ft, new, g_in, n_in):
             nact += 1
             pen = max(pen, math.sqrt(fn0 * fn0 + fn1 * fn1 + fn2 * fn2) / k[i])
             if mu > 0.0:
-                t0, t1, t2, slip = _stick(mu, kp, kt[i], x[i, 0], x[i, 1], x[i, 2], n0, n1, n2,
-                                          anchor[i, 0], anchor[i, 1], anchor[i, 2])
+                t0, t1, t2, slip = _stick(
+                    mu, kp, kt[i], x[i, 0], x[i, 1], x[i, 2], n0, n1, n2, anchor[i, 0], anchor[i, 1], anchor[i, 2]
+                )
                 ft[i, 0], ft[i, 1], ft[i, 2] = t0, t1, t2
                 new[i, 0], new[i, 1], new[i, 2] = x[i, 0] + t0 / kt[i], x[i, 1] + t1 / kt[i], x[i, 2] + t2 / kt[i]
                 et += (t0 * t0 + t1 * t1 + t2 * t2) / kt[i]
@@ -176,8 +177,9 @@ def contact_pass(codes, params, offsets, mus, X0, D, nodes, k, kt, anchors, new,
         if mu > 0.0:
             for j in range(m):
                 a[j, 0], a[j, 1], a[j, 2] = anchors[jf, nodes[j], 0], anchors[jf, nodes[j], 1], anchors[jf, nodes[j], 2]
-            e1, e2, n1, n2, pb = body_forces(codes[b], params[b], offsets[b], mu, x, kk, kkt, a, f, FT[jf], na,
-                                             _G0, _N0)
+            e1, e2, n1, n2, pb = body_forces(
+                codes[b], params[b], offsets[b], mu, x, kk, kkt, a, f, FT[jf], na, _G0, _N0
+            )
             for j in range(m):
                 new[jf, nodes[j], 0], new[jf, nodes[j], 1], new[jf, nodes[j], 2] = na[j, 0], na[j, 1], na[j, 2]
             jf += 1
@@ -202,6 +204,9 @@ def friction_work(FT, nodes, Dn1, Dp):
     for b in range(FT.shape[0]):
         for j in range(nodes.size):
             o = 6 * nodes[j]
-            s += FT[b, j, 0] * (Dn1[o] - Dp[o]) + FT[b, j, 1] * (Dn1[o + 1] - Dp[o + 1]) + \
-                FT[b, j, 2] * (Dn1[o + 2] - Dp[o + 2])
+            s += (
+                FT[b, j, 0] * (Dn1[o] - Dp[o])
+                + FT[b, j, 1] * (Dn1[o + 1] - Dp[o + 1])
+                + FT[b, j, 2] * (Dn1[o + 2] - Dp[o + 2])
+            )
     return s

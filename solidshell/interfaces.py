@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 import numpy as np
 
-if TYPE_CHECKING:   # annotations only: importing these here would import the solvers
+if TYPE_CHECKING:  # annotations only: importing these here would import the solvers
     import scipy.sparse as sp
 
     from .solvers.explicit.kernels import Dofs
@@ -75,8 +75,8 @@ class ContactBody(Protocol):
     ``signed_distance`` the laws call instead.  ``lipschitz``: a bound on |g(x) - g(y)| / |x - y|,
     None when unknown (then every node is a contact candidate)."""
 
-    offset: float        # distance kept between the body and the mid-surface [length]
-    friction: float      # Coulomb coefficient mu (0: frictionless)
+    offset: float  # distance kept between the body and the mid-surface [length]
+    friction: float  # Coulomb coefficient mu (0: frictionless)
     lipschitz: float | None
     code: int
 
@@ -105,10 +105,10 @@ class SolverProblem(Protocol):
     """What a solver needs of a posed problem (solidshell.problem.Problem)."""
 
     model: ExplicitModel
-    fixed: np.ndarray                  # (N,6) bool: prescribed dofs
-    loads: np.ndarray                  # (N,6) dead nodal forces [force]
-    prescribed: np.ndarray             # (N,6) values of the prescribed dofs [length]
-    contact: Sequence[ContactBody]     # empty: no contact search at all
+    fixed: np.ndarray  # (N,6) bool: prescribed dofs
+    loads: np.ndarray  # (N,6) dead nodal forces [force]
+    prescribed: np.ndarray  # (N,6) values of the prescribed dofs [length]
+    contact: Sequence[ContactBody]  # empty: no contact search at all
     name: str
 
 
@@ -158,9 +158,9 @@ class Damper(Protocol):
     runs).  The flags are declared by every damper (the base class's defaults: False)."""
 
     name: str
-    rewrites_step: bool      # correct() computes D_n+1 from R alone (the fused step only forms R)
-    wants_power: bool        # correct() reads view.step_power
-    varies_alpha: bool       # the viscous alpha changes during the run (state.damper_alpha)
+    rewrites_step: bool  # correct() computes D_n+1 from R alone (the fused step only forms R)
+    wants_power: bool  # correct() reads view.step_power
+    varies_alpha: bool  # the viscous alpha changes during the run (state.damper_alpha)
 
     def alpha0(self, settings) -> float:
         """The viscous alpha [1/s] at the start."""
@@ -183,9 +183,9 @@ class Observer(Protocol):
 class RunReadings(Protocol):
     """The latest readings of a run a progress report shows (the explicit State has them)."""
 
-    last_ekin: float         # kinetic energy at the last sample
-    last_rel_res: float      # |R|_free / |P|_free at the last check
-    last_rel_ke: float       # E_kin / W_ext at the last check
+    last_ekin: float  # kinetic energy at the last sample
+    last_rel_res: float  # |R|_free / |P|_free at the last check
+    last_rel_ke: float  # E_kin / W_ext at the last check
 
 
 class FrameStore(Protocol):

@@ -37,9 +37,18 @@ from pathlib import Path
 
 import numpy as np
 
-UNITS = {"length": "cm", "force": "gf", "time": "s", "mass": "gf*s^2/cm", "angle": "deg",
-         "displacement": "cm", "energy": "gf*cm", "rigidity_tensile": "gf/cm",
-         "rigidity_bending": "gf*cm^2/cm", "weight": "gf/cm^2"}
+UNITS = {
+    "length": "cm",
+    "force": "gf",
+    "time": "s",
+    "mass": "gf*s^2/cm",
+    "angle": "deg",
+    "displacement": "cm",
+    "energy": "gf*cm",
+    "rigidity_tensile": "gf/cm",
+    "rigidity_bending": "gf*cm^2/cm",
+    "weight": "gf/cm^2",
+}
 
 
 # --------------------------------------------------------------------------- atomic writes
@@ -62,7 +71,7 @@ def _umask() -> int:
     return old
 
 
-_FILE_MODE = 0o666 & ~_umask()   # what open() would give a new file (mkstemp gives 0600)
+_FILE_MODE = 0o666 & ~_umask()  # what open() would give a new file (mkstemp gives 0600)
 
 
 def _fsync_file(p: Path) -> None:
@@ -176,10 +185,12 @@ def _fields(mesh, U=None) -> dict:
     if U is None:
         return {}
     U = np.asarray(U, dtype=float).reshape(mesh.n_nodes, 6)
-    return {"displacement": U[:, :3].copy(),
-            "director_displacement": U[:, 3:].copy(),
-            "deformed_director": mesh.directors + U[:, 3:],
-            "position": mesh.nodes + U[:, :3]}
+    return {
+        "displacement": U[:, :3].copy(),
+        "director_displacement": U[:, 3:].copy(),
+        "deformed_director": mesh.directors + U[:, 3:],
+        "position": mesh.nodes + U[:, :3],
+    }
 
 
 def write_mesh_file(path, mesh, U=None, deformed: bool = False, run_id: str | None = None) -> Path:
@@ -227,7 +238,6 @@ def _fast_xml_series_writer():
 def write_time_series(path, mesh, frames, run_id: str | None = None) -> Path:
     """XDMF time series (meshio TimeSeriesWriter, inline XML data) of ``frames`` = [(t, U (N,6)), ...]
     on the undeformed mesh: fields ``displacement`` and ``director_displacement`` per frame."""
-    import meshio
 
     path = Path(path)
     cells = []
@@ -240,8 +250,9 @@ def write_time_series(path, mesh, frames, run_id: str | None = None) -> Path:
             w.write_points_cells(mesh.nodes, cells)
             for t, U in frames:
                 U = np.asarray(U, dtype=float).reshape(mesh.n_nodes, 6)
-                w.write_data(float(t), point_data={"displacement": U[:, :3].copy(),
-                                                   "director_displacement": U[:, 3:].copy()})
+                w.write_data(
+                    float(t), point_data={"displacement": U[:, :3].copy(), "director_displacement": U[:, 3:].copy()}
+                )
         if run_id is not None:
             stamp_xml(tmp, run_id)
     return path
@@ -291,7 +302,7 @@ def stamp_xml(path, run_id: str) -> None:
     path = Path(path)
     data = path.read_bytes()
     at = data.index(b"?>") + 2 if data.startswith(b"<?xml") else 0
-    if at and data[at:at + 1] == b"\n":
+    if at and data[at : at + 1] == b"\n":
         at += 1
     path.write_bytes(data[:at] + tag + data[at:])
 
@@ -321,10 +332,10 @@ def _png_text(data: bytes) -> dict:
 
     out, i = {}, 8
     while i + 8 <= len(data):
-        (n,) = struct.unpack(">I", data[i:i + 4])
-        kind = data[i + 4:i + 8]
+        (n,) = struct.unpack(">I", data[i : i + 4])
+        kind = data[i + 4 : i + 8]
         if kind == b"tEXt":
-            k, _, v = data[i + 8:i + 8 + n].partition(b"\0")
+            k, _, v = data[i + 8 : i + 8 + n].partition(b"\0")
             out[k] = v
         i += 12 + n
     return out
@@ -360,15 +371,19 @@ def package_versions() -> dict:
 
 
 def mesh_counts(mesh, fixed=None) -> dict:
-    c = {"nodes": int(mesh.n_nodes), "quads": int(mesh.n_quads), "triangles": int(mesh.n_tris),
-         "elements": int(mesh.n_elements), "dofs": 6 * int(mesh.n_nodes),
-         "node_sets": {k: int(len(v)) for k, v in sorted(mesh.node_sets.items())}}
+    c = {
+        "nodes": int(mesh.n_nodes),
+        "quads": int(mesh.n_quads),
+        "triangles": int(mesh.n_tris),
+        "elements": int(mesh.n_elements),
+        "dofs": 6 * int(mesh.n_nodes),
+        "node_sets": {k: int(len(v)) for k, v in sorted(mesh.node_sets.items())},
+    }
     if fixed is not None:
         nf = int(np.count_nonzero(fixed))
         c["fixed_dofs"] = nf
         c["free_dofs"] = c["dofs"] - nf
     return c
-
 
 
 def series_frame_paths(path, n: int) -> list[Path]:

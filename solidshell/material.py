@@ -89,9 +89,16 @@ class Fabric:
     name: str = field(default="fabric", compare=False)
 
     def __post_init__(self):
-        for n, u in (("tensile_warp", "gf/cm"), ("tensile_weft", "gf/cm"), ("shear", "gf/cm"),
-                     ("bending_warp", "gf*cm^2/cm"), ("bending_weft", "gf*cm^2/cm"),
-                     ("torsion", "gf*cm^2/cm"), ("weight", "gf/cm^2"), ("thickness", "cm")):
+        for n, u in (
+            ("tensile_warp", "gf/cm"),
+            ("tensile_weft", "gf/cm"),
+            ("shear", "gf/cm"),
+            ("bending_warp", "gf*cm^2/cm"),
+            ("bending_weft", "gf*cm^2/cm"),
+            ("torsion", "gf*cm^2/cm"),
+            ("weight", "gf/cm^2"),
+            ("thickness", "cm"),
+        ):
             object.__setattr__(self, n, _positive(n, getattr(self, n), u))
         for n in ("transverse_shear", "thickness_modulus"):
             if getattr(self, n) is not None:
@@ -111,8 +118,17 @@ class Fabric:
     @classmethod
     def wool(cls, **overrides) -> "Fabric":
         """The wool fabric of Table 1 (Kang & Yu [10]), gf-cm-s units; keywords override fields."""
-        data: dict[str, Any] = dict(tensile_warp=1118.2, tensile_weft=759.5, shear=41.8, bending_warp=0.083,
-                                    bending_weft=0.063, torsion=0.027, weight=0.019, thickness=0.0593, name="wool")
+        data: dict[str, Any] = dict(
+            tensile_warp=1118.2,
+            tensile_weft=759.5,
+            shear=41.8,
+            bending_warp=0.083,
+            bending_weft=0.063,
+            torsion=0.027,
+            weight=0.019,
+            thickness=0.0593,
+            name="wool",
+        )
         data.update(overrides)
         return cls(**data)
 

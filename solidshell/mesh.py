@@ -94,8 +94,9 @@ class ShellMesh:
     n_elements = property(lambda self: len(self.quads) + len(self.tris))
 
     def __repr__(self) -> str:
-        return (f"ShellMesh({self.n_nodes} nodes, {self.n_quads} quads, {self.n_tris} tris, "
-                f"sets={sorted(self.node_sets)})")
+        return (
+            f"ShellMesh({self.n_nodes} nodes, {self.n_quads} quads, {self.n_tris} tris, sets={sorted(self.node_sets)})"
+        )
 
     # -------------------------------------------------------------- node sets
     def add_node_set(self, name: str, nodes) -> None:
@@ -109,7 +110,9 @@ class ShellMesh:
         try:
             idx = self.node_sets[name]
         except KeyError:
-            raise InputError(f"mesh has no node set {name!r}; it has: {', '.join(sorted(self.node_sets)) or 'none'}") from None
+            raise InputError(
+                f"mesh has no node set {name!r}; it has: {', '.join(sorted(self.node_sets)) or 'none'}"
+            ) from None
         if idx.size == 0:
             raise InputError(f"node set {name!r} selects no node")
         return idx
@@ -125,8 +128,10 @@ class ShellMesh:
         n = np.linalg.norm(acc, axis=1)
         if np.any(n <= 0.0):
             bad = np.flatnonzero(n <= 0.0)
-            raise InputError(f"{bad.size} node(s) belong to no element or only to degenerate ones "
-                             f"(first: node {bad[0]}); cannot define their directors")
+            raise InputError(
+                f"{bad.size} node(s) belong to no element or only to degenerate ones "
+                f"(first: node {bad[0]}); cannot define their directors"
+            )
         return acc / n[:, None]
 
     def element_areas(self) -> tuple[np.ndarray, np.ndarray]:
@@ -156,7 +161,7 @@ class ShellMesh:
         parts = []
         for cells in (self.quads, self.tris):
             if len(cells):
-                k = cells.shape[1]
+                cells.shape[1]
                 parts.append(np.stack([cells, np.roll(cells, -1, axis=1)], axis=2).reshape(-1, 2))
         e = np.sort(np.concatenate(parts), axis=1)
         return np.unique(e, axis=0)
@@ -193,7 +198,9 @@ class ShellMesh:
         for name, cells in (("quad", self.quads), ("triangle", self.tris)):
             if not len(cells):
                 continue
-            if np.any([len(set(r)) < cells.shape[1] for r in cells[np.any(np.diff(np.sort(cells, 1), axis=1) == 0, axis=1)]]):
+            if np.any(
+                [len(set(r)) < cells.shape[1] for r in cells[np.any(np.diff(np.sort(cells, 1), axis=1) == 0, axis=1)]]
+            ):
                 raise InputError(f"a {name} repeats a node")
             cn = _corner_normals(X, cells)
             mag = np.linalg.norm(cn, axis=2)
@@ -203,8 +210,7 @@ class ShellMesh:
             dots = np.einsum("ekc,ekc->ek", cn, self.directors[cells])
             if np.any(dots <= 0.0):
                 e = int(np.argwhere(dots <= 0.0)[0, 0])
-                raise InputError(f"{name} {e} is inverted (not counter-clockwise about its director) "
-                                 f"or non-convex")
+                raise InputError(f"{name} {e} is inverted (not counter-clockwise about its director) or non-convex")
 
     # ------------------------------------------------------------------ copies
     def copy(self) -> "ShellMesh":
@@ -251,11 +257,14 @@ class ShellMesh:
         pd = m.point_data or {}
         D = pd.get("director")
         sets = {k[4:]: np.flatnonzero(np.asarray(v)[used] > 0) for k, v in pd.items() if k.startswith("set:")}
-        return cls(pts[used],
-                   quads=remap[np.concatenate(quads)] if quads else None,
-                   tris=remap[np.concatenate(tris)] if tris else None,
-                   directors=None if D is None else np.asarray(D, float)[used],
-                   node_sets=sets, check=check)
+        return cls(
+            pts[used],
+            quads=remap[np.concatenate(quads)] if quads else None,
+            tris=remap[np.concatenate(tris)] if tris else None,
+            directors=None if D is None else np.asarray(D, float)[used],
+            node_sets=sets,
+            check=check,
+        )
 
     # --------------------------------------------------------------- skfem
     def to_skfem(self):

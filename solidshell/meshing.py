@@ -38,10 +38,20 @@ import numpy as np
 from .errors import InputError
 from .mesh import ShellMesh
 
-__all__ = ["parse_density", "build_mesh", "from_file", "RECIPES", "Recipe",
-           "strip", "square_on_square", "disc_on_disc", "square_on_disc", "square"]
+__all__ = [
+    "parse_density",
+    "build_mesh",
+    "from_file",
+    "RECIPES",
+    "Recipe",
+    "strip",
+    "square_on_square",
+    "disc_on_disc",
+    "square_on_disc",
+    "square",
+]
 
-_GMSH_LOCK = threading.Lock()   # gmsh keeps one global state per process
+_GMSH_LOCK = threading.Lock()  # gmsh keeps one global state per process
 _FIELD = re.compile(r"\s*[0-9]+\s*")
 
 
@@ -100,7 +110,7 @@ def _extract(gmsh) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, np.nda
     tags, xyz, _ = gmsh.model.mesh.getNodes()
     index = np.full(int(tags.max()) + 1 if len(tags) else 1, -1, dtype=np.int64)
     index[tags.astype(np.int64)] = np.arange(len(tags))
-    cells = {3: [], 2: []}            # gmsh type 3 = 4-node quadrangle, 2 = 3-node triangle
+    cells = {3: [], 2: []}  # gmsh type 3 = 4-node quadrangle, 2 = 3-node triangle
     for etype, _, conn in zip(*gmsh.model.mesh.getElements(dim=2)):
         if etype not in cells:
             name = gmsh.model.mesh.getElementProperties(etype)[0]
@@ -157,7 +167,7 @@ class _Builder:
 
     def __init__(self, gmsh):
         self.gmsh, self.occ = gmsh, gmsh.model.occ
-        self.curves: list[tuple[int, int]] = []       # (curve tag, elements)
+        self.curves: list[tuple[int, int]] = []  # (curve tag, elements)
         self.surfaces: list[int] = []
         self.groups: dict[tuple[int, str], list[int]] = {}
 
@@ -222,14 +232,19 @@ def strip(counts: tuple[int, int], length: float = 5.0, width: float = 1.0) -> S
     with _gmsh_model("strip") as gmsh:
         b = _Builder(gmsh)
         p = [b.point(x, y) for x, y in ((0, -W / 2), (L, -W / 2), (L, W / 2), (0, W / 2))]
-        c = [b.line(p[0], p[1], n), b.line(p[1], p[2], m, "tip"),
-             b.line(p[2], p[3], n), b.line(p[3], p[0], m, "clamped")]
+        c = [
+            b.line(p[0], p[1], n),
+            b.line(p[1], p[2], m, "tip"),
+            b.line(p[2], p[3], n),
+            b.line(p[3], p[0], m, "clamped"),
+        ]
         b.panel(*c)
         return b.mesh()
 
 
-def square_on_square(counts: tuple[int, int, int], sheet: float = 20.0,
-                     pedestal: float = 10.0, grading: float = 1.0) -> ShellMesh:
+def square_on_square(
+    counts: tuple[int, int, int], sheet: float = 20.0, pedestal: float = 10.0, grading: float = 1.0
+) -> ShellMesh:
     """Hanging part of a sheet x sheet cm square centred on a pedestal x pedestal cm square
     pedestal (Sections 3.2, 3.5, 6.1, 6.2): four trapezoidal panels between the pedestal edge and
     the sheet edge, meeting on the diagonals.  counts = (A along the pedestal edge, B outward, 4):
@@ -253,8 +268,7 @@ def square_on_square(counts: tuple[int, int, int], sheet: float = 20.0,
         inner = [b.point(i * p / 2, j * p / 2) for i, j in corners]
         outer = [b.point(i * s / 2, j * s / 2) for i, j in corners]
         g = float(grading)
-        diag = [b.line(inner[k], outer[k], nb, dist=("Progression", g ** (1.0 / max(nb - 1, 1))))
-                for k in range(4)]
+        diag = [b.line(inner[k], outer[k], nb, dist=("Progression", g ** (1.0 / max(nb - 1, 1)))) for k in range(4)]
         bump = ("Bump", 1.0 / g) if g != 1.0 else ("Progression", 1.0)
         for k in range(4):
             k1 = (k + 1) % 4
@@ -264,8 +278,7 @@ def square_on_square(counts: tuple[int, int, int], sheet: float = 20.0,
         return b.mesh()
 
 
-def disc_on_disc(counts: tuple[int, int], diameter: float = 25.4,
-                 pedestal_diameter: float = 12.7) -> ShellMesh:
+def disc_on_disc(counts: tuple[int, int], diameter: float = 25.4, pedestal_diameter: float = 12.7) -> ShellMesh:
     """Hanging annulus of a disc of ``diameter`` cm centred on a circular pedestal (Section 3.3:
     Ø25.4 on Ø12.7, meshes 10x40 and 20x80).  counts = (R radial, C around), C divisible by 4
     (one panel per quadrant, so the X and Y axes are mesh lines): RC quads, (R+1)C nodes.  Nodes
@@ -289,11 +302,10 @@ def disc_on_disc(counts: tuple[int, int], diameter: float = 25.4,
             a_in = b.arc(inner[k], o, inner[k1], nc // 4, "clamped")
             a_out = b.arc(outer[k], o, outer[k1], nc // 4, "outer")
             b.panel(a_in, ray[k1], a_out, ray[k])
-        return b.mesh()        # the arcs' centre point is no mesh node: _extract drops it
+        return b.mesh()  # the arcs' centre point is no mesh node: _extract drops it
 
 
-def square_on_disc(counts: tuple[int, int], sheet: float = 50.0,
-                   pedestal_diameter: float = 20.0) -> ShellMesh:
+def square_on_disc(counts: tuple[int, int], sheet: float = 50.0, pedestal_diameter: float = 20.0) -> ShellMesh:
     """Hanging part of a sheet x sheet cm square centred on a circular pedestal (Sections 3.4,
     4.2, 6.3: 50x50 on Ø20, mesh 30x240, level 0 4x32).  counts = (R outward, C around); four
     panels, one per square side, between the pedestal arc and the side, meeting on the
@@ -306,7 +318,7 @@ def square_on_disc(counts: tuple[int, int], sheet: float = 50.0,
     nr, nc = counts
     if nc % 8:
         raise InputError(f"square_on_disc needs C (elements around) divisible by 8, got {nc}")
-    r = dp / 2 / math.sqrt(2.0)          # pedestal points on the diagonals
+    r = dp / 2 / math.sqrt(2.0)  # pedestal points on the diagonals
     corners = ((1, -1), (1, 1), (-1, 1), (-1, -1))
     with _gmsh_model("square_on_disc") as gmsh:
         b = _Builder(gmsh)
@@ -319,7 +331,7 @@ def square_on_disc(counts: tuple[int, int], sheet: float = 50.0,
             a_in = b.arc(inner[k], o, inner[k1], nc // 4, "clamped")
             e_out = b.line(outer[k], outer[k1], nc // 4, "outer")
             b.panel(a_in, diag[k1], e_out, diag[k])
-        return b.mesh()        # the arcs' centre point is no mesh node: _extract drops it
+        return b.mesh()  # the arcs' centre point is no mesh node: _extract drops it
 
 
 def square(counts: tuple[int, int], size: float = 20.0) -> ShellMesh:
@@ -334,8 +346,12 @@ def square(counts: tuple[int, int], size: float = 20.0) -> ShellMesh:
     with _gmsh_model("square") as gmsh:
         b = _Builder(gmsh)
         p = [b.point(i * a / 2, j * a / 2) for i, j in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
-        c = [b.line(p[0], p[1], n, "outer"), b.line(p[1], p[2], m, "outer"),
-             b.line(p[2], p[3], n, "outer"), b.line(p[3], p[0], m, "outer")]
+        c = [
+            b.line(p[0], p[1], n, "outer"),
+            b.line(p[1], p[2], m, "outer"),
+            b.line(p[2], p[3], n, "outer"),
+            b.line(p[3], p[0], m, "outer"),
+        ]
         b.panel(*c)
         for name, q in zip(names, p):
             b.points_group(name, [q])
@@ -376,7 +392,7 @@ def _mesh_geo(p: Path):
             gmsh.open(str(p))
             gmsh.model.mesh.generate(2)
             errors = [m for m in gmsh.logger.get() if m.startswith("Error")]
-        except Exception as e:              # gmsh raises a plain Exception with its log line
+        except Exception as e:  # gmsh raises a plain Exception with its log line
             errors = [str(e) or "error"]
             _reset_geo_parser(gmsh)
         finally:
@@ -406,12 +422,14 @@ def _read_meshio(p: Path):
     import meshio
 
     out = io.StringIO()
-    try:   # meshio prints its errors and may even sys.exit(1) on an unreadable file
+    try:  # meshio prints its errors and may even sys.exit(1) on an unreadable file
         with contextlib.redirect_stdout(out), contextlib.redirect_stderr(out):
             m = meshio.read(str(p))
-    except (Exception, SystemExit) as e:    # ReadError, KeyError, ValueError, SystemExit, ...
-        msg = next((line for line in [str(e)] + out.getvalue().splitlines() if line.strip()
-                    and not line.strip().isdigit()), type(e).__name__)
+    except (Exception, SystemExit) as e:  # ReadError, KeyError, ValueError, SystemExit, ...
+        msg = next(
+            (line for line in [str(e)] + out.getvalue().splitlines() if line.strip() and not line.strip().isdigit()),
+            type(e).__name__,
+        )
         raise InputError(f"cannot read mesh file {p.name}: {msg.strip()}") from None
     X = np.asarray(m.points, dtype=float)
     if X.ndim != 2 or len(X) == 0:
@@ -459,6 +477,7 @@ def _physical_sets(m) -> dict[str, np.ndarray]:
 class Recipe:
     """A mesh recipe: ``build(counts, **geometry)``, its default density and density form;
     ``optional``: the geometry keywords a scene file may leave out (it states every length)."""
+
     build: Callable[..., ShellMesh]
     density: str | None
     form: str | None
@@ -483,13 +502,22 @@ class Recipe:
 
 RECIPES: dict[str, Recipe] = {
     "strip": Recipe(strip, "10x1", "NxM", "5x1 cm strip clamped at x = 0; N along x M across (§3.1)"),
-    "square_on_square": Recipe(square_on_square, "24x8x4", "AxBx4",
-                               "hanging part of a square sheet on a square pedestal; 4 trapezoidal panels (§3.2, §3.5)",
-                               optional=("grading",)),
-    "disc_on_disc": Recipe(disc_on_disc, "10x40", "RxC",
-                           "hanging annulus of a Ø25.4 disc on a Ø12.7 pedestal; R radial x C around (§3.3)"),
-    "square_on_disc": Recipe(square_on_disc, "30x240", "RxC",
-                             "hanging part of a 50x50 sheet on a Ø20 pedestal; R outward x C around, 8 | C (§3.4)"),
+    "square_on_square": Recipe(
+        square_on_square,
+        "24x8x4",
+        "AxBx4",
+        "hanging part of a square sheet on a square pedestal; 4 trapezoidal panels (§3.2, §3.5)",
+        optional=("grading",),
+    ),
+    "disc_on_disc": Recipe(
+        disc_on_disc, "10x40", "RxC", "hanging annulus of a Ø25.4 disc on a Ø12.7 pedestal; R radial x C around (§3.3)"
+    ),
+    "square_on_disc": Recipe(
+        square_on_disc,
+        "30x240",
+        "RxC",
+        "hanging part of a 50x50 sheet on a Ø20 pedestal; R outward x C around, 8 | C (§3.4)",
+    ),
     "square": Recipe(square, "40x40", "NxM", "whole square sheet centred at the origin; N along x M along y (§4)"),
     "from_file": Recipe(from_file, None, None, "a user's .geo (meshed by gmsh) or a mesh file read by meshio"),
 }
@@ -505,8 +533,10 @@ def build_mesh(recipe: str, density: str | None = None, **geometry) -> ShellMesh
     r = RECIPES[key]
     unknown = sorted(set(geometry) - set(r.geometry))
     if unknown:
-        raise InputError(f"mesh recipe {key!r} has no geometry keyword {', '.join(map(repr, unknown))}; "
-                         f"it accepts: {', '.join(r.geometry) or 'none'}")
+        raise InputError(
+            f"mesh recipe {key!r} has no geometry keyword {', '.join(map(repr, unknown))}; "
+            f"it accepts: {', '.join(r.geometry) or 'none'}"
+        )
     if r.form is None:
         if density is not None:
             raise InputError(f"mesh recipe {key!r} takes no density (got {density!r})")

@@ -12,8 +12,7 @@ import copy
 import numpy as np
 from numba import get_num_threads
 
-from .assembly import (FreeLowerPattern, SparsePattern, element_dofs, scatter_add_half, scatter_add_mat,
-                       scatter_add_vec)
+from .assembly import FreeLowerPattern, SparsePattern, element_dofs, scatter_add_half, scatter_add_mat, scatter_add_vec
 from .elements import THICKNESS_STRAINS, core, quad4, tri3
 from .elements.corners import corner_alignment
 from .errors import InputError
@@ -37,14 +36,24 @@ _TYPE_CONSTANTS = ("alpha", "beta", "tie")
 
 
 def _precompute(module, Xo_e, Xn_e, section, membrane) -> dict:
-    return module.precompute(Xo_e, Xn_e, section.C_m, section.C_b, section.C_t, float(section.E_z),
-                             float(section.warp_angle_rad), membrane=membrane)
+    return module.precompute(
+        Xo_e,
+        Xn_e,
+        section.C_m,
+        section.C_b,
+        section.C_t,
+        float(section.E_z),
+        float(section.warp_angle_rad),
+        membrane=membrane,
+    )
 
 
 def _section_key(section) -> bytes:
     """What of a section the folded constants depend on, as bytes."""
-    return b"".join(np.asarray(v, dtype=float).tobytes() for v in
-                    (section.C_m, section.C_b, section.C_t, section.E_z, section.warp_angle_rad))
+    return b"".join(
+        np.asarray(v, dtype=float).tobytes()
+        for v in (section.C_m, section.C_b, section.C_t, section.E_z, section.warp_angle_rad)
+    )
 
 
 class ElementConstants:
@@ -58,7 +67,7 @@ class ElementConstants:
 
     def __init__(self):
         self._section = None
-        self._tables = {}        # (module, membrane) -> _ConstantsTable
+        self._tables = {}  # (module, membrane) -> _ConstantsTable
 
     def get(self, module, Xo_e, Xn_e, section, membrane) -> dict:
         """precompute's dict for the elements with nodal (M, nn, 3) Xo_e, Xn_e: the cached rows,
@@ -83,8 +92,9 @@ def _element_rows(Xo_e, Xn_e) -> np.ndarray:
     """(M, 6 nn) uint64: each element's reference node coordinates X_o, X_n as raw 64-bit words, its
     key in ElementConstants (equal rows <=> equal bytes, as the per-element bytes keys were)."""
     M = len(Xo_e)
-    R = np.concatenate([np.asarray(Xo_e, dtype=float).reshape(M, -1), np.asarray(Xn_e, dtype=float).reshape(M, -1)],
-                       axis=1)
+    R = np.concatenate(
+        [np.asarray(Xo_e, dtype=float).reshape(M, -1), np.asarray(Xn_e, dtype=float).reshape(M, -1)], axis=1
+    )
     return np.ascontiguousarray(R).view(np.uint64)
 
 
@@ -109,11 +119,11 @@ class _ConstantsTable:
 
     def __init__(self):
         self.n = 0
-        self.rows = None             # (cap, 6 nn) uint64 keys of the stored elements
-        self.store = {}              # per-element constant -> (cap, ...) array
-        self.shared = None           # the type constants (_TYPE_CONSTANTS) of the first precompute
-        self.hashes = np.zeros(0, dtype=np.uint64)   # sorted hashes of the indexed rows
-        self.slots = np.zeros(0, dtype=np.int64)     # their rows in the stores
+        self.rows = None  # (cap, 6 nn) uint64 keys of the stored elements
+        self.store = {}  # per-element constant -> (cap, ...) array
+        self.shared = None  # the type constants (_TYPE_CONSTANTS) of the first precompute
+        self.hashes = np.zeros(0, dtype=np.uint64)  # sorted hashes of the indexed rows
+        self.slots = np.zeros(0, dtype=np.int64)  # their rows in the stores
 
     def find(self, rows) -> np.ndarray:
         """(M,) store row of each element (row of ``rows``), -1 where not stored."""
@@ -164,7 +174,7 @@ def _grown(a, cap, like) -> np.ndarray:
     """``a``'s rows in a new (cap, ...) array shaped and typed like ``like``'s rows."""
     out = np.empty((cap,) + like.shape[1:], dtype=like.dtype)
     if a is not None:
-        out[:len(a)] = a
+        out[: len(a)] = a
     return out
 
 
@@ -176,8 +186,7 @@ class _Block:
         self.conn = np.ascontiguousarray(conn, dtype=np.int64)
         self.nn = conn.shape[1]
         self.dofs = element_dofs(self.conn)
-        c = (constants.get if constants is not None else _precompute)(module, Xo[conn], Xn[conn], section,
-                                                                       membrane)
+        c = (constants.get if constants is not None else _precompute)(module, Xo[conn], Xn[conn], section, membrane)
         # Eq. (24) measures |x_n| - 1 against |X_n| (not |X_n|^2/2 as the Green strain does)
         c["r_zq"] = np.sqrt(2.0 * c["r_z"])
         self.c = c
@@ -201,8 +210,22 @@ class _Block:
         from which the strains are formed (displacement form, elements/core.py); ``sl`` selects a
         range of elements (the per-element arrays are sliced, views)."""
         c = self.c
-        return (xo, xn, U, self.conn[sl], self.dN, self.alpha, self.beta, self.tie, c["Cmb"][sl],
-                c["Cs"][sl], c["Cz"][sl], c["r_zq"][sl], quasi, mu)
+        return (
+            xo,
+            xn,
+            U,
+            self.conn[sl],
+            self.dN,
+            self.alpha,
+            self.beta,
+            self.tie,
+            c["Cmb"][sl],
+            c["Cs"][sl],
+            c["Cz"][sl],
+            c["r_zq"][sl],
+            quasi,
+            mu,
+        )
 
 
 def _membrane_runs(membrane, n_quads: int) -> list:
@@ -243,8 +266,15 @@ class Model:
         elements (the adaptive driver's), or None
     """
 
-    def __init__(self, mesh: ShellMesh, material, thickness_strain: str = "green", mu: float = 0.5,
-                 membrane: str = "full", constants: ElementConstants | None = None):
+    def __init__(
+        self,
+        mesh: ShellMesh,
+        material,
+        thickness_strain: str = "green",
+        mu: float = 0.5,
+        membrane: str = "full",
+        constants: ElementConstants | None = None,
+    ):
         if thickness_strain not in THICKNESS_STRAINS:
             raise InputError(f"thickness_strain must be one of {THICKNESS_STRAINS}, got {thickness_strain!r}")
         runs = _membrane_runs(membrane, len(mesh.quads))
@@ -274,7 +304,7 @@ class Model:
         sub.blocks = [b.take(np.flatnonzero(touch[b.conn].any(axis=1))) for b in self.blocks]
         sub.blocks = [b for b in sub.blocks if len(b.conn)]
         sub._pattern = None
-        sub._areas = None       # nodal_areas() of the sub-model: its own blocks' (the memo is the whole model's)
+        sub._areas = None  # nodal_areas() of the sub-model: its own blocks' (the memo is the whole model's)
         return sub
 
     n_nodes = property(lambda self: self.mesh.n_nodes)
@@ -359,24 +389,29 @@ class Model:
     def _force_and_tangent_into(self, U, pos_maps, nnz):
         """_chunked_tangent with the whole element matrices, scattered through ``pos_maps`` (one
         (M, nd, nd) position map per block; negative positions are skipped)."""
-        return self._chunked_tangent(U, nnz, TANGENT_CHUNK, core.force_tangent,
-                                     lambda k, sl, Ke, data: scatter_add_mat(pos_maps[k][sl], Ke, data))
+        return self._chunked_tangent(
+            U,
+            nnz,
+            TANGENT_CHUNK,
+            core.force_tangent,
+            lambda k, sl, Ke, data: scatter_add_mat(pos_maps[k][sl], Ke, data),
+        )
 
     def force_and_tangent(self, U):
         """(internal force (N,6), tangent K_t (6N,6N) CSR) at U, Eq. (9)."""
-        import scipy.sparse as sp      # here only: the static solver's path never forms this matrix
+        import scipy.sparse as sp  # here only: the static solver's path never forms this matrix
 
         p = self.pattern
         F, data = self._force_and_tangent_into(U, p.pos, p.nnz)
-        return F.reshape(-1, 6), sp.csr_matrix((data, p.indices.copy(), p.indptr.copy()),
-                                               shape=(p.n, p.n))
+        return F.reshape(-1, 6), sp.csr_matrix((data, p.indices.copy(), p.indptr.copy()), shape=(p.n, p.n))
 
     def free_lower_pattern(self, free) -> FreeLowerPattern:
         """The lower triangle of the tangent's pattern on the dofs ``free`` (assembly.py).  The
         full pattern is built for it but not kept unless it already was: the static solver needs
         only this one, and the full one's maps are ~15 MB on square-pedestal 48x16x4."""
-        pattern = self._pattern if self._pattern is not None else \
-            SparsePattern(self.n_dofs, [b.dofs for b in self.blocks])
+        pattern = (
+            self._pattern if self._pattern is not None else SparsePattern(self.n_dofs, [b.dofs for b in self.blocks])
+        )
         return FreeLowerPattern(pattern, free)
 
     def force_and_free_tangent(self, U, lower: FreeLowerPattern):
@@ -385,6 +420,7 @@ class Model:
         Only the triangle of each element matrix that lands in this triangle is formed
         (core.force_tangent with ``half``) and scattered (lower.half_pos); the same bits as the full
         assembly's entries."""
+
         def scatter(k, sl, Kh, data):
             scatter_add_half(lower.half_pos[k][sl], lower.half_entries[k], Kh.reshape(len(Kh), -1), data)
 
@@ -415,8 +451,9 @@ class Model:
             A = self.nodal_areas()
             mu = self.material.mass_per_area
             h = self.material.thickness
-            self._mass = np.column_stack([np.repeat(mu * A[:, None], 3, 1),
-                                          np.repeat(mu * h * h / 4.0 * A[:, None], 3, 1)])
+            self._mass = np.column_stack(
+                [np.repeat(mu * A[:, None], 3, 1), np.repeat(mu * h * h / 4.0 * A[:, None], 3, 1)]
+            )
         return self._mass.copy()
 
     # ------------------------------------------------------------- diagnostics

@@ -100,6 +100,7 @@ def _field(p: PerturbationSettings, X: np.ndarray, anchors: np.ndarray, centre, 
 
     def w(x):
         return base(x) * _taper(x[:, :2], anchors)
+
     return w
 
 
@@ -113,8 +114,10 @@ def initial_state(settings, mesh, fixed, centre=None) -> np.ndarray | None:
     if p.amplitude == 0.0:
         return None
     if p.shape == "folds" and centre is None:
-        raise InputError("perturbation.shape = 'folds' needs a pedestal or sphere to turn about; "
-                         "this scene has none (use shape = 'random')")
+        raise InputError(
+            "perturbation.shape = 'folds' needs a pedestal or sphere to turn about; "
+            "this scene has none (use shape = 'random')"
+        )
     X = np.asarray(mesh.nodes, float)
     Xn = np.asarray(mesh.directors, float)
     anchor = np.asarray(fixed, bool).reshape(len(X), 6)[:, :3].all(axis=1)

@@ -20,8 +20,12 @@ from .render.geometry import CAMERAS, bodies_of
 from .render.panel import ViewStyle, colorbar, draw_view, height_norm, scene_warp_deg
 
 VIEWS = ("top", "iso", "side", "side_yz")
-_VIEW_NAMES = {"top": "top view", "iso": "isometric view", "side": "side view (x-z projection)",
-               "side_yz": "side view (y-z projection)"}
+_VIEW_NAMES = {
+    "top": "top view",
+    "iso": "isometric view",
+    "side": "side view (x-z projection)",
+    "side_yz": "side view (y-z projection)",
+}
 
 
 def _figure(figsize):
@@ -35,8 +39,17 @@ def _figure(figsize):
     return fig
 
 
-def render(path, mesh, U=None, view: str = "iso", title: str | None = None, scene=None,
-           subtitle: str | None = None, dpi: int = 130, mesh_lines: bool = True) -> Path:
+def render(
+    path,
+    mesh,
+    U=None,
+    view: str = "iso",
+    title: str | None = None,
+    scene=None,
+    subtitle: str | None = None,
+    dpi: int = 130,
+    mesh_lines: bool = True,
+) -> Path:
     """Draw the mesh at X_o + U_o (U (N,6) or None for the undeformed mesh) and write a PNG."""
     from .io import atomic_path
 
@@ -48,8 +61,16 @@ def render(path, mesh, U=None, view: str = "iso", title: str | None = None, scen
         X = X + np.asarray(U, float).reshape(-1, 6)[:, :3]
     fig = _figure((7.0, 6.0))
     ax = fig.add_subplot(111)
-    sm = draw_view(ax, mesh, X, view, bodies=bodies_of(scene), norm=height_norm(X), warp_deg=scene_warp_deg(scene),
-                   style=ViewStyle(mesh_lines=mesh_lines))
+    sm = draw_view(
+        ax,
+        mesh,
+        X,
+        view,
+        bodies=bodies_of(scene),
+        norm=height_norm(X),
+        warp_deg=scene_warp_deg(scene),
+        style=ViewStyle(mesh_lines=mesh_lines),
+    )
     colorbar(fig, ax, sm)
     head = title or "solidshell"
     sub = _VIEW_NAMES[view] + (f" -- {subtitle}" if subtitle else "")

@@ -37,12 +37,15 @@ MARKER = "RUNNING"
 
 # Names this package writes into a run folder (solidshell.runner) and the temporaries of its atomic
 # writes (".<stem>.<random><suffix>", solidshell.io.atomic_path).
-_OURS = re.compile(r"""^(?:
+_OURS = re.compile(
+    r"""^(?:
       (?:mesh|result)\.(?:xdmf|vtu) | deformed\.vtu | series\.xdmf | summary\.json | RUNNING
     | projected_boundary\.csv | (?:top|iso|side|side_yz)\.png | iso_t\d+(?:\.\d+)?\.png
     | \.(?:mesh|result|deformed|series|summary|projected_boundary|top|iso|side|side_yz|iso_t\d+(?:\.\d+)?)
       \.[A-Za-z0-9_]+\.(?:xdmf|vtu|json|csv|png)
-)$""", re.X)
+)$""",
+    re.X,
+)
 
 
 def _io(exc: OSError, path) -> IOFailure:
@@ -98,9 +101,13 @@ class RunFolder:
             else:
                 self.foreign.append(n)
         if self.foreign and not self.force:
-            shown = ", ".join(self.foreign[:5]) + (f" and {len(self.foreign) - 5} more" if len(self.foreign) > 5 else "")
-            raise InputError(f"output folder {p} holds files solidshell did not write ({shown}); "
-                             f"choose another --out, or --force (force=True) to write beside them")
+            shown = ", ".join(self.foreign[:5]) + (
+                f" and {len(self.foreign) - 5} more" if len(self.foreign) > 5 else ""
+            )
+            raise InputError(
+                f"output folder {p} holds files solidshell did not write ({shown}); "
+                f"choose another --out, or --force (force=True) to write beside them"
+            )
 
     def _old_summary(self) -> dict:
         f = self.path / "summary.json"
@@ -121,8 +128,10 @@ class RunFolder:
                 pass
             except OSError as e:
                 raise _io(e, self.path) from None
-        self.write_json(MARKER, {"run_id": self.run_id, "pid": os.getpid(),
-                                 "started": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())})
+        self.write_json(
+            MARKER,
+            {"run_id": self.run_id, "pid": os.getpid(), "started": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())},
+        )
 
     def abandon(self) -> None:
         """The run ends with nothing to write: remove the marker (and the folder if we made it and

@@ -14,7 +14,6 @@ import math
 from typing import Annotated, Any, Optional, TypeVar
 
 import numpy as np
-
 from pydantic import AfterValidator, BaseModel, ConfigDict, ValidationError
 
 from .errors import InputError
@@ -59,8 +58,7 @@ class SettingsModel(BaseModel):
     """Base of every solver's settings: frozen, unknown keys refused, strict-ish numbers (a string
     "abc" is refused; "1e-3" from a command line is accepted as 1e-3 by pydantic's lax mode)."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True, arbitrary_types_allowed=True,
-                              validate_default=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, arbitrary_types_allowed=True, validate_default=True)
 
     def as_dict(self) -> dict:
         """The settings as a plain dict (every key, defaults filled in)."""
@@ -75,7 +73,7 @@ def _one_line(exc: ValidationError, where: str, model: type[SettingsModel]) -> s
     for e in exc.errors():
         key = ".".join(str(p) for p in e.get("loc", ()))
         msg = e.get("msg", "invalid").replace("Value error, ", "")
-        if not key:                 # a rule across settings (model validator): its own words
+        if not key:  # a rule across settings (model validator): its own words
             parts.append(msg)
             continue
         if e.get("type") == "extra_forbidden":

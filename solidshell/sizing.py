@@ -34,10 +34,10 @@ BASE_BYTES = 256 * MIB
 """Interpreter, numpy/scipy/numba/matplotlib and compiled kernels, independent of the mesh."""
 
 BYTES_PER_ELEMENT = {
-    "none": 4 * KIB,        # meshing 1 KiB + mesh files and pictures
-    "explicit": 12 * KIB,   # loop 2.6 KiB + frames up to 4.7 KiB per node + files
+    "none": 4 * KIB,  # meshing 1 KiB + mesh files and pictures
+    "explicit": 12 * KIB,  # loop 2.6 KiB + frames up to 4.7 KiB per node + files
     "relax": 12 * KIB,
-    "static": 64 * KIB,     # tangent + factor, measured 51 KiB at 1.2e4 elements
+    "static": 64 * KIB,  # tangent + factor, measured 51 KiB at 1.2e4 elements
 }
 
 
@@ -78,8 +78,7 @@ def _human(n: float) -> str:
     return f"{n:.3g} PiB"  # pragma: no cover
 
 
-def check(n_elements: int, kind: str, what: str, allow_large: bool = False,
-          available: int | None = None) -> int:
+def check(n_elements: int, kind: str, what: str, allow_large: bool = False, available: int | None = None) -> int:
     """Refuse (InputError, one line) a run whose estimated memory exceeds the available memory.
 
     ``what`` names the mesh in the message (e.g. "--mesh 1000000x1000000x4"); ``available``
@@ -89,8 +88,10 @@ def check(n_elements: int, kind: str, what: str, allow_large: bool = False,
         return need
     have = available_memory() if available is None else int(available)
     if have is not None and need > have:
-        raise InputError(f"{what}: {n_elements:.4g} elements need about {_human(need)} for a "
-                         f"{kind if kind != 'none' else 'mesh-only'} run, more than the "
-                         f"{_human(have)} available; use a coarser mesh, or --allow-large "
-                         f"(run_scene(..., allow_large=True)) to try anyway")
+        raise InputError(
+            f"{what}: {n_elements:.4g} elements need about {_human(need)} for a "
+            f"{kind if kind != 'none' else 'mesh-only'} run, more than the "
+            f"{_human(have)} available; use a coarser mesh, or --allow-large "
+            f"(run_scene(..., allow_large=True)) to try anyway"
+        )
     return need

@@ -18,17 +18,17 @@ CM_IN_M = 1.0e-2
 # SI factor of each quantity kind, as (force exponent, length exponent, time exponent):
 # a value in gf^a cm^b s^c is multiplied by GF_IN_N**a * CM_IN_M**b to get SI.
 _KINDS = {
-    "length": (0, 1),                  # cm -> m
-    "area": (0, 2),                    # cm^2 -> m^2
-    "force": (1, 0),                   # gf -> N
-    "force_per_length": (1, -1),       # gf/cm -> N/m   (tensile, shear rigidity; line load)
-    "pressure": (1, -2),               # gf/cm^2 -> Pa  (weight per area; surface load)
-    "moment": (1, 1),                  # gf*cm -> N*m   (bending rigidity per width, gf*cm^2/cm)
-    "bending_rigidity": (1, 1),        # gf*cm^2/cm -> N*m
-    "mass": (1, -1),                   # gf*s^2/cm -> kg
-    "mass_per_area": (1, -3),          # gf*s^2/cm^3 -> kg/m^2
-    "acceleration": (0, 1),            # cm/s^2 -> m/s^2
-    "energy": (1, 1),                  # gf*cm -> J
+    "length": (0, 1),  # cm -> m
+    "area": (0, 2),  # cm^2 -> m^2
+    "force": (1, 0),  # gf -> N
+    "force_per_length": (1, -1),  # gf/cm -> N/m   (tensile, shear rigidity; line load)
+    "pressure": (1, -2),  # gf/cm^2 -> Pa  (weight per area; surface load)
+    "moment": (1, 1),  # gf*cm -> N*m   (bending rigidity per width, gf*cm^2/cm)
+    "bending_rigidity": (1, 1),  # gf*cm^2/cm -> N*m
+    "mass": (1, -1),  # gf*s^2/cm -> kg
+    "mass_per_area": (1, -3),  # gf*s^2/cm^3 -> kg/m^2
+    "acceleration": (0, 1),  # cm/s^2 -> m/s^2
+    "energy": (1, 1),  # gf*cm -> J
 }
 
 

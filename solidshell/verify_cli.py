@@ -13,12 +13,19 @@ def add_parser(sub) -> None:
     v.add_argument("--quick", action="store_true", help="the reduced set (< 2 min), part of the test run")
     v.add_argument("--out", metavar="DIR", help="output folder (default: verification-out)")
     v.add_argument("--list", action="store_true", help="list the checks and exit")
-    v.add_argument("--references", action="store_true",
-                   help="regenerate every stored reference file and check that it has not changed")
-    v.add_argument("--fenicsx", action="store_true",
-                   help="run the DOLFINx cross-check (verification/fenicsx; needs dolfinx)")
-    v.add_argument("--reuse", action="store_true",
-                   help="with --fenicsx: reuse the converged DOLFINx results of identical jobs in OUT/fenicsx_work")
+    v.add_argument(
+        "--references",
+        action="store_true",
+        help="regenerate every stored reference file and check that it has not changed",
+    )
+    v.add_argument(
+        "--fenicsx", action="store_true", help="run the DOLFINx cross-check (verification/fenicsx; needs dolfinx)"
+    )
+    v.add_argument(
+        "--reuse",
+        action="store_true",
+        help="with --fenicsx: reuse the converged DOLFINx results of identical jobs in OUT/fenicsx_work",
+    )
 
 
 def run(args) -> int:

@@ -26,8 +26,8 @@ from solidshell.errors import InputError
 from solidshell.mesh import ShellMesh
 from solidshell.run import run_scene
 from solidshell.run.adaptive import _adaptive_run, adapt_settings
-from solidshell.scenes.build import build_scene_mesh
 from solidshell.scenes import load
+from solidshell.scenes.build import build_scene_mesh
 from solidshell.solvers.explicit import checkpoint, threads_for
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -36,15 +36,29 @@ LEVEL0 = "4x4"
 LEVEL0_NODES = 25
 # Eq. (25) at const 0.2 splits the hung corners' elements at step 3900 (t = 0.0299 s); 0.2 s of
 # hysteresis (eps 0.1) keeps them split.  No pictures or snapshot PNGs: they are not under test.
-ADAPT = {"adapt.levels": 2, "adapt.const": 0.2, "adapt.eps": 0.1, "adapt.every": 50,
-         "output.pictures": [], "output.snapshots": []}
-T_END = 0.031            # one remesh (t = 0.0299 s) and 145 steps after it
+ADAPT = {
+    "adapt.levels": 2,
+    "adapt.const": 0.2,
+    "adapt.eps": 0.1,
+    "adapt.every": 50,
+    "output.pictures": [],
+    "output.snapshots": [],
+}
+T_END = 0.031  # one remesh (t = 0.0299 s) and 145 steps after it
 
 
 def _explicit(tmp, transfer="dk", t_end=T_END, out=True, settle=True):
-    return run_scene(SCENE, mesh=LEVEL0, solver="explicit", out_dir=tmp if out else None, progress=False,
-                     overrides={**ADAPT, "adapt.transfer": transfer, "adapt.settle_directors": settle},
-                     adaptive=True, t_end=t_end, snapshots=[])
+    return run_scene(
+        SCENE,
+        mesh=LEVEL0,
+        solver="explicit",
+        out_dir=tmp if out else None,
+        progress=False,
+        overrides={**ADAPT, "adapt.transfer": transfer, "adapt.settle_directors": settle},
+        adaptive=True,
+        t_end=t_end,
+        snapshots=[],
+    )
 
 
 @pytest.fixture(scope="module")
@@ -57,22 +71,48 @@ def relax_run(tmp_path_factory):
     # relaxation with unscaled masses (mass_scaling = 1) falls like the explicit run, so it splits
     # within a few thousand steps; const 0.1 splits at step 2700 (t = 0.0207 s).  A relaxation run
     # stopped by max_steps keeps no end frame, so frames every 700 steps (the one at 2800 is refined)
-    return run_scene(SCENE, mesh=LEVEL0, solver="relax", out_dir=tmp_path_factory.mktemp("relax"), progress=False,
-                     overrides={**ADAPT, "adapt.const": 0.1, "adapt.eps": 0.05}, adaptive=True,
-                     mass_scaling=1.0, max_steps=2900, frame_every=700)
+    return run_scene(
+        SCENE,
+        mesh=LEVEL0,
+        solver="relax",
+        out_dir=tmp_path_factory.mktemp("relax"),
+        progress=False,
+        overrides={**ADAPT, "adapt.const": 0.1, "adapt.eps": 0.05},
+        adaptive=True,
+        mass_scaling=1.0,
+        max_steps=2900,
+        frame_every=700,
+    )
 
 
 @pytest.fixture(scope="module")
 def relax_kinetic_run(tmp_path_factory):
     # the same with Cundall's kinetic damping (velocities zeroed at kinetic-energy peaks)
-    return run_scene(SCENE, mesh=LEVEL0, solver="relax", out_dir=tmp_path_factory.mktemp("relaxk"), progress=False,
-                     overrides={**ADAPT, "adapt.const": 0.1, "adapt.eps": 0.05}, adaptive=True,
-                     mass_scaling=1.0, max_steps=2900, frame_every=700, damping="kinetic")
+    return run_scene(
+        SCENE,
+        mesh=LEVEL0,
+        solver="relax",
+        out_dir=tmp_path_factory.mktemp("relaxk"),
+        progress=False,
+        overrides={**ADAPT, "adapt.const": 0.1, "adapt.eps": 0.05},
+        adaptive=True,
+        mass_scaling=1.0,
+        max_steps=2900,
+        frame_every=700,
+        damping="kinetic",
+    )
 
 
 # ----------------------------------------------------------------------------- 1. runs and their files
-SUMMARY_KEYS = ("max_active_nodes", "active_nodes_history", "remesh_count", "remesh_time_s", "remesh_share",
-                "max_interpenetrated_nodes", "remesh_energy_jumps")
+SUMMARY_KEYS = (
+    "max_active_nodes",
+    "active_nodes_history",
+    "remesh_count",
+    "remesh_time_s",
+    "remesh_share",
+    "max_interpenetrated_nodes",
+    "remesh_energy_jumps",
+)
 
 
 def _series(out):
@@ -164,7 +204,7 @@ def test_restart_of_an_adaptive_run_is_bit_for_bit(tmp_path):
     part = _driver({}, **RESTART)
     part.start()
     while part.integ.state.step < 2800:
-        with threads_for(part.integ, part.settings.threads):    # as run() does (bitwise either way)
+        with threads_for(part.integ, part.settings.threads):  # as run() does (bitwise either way)
             assert part.integ.advance(part.adapt.every) == "running"
         part._adapt_pass()
     assert part.remeshes, "the checkpoint must hold a remeshed state"
@@ -183,9 +223,17 @@ def test_restart_of_an_adaptive_run_is_bit_for_bit(tmp_path):
     for (_, _, Ua), (_, _, Ub) in zip(res.series, ref.series):
         assert np.array_equal(Ua, Ub)
 
-    out = run_scene(SCENE, mesh=LEVEL0, solver="explicit", progress=False, adaptive=True,
-                    overrides={**ADAPT, "adapt.const": RESTART["const"], "adapt.eps": RESTART["eps"]},
-                    t_end=RESTART["t_end"], snapshots=[], restart=str(ck))
+    out = run_scene(
+        SCENE,
+        mesh=LEVEL0,
+        solver="explicit",
+        progress=False,
+        adaptive=True,
+        overrides={**ADAPT, "adapt.const": RESTART["const"], "adapt.eps": RESTART["eps"]},
+        t_end=RESTART["t_end"],
+        snapshots=[],
+        restart=str(ck),
+    )
     assert np.array_equal(out.U, ref.result.U.reshape(-1, 6))
     assert out.summary["remesh_count"] == len(whole.remeshes)
 
@@ -219,7 +267,7 @@ def test_freeze_leaves_stops_the_passes_and_a_restart_stays_frozen(tmp_path):
     the second (step 3350).  Its first remesh is the unfrozen run's, to the last bit of the booked
     energy jump and kinetic energy.  A checkpoint taken after the freeze restarts frozen, bit for bit."""
     ref_run = _driver({}, **RESTART)
-    ref = ref_run.run()
+    ref_run.run()
     first, second = ref_run.remeshes[0], ref_run.remeshes[1]
     frz = dict(RESTART, freeze_leaves=10**6, freeze_after=first["t"] * (1.0 + 1e-9))
     whole = _driver({}, **frz)
@@ -227,7 +275,7 @@ def test_freeze_leaves_stops_the_passes_and_a_restart_stays_frozen(tmp_path):
     assert whole.frozen is not None and whole.frozen[1] == second["step"]
     assert whole.remeshes == [first]
     assert whole.summary_info()["remesh_frozen_at"] == {"t": whole.frozen[0], "step": second["step"]}
-    assert out.mesh.n_nodes == whole.history[-1][1] == first["active_nodes"]   # that mesh to the end
+    assert out.mesh.n_nodes == whole.history[-1][1] == first["active_nodes"]  # that mesh to the end
 
     part = _driver({}, **frz)
     part.start()
@@ -245,9 +293,13 @@ def test_freeze_leaves_stops_the_passes_and_a_restart_stays_frozen(tmp_path):
     assert np.array_equal(res.result.U, out.result.U)
 
 
-@pytest.mark.parametrize("freeze_on, frozen", [
-    ("splits", {(3, 0): True, (5, 0): True, (6, 0): False, (3, 1): False, (0, 2): False}),
-    ("changes", {(3, 0): True, (3, 2): True, (0, 5): True, (3, 3): False, (6, 0): False})])
+@pytest.mark.parametrize(
+    "freeze_on, frozen",
+    [
+        ("splits", {(3, 0): True, (5, 0): True, (6, 0): False, (3, 1): False, (0, 2): False}),
+        ("changes", {(3, 0): True, (3, 2): True, (0, 5): True, (3, 3): False, (6, 0): False}),
+    ],
+)
 def test_freeze_rule_counts_splits_or_all_changes(freeze_on, frozen):
     """adapt.freeze_on: "splits" freezes at a pass of 1-K splits and no merge, "changes" at a pass of
     1-K splits and merges together (K = 5 here); never before freeze_after."""
@@ -291,7 +343,7 @@ def test_new_node_settling_that_falls_short_falls_back_to_directors_only(monkeyp
     class Short(drv.DirectorSettler):
         def __call__(self, D, **kw):
             out, rep = super().__call__(D, **kw)
-            if len(self.idx) > int(np.count_nonzero(~self.fixed[:, 3:])):   # positions among the dofs
+            if len(self.idx) > int(np.count_nonzero(~self.fixed[:, 3:])):  # positions among the dofs
                 rep.converged = False
             return out, rep
 
@@ -348,7 +400,7 @@ def test_remeshing_runs_on_one_thread_on_small_meshes():
     """The critical-step estimate of every new mesh runs on the solver's thread count (one thread on
     a small mesh: two were measured 11x slower per remesh at load 5).  make_problem is called where the driver builds each integrator (start and every remesh); the
     numba thread count there must be the one threads_for gives a < SMALL_MESH_ELEMENTS mesh: 1."""
-    run = _driver({}, t_end=0.0035, const=0.0005, eps=0.00025)   # splits at steps 200, 250, 300, ...
+    run = _driver({}, t_end=0.0035, const=0.0005, eps=0.00025)  # splits at steps 200, 250, 300, ...
     seen, make = [], run.make_problem
 
     def recording(mesh):
@@ -365,10 +417,13 @@ def test_remeshing_runs_on_one_thread_on_small_meshes():
 def test_dk_transfer_jump_is_smaller_than_linear_and_settling_lowers_it(explicit_run):
     dk, lin = (_explicit(None, transfer=t, out=False, settle=False) for t in ("dk", "linear"))
     a, b = dk.summary["remeshes"][0], lin.summary["remeshes"][0]
-    c = explicit_run.summary["remeshes"][0]            # DK with settled directors (the default)
+    c = explicit_run.summary["remeshes"][0]  # DK with settled directors (the default)
     # the same state up to the first remesh, so the same marks: only the transfer differs
-    assert (a["step"], a["splits"], a["nodes_in"]) == (b["step"], b["splits"], b["nodes_in"]) == \
-        (c["step"], c["splits"], c["nodes_in"])
+    assert (
+        (a["step"], a["splits"], a["nodes_in"])
+        == (b["step"], b["splits"], b["nodes_in"])
+        == (c["step"], c["splits"], c["nodes_in"])
+    )
     assert a["kinetic_before"] == b["kinetic_before"] == c["kinetic_before"]
     # the bare transfers (the paper's comparison, §5.4), measured 0.627 (DK) vs 8.90 (linear):
     # linear interpolation of the bent corner puts the new mid-edge nodes on the chord (a kink:
@@ -398,17 +453,19 @@ def _drooping_square_on_disc(a, **adapt):
     """square-on-disc's level-0 run (one level) started, and a droop of its sheet from the clamped
     rim: w = -a d^2 with d the distance past the rim [cm], directors tilted with the slope, the
     clamped dofs at zero.  Returns (run, U (N,6))."""
-    sc = load("square-on-disc").with_overrides({"adapt.enabled": True, "adapt.levels": 1,
-                                                 **{f"adapt.{k}": v for k, v in adapt.items()}})
+    sc = load("square-on-disc").with_overrides(
+        {"adapt.enabled": True, "adapt.levels": 1, **{f"adapt.{k}": v for k, v in adapt.items()}}
+    )
     mesh, _ = build_scene_mesh(sc, sc.mesh["adaptive_level0"], "relax")
-    run = _adaptive_run(sc, mesh, {**sc.solver_settings("relax"), "t_max": 1.0}, adapt_settings(sc, "relax"),
-                        "relax", lambda *a: None)
+    run = _adaptive_run(
+        sc, mesh, {**sc.solver_settings("relax"), "t_max": 1.0}, adapt_settings(sc, "relax"), "relax", lambda *a: None
+    )
     run.start()
     X = run.active.mesh.nodes
     r = np.hypot(X[:, 0], X[:, 1])
     d = np.maximum(r - 10.0, 0.0)
     U = np.zeros((len(X), 6))
-    U[:, 2] = -a * d ** 2
+    U[:, 2] = -a * d**2
     U[:, 3:5] = 2.0 * a * d[:, None] * X[:, :2] / r[:, None]
     U[np.asarray(run._problem(run.active).fixed, dtype=bool)] = 0.0
     return run, U
@@ -422,6 +479,7 @@ def test_inserted_clamped_nodes_keep_their_prescribed_values_on_both_time_levels
     integrator does not snap the node back within one step (a ~50 cm/s jolt on the clamp, which the
     ledger booked as energy: docs/adaptivity.md)."""
     from solidshell.adapt.transfer import to_new_mesh
+
     run, U = _drooping_square_on_disc(0.05, settle_directors=False)
     st = run.integ.state
     st.D, st.D_prev = U.ravel().copy(), U.ravel().copy()
@@ -429,7 +487,7 @@ def test_inserted_clamped_nodes_keep_their_prescribed_values_on_both_time_levels
     new = run.forest.active_mesh()
     bare = to_new_mesh(run.bg, st.D, run.active.nodes, new.nodes).reshape(-1, 6)
     fixed = np.asarray(run._problem(new).fixed, dtype=bool)
-    assert np.abs(bare[fixed]).max() > 1e-3              # the transfer alone leaves the clamps displaced
+    assert np.abs(bare[fixed]).max() > 1e-3  # the transfer alone leaves the clamps displaced
     run._switch(new, int(new.mesh.n_elements), 0)
     st = run.integ.state
     assert not np.any(st.D.reshape(-1, 6)[fixed]) and not np.any(st.D_prev.reshape(-1, 6)[fixed])
@@ -445,6 +503,7 @@ def test_new_node_settling_of_large_bent_elements_gets_the_steps_it_needs():
     from solidshell.adapt import driver
     from solidshell.adapt.settle import DirectorSettler
     from solidshell.adapt.transfer import to_new_mesh
+
     run, U = _drooping_square_on_disc(0.03)
     run.forest.split([[0, i] for i in range(0, len(run.bg.level0.quads), 2)])
     new = run.forest.active_mesh()
@@ -464,10 +523,21 @@ def test_every_new_mesh_gets_its_own_critical_step():
     dt_crit 8.58e-5 -> 7.22e-5 s.  Keeping the old step there (the rule before: a new estimate only
     when the finest level changed) went non-finite 18 steps later (step 1018).  Each remesh now
     estimates the step of its mesh: the run stays finite past it with dt below every estimate."""
-    out = run_scene("square-pedestal", solver="relax", adaptive=True, out_dir=None, progress=False,
-                    overrides={"solver.relax.t_max": 0.1, "output.pictures": [], "output.snapshots": [],
-                               # the adaptive defaults, not the scene's §6 table (its coarse "ans")
-                               "adapt.const": 0.5, "adapt.coarse_membrane": "scene"})
+    out = run_scene(
+        "square-pedestal",
+        solver="relax",
+        adaptive=True,
+        out_dir=None,
+        progress=False,
+        overrides={
+            "solver.relax.t_max": 0.1,
+            "output.pictures": [],
+            "output.snapshots": [],
+            # the adaptive defaults, not the scene's §6 table (its coarse "ans")
+            "adapt.const": 0.5,
+            "adapt.coarse_membrane": "scene",
+        },
+    )
     s = out.summary
     assert s["finite"] and s["t_final"] >= 0.1 - 1e-9, s["message"]
     assert s["remesh_count"] >= 3
@@ -480,16 +550,16 @@ def test_split_everything_then_flat_state_merges_back_to_level0():
     # the bare transfer: settling D_-1's directors (a state one gravity half-step from flat) would
     # move them by ~1e-9, and this test asks for the exact state back (settling: test_adapt_settle.py)
     run = _driver({}, settle_directors=False)
-    run.start()                                   # t = 0: the flat, stress-free sheet, D = 0
+    run.start()  # t = 0: the flat, stress-free sheet, D = 0
     level0 = run.active.mesh
-    Dp0 = run.integ.state.D_prev.copy()          # D_-1 of the start (gravity's first half step)
+    Dp0 = run.integ.state.D_prev.copy()  # D_-1 of the start (gravity's first half step)
     assert level0.n_nodes == LEVEL0_NODES
     run.forest.refine_all()
     full = run.forest.active_mesh()
     run._switch(full, int(full.mesh.n_elements), 0)
-    assert run.active.mesh.n_nodes == len(run.bg.Xo) == 289          # (4*4 + 1)^2 nodes at level 2
+    assert run.active.mesh.n_nodes == len(run.bg.Xo) == 289  # (4*4 + 1)^2 nodes at level 2
     assert not np.any(run.integ.state.D)
-    for _ in range(run.bg.levels + 1):            # Eq. (26) holds everywhere (eps_b = 0)
+    for _ in range(run.bg.levels + 1):  # Eq. (26) holds everywhere (eps_b = 0)
         run._adapt_pass()
     merges = [r["merges"] for r in run.remeshes[1:]]
     assert merges and all(m > 0 for m in merges) and sum(merges) == 16 + 4 * 16
@@ -512,10 +582,10 @@ def test_merge_hold_keeps_leaves_a_split_just_made():
     run._switch(run.forest.active_mesh(), 0, 0)
     step = run.integ.state.step
     for l in range(1, run.bg.levels + 1):
-        run.born[l][:] = step                     # as if a split had made every leaf now
+        run.born[l][:] = step  # as if a split had made every leaf now
     n = len(run.remeshes)
     run._adapt_pass()
-    assert len(run.remeshes) == n                 # every merge held
+    assert len(run.remeshes) == n  # every merge held
     extra = run._checkpoint_arrays()
     assert all(np.array_equal(extra[f"adapt_born_{l}"], b) for l, b in enumerate(run.born))
     run.integ.advance(4 * 50)
@@ -529,8 +599,8 @@ def test_remap_anchors_keeps_survivors_and_gives_new_nodes_nan():
     a = rng.normal(size=(2, len(old), 3))
     b = _remap_anchors(a, old, new, Nb)
     assert b.shape == (2, len(new), 3)
-    assert np.array_equal(b[:, :3], a[:, [0, 2, 3]])          # nodes 0, 2, 5 keep theirs (1 is gone)
-    assert np.all(np.isnan(b[:, 3:]))                           # 7, 9 are new: no stick anchor yet
+    assert np.array_equal(b[:, :3], a[:, [0, 2, 3]])  # nodes 0, 2, 5 keep theirs (1 is gone)
+    assert np.all(np.isnan(b[:, 3:]))  # 7, 9 are new: no stick anchor yet
     empty = _remap_anchors(np.zeros((0, len(old), 3)), old, new, Nb)
     assert empty.shape == (0, len(new), 3)
 
@@ -612,26 +682,47 @@ def _triangle_scene(tmp_path) -> Path:
             tris += [[a, a + 1, a + 4], [a, a + 4, a + 3]]
     sio.write_mesh_file(tmp_path / "tri.vtu", ShellMesh(X, tris=np.array(tris)))
     p = tmp_path / "tri.toml"
-    p.write_text('name = "tri"\ntitle = "triangles"\n[geometry]\nfile = "tri.vtu"\n[material]\nfabric = "wool"\n'
-                 '[loads]\ngravity = true\n[solver]\nkind = "explicit"\n[solver.explicit]\nt_end = 0.01\n'
-                 '[adapt]\nenabled = true\n')
+    p.write_text(
+        'name = "tri"\ntitle = "triangles"\n[geometry]\nfile = "tri.vtu"\n[material]\nfabric = "wool"\n'
+        '[loads]\ngravity = true\n[solver]\nkind = "explicit"\n[solver.explicit]\nt_end = 0.01\n'
+        "[adapt]\nenabled = true\n"
+    )
     return p
 
 
-BAD = {   # name: (scene, run_scene kwargs, CLI args, words the one-line message must hold)
+BAD = {  # name: (scene, run_scene kwargs, CLI args, words the one-line message must hold)
     "static": (SCENE, dict(mesh=LEVEL0, solver="static"), ["--mesh", LEVEL0, "--solver", "static"], ["static"]),
     "triangles": (None, {}, [], ["triangle", "quadrilateral"]),
-    "const<=eps": (SCENE, dict(mesh=LEVEL0, overrides={"adapt.const": 0.1, "adapt.eps": 0.2}),
-                   ["--mesh", LEVEL0, "--set", "adapt.const=0.1", "--set", "adapt.eps=0.2"], ["eps", "const"]),
-    "levels=12": (SCENE, dict(mesh="40x40", overrides={"adapt.levels": 12}),
-                  ["--mesh", "40x40", "--set", "adapt.levels=12"], ["levels = 12", "GiB", "1600"]),
-    "guard levels": (SCENE, dict(mesh=LEVEL0, overrides={"adapt.levels": 10, "adapt.guard_levels": 3}),
-                     ["--mesh", LEVEL0, "--set", "adapt.levels=10", "--set", "adapt.guard_levels=3"],
-                     ["guard_levels", "13", "12"]),
-    "guard threshold": (SCENE, dict(mesh=LEVEL0, overrides={"adapt.guard_alignment": 1.0}),
-                        ["--mesh", LEVEL0, "--set", "adapt.guard_alignment=1"], ["guard_alignment"]),
-    "unknown key": (SCENE, dict(mesh=LEVEL0, overrides={"adapt.colour": 1}),
-                    ["--mesh", LEVEL0, "--set", "adapt.colour=1"], ["colour"]),
+    "const<=eps": (
+        SCENE,
+        dict(mesh=LEVEL0, overrides={"adapt.const": 0.1, "adapt.eps": 0.2}),
+        ["--mesh", LEVEL0, "--set", "adapt.const=0.1", "--set", "adapt.eps=0.2"],
+        ["eps", "const"],
+    ),
+    "levels=12": (
+        SCENE,
+        dict(mesh="40x40", overrides={"adapt.levels": 12}),
+        ["--mesh", "40x40", "--set", "adapt.levels=12"],
+        ["levels = 12", "GiB", "1600"],
+    ),
+    "guard levels": (
+        SCENE,
+        dict(mesh=LEVEL0, overrides={"adapt.levels": 10, "adapt.guard_levels": 3}),
+        ["--mesh", LEVEL0, "--set", "adapt.levels=10", "--set", "adapt.guard_levels=3"],
+        ["guard_levels", "13", "12"],
+    ),
+    "guard threshold": (
+        SCENE,
+        dict(mesh=LEVEL0, overrides={"adapt.guard_alignment": 1.0}),
+        ["--mesh", LEVEL0, "--set", "adapt.guard_alignment=1"],
+        ["guard_alignment"],
+    ),
+    "unknown key": (
+        SCENE,
+        dict(mesh=LEVEL0, overrides={"adapt.colour": 1}),
+        ["--mesh", LEVEL0, "--set", "adapt.colour=1"],
+        ["colour"],
+    ),
 }
 
 
@@ -648,8 +739,13 @@ def test_bad_adaptive_input_one_line_before_any_file(case, tmp_path):
     assert not out.exists()
 
     out_cli = tmp_path / "out_cli"
-    p = subprocess.run([sys.executable, "-m", "solidshell", "run", scene, "--adaptive", "--no-progress",
-                        "--out", str(out_cli), *args], cwd=ROOT, capture_output=True, text=True, timeout=120)
+    p = subprocess.run(
+        [sys.executable, "-m", "solidshell", "run", scene, "--adaptive", "--no-progress", "--out", str(out_cli), *args],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert p.returncode == 2, p.stderr
     lines = p.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("solidshell: error:") and all(w in lines[0] for w in words), p.stderr
@@ -690,10 +786,21 @@ def test_the_sphere_first_remesh_of_the_papers_path_books_no_penalty_energy():
     land inside it: that remesh booked 1273 gf cm of penalty energy and the run went non-finite at
     t = 1.116 s.  Moved onto the surface (8 nodes), the remesh books ~10 gf cm (measured 9.6) and
     the run goes on, its penetration at the penalty's scale (measured 0.0047 cm)."""
-    out = run_scene("sphere", solver="relax", adaptive=True, out_dir=None, progress=False,
-                    overrides={"solver.relax.preset": "paper", "solver.relax.t_max": 1.13,
-                               "adapt.coarse_membrane": "ans", "adapt.const": 0.4,
-                               "output.pictures": [], "output.snapshots": []})
+    out = run_scene(
+        "sphere",
+        solver="relax",
+        adaptive=True,
+        out_dir=None,
+        progress=False,
+        overrides={
+            "solver.relax.preset": "paper",
+            "solver.relax.t_max": 1.13,
+            "adapt.coarse_membrane": "ans",
+            "adapt.const": 0.4,
+            "output.pictures": [],
+            "output.snapshots": [],
+        },
+    )
     s = out.summary
     assert s["finite"] and s["t_final"] >= 1.13 - 1e-6, s["message"]
     first = s["remeshes"][0]
@@ -713,13 +820,24 @@ def test_inserted_nodes_keep_their_interpolated_velocity_when_the_sheet_is_near_
     30x240 mesh).  The new nodes now keep the interpolated velocity of their neighbours (a convex
     combination, docs/adaptivity.md), only the directors take the quasi-static rate: 0.7 gf cm
     booked (measured), no rise of the kinetic energy."""
-    out = run_scene("square-on-disc", solver="relax", adaptive=True, out_dir=None, progress=False,
-                    overrides={"solver.relax.preset": "paper", "solver.relax.t_max": 1.3,
-                               "adapt.coarse_membrane": "ans", "adapt.const": 0.6,
-                               "output.pictures": [], "output.snapshots": []})
+    out = run_scene(
+        "square-on-disc",
+        solver="relax",
+        adaptive=True,
+        out_dir=None,
+        progress=False,
+        overrides={
+            "solver.relax.preset": "paper",
+            "solver.relax.t_max": 1.3,
+            "adapt.coarse_membrane": "ans",
+            "adapt.const": 0.6,
+            "output.pictures": [],
+            "output.snapshots": [],
+        },
+    )
     r = out.summary["remeshes"]
     assert len(r) >= 2 and r[1]["t"] == pytest.approx(1.245, abs=0.002), [x["t"] for x in r]
     # 5 gf cm: well below the 80 of the old rate, above the 0.7 measured (the first pass, of 8
     # coarse corner quads, books 5.2 with either rate)
     assert abs(r[1]["energy_jump"]) < 5.0
-    assert out.summary["final_kinetic_energy"] < 2.0 * r[1]["kinetic_before"]     # at t = 1.3 s
+    assert out.summary["final_kinetic_energy"] < 2.0 * r[1]["kinetic_before"]  # at t = 1.3 s

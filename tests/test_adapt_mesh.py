@@ -9,8 +9,13 @@ from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
 from solidshell import Fabric, IsotropicShell, ShellMesh
-from solidshell.adapt import (AdaptiveMesh, BackgroundMesh, boundary_area_report, circle_projector,
-                              estimate_background_bytes)
+from solidshell.adapt import (
+    AdaptiveMesh,
+    BackgroundMesh,
+    boundary_area_report,
+    circle_projector,
+    estimate_background_bytes,
+)
 from solidshell.adapt.transition import CENTRE, TABLE, TRANSITION_POLICIES, choose_variant, pattern_quality
 from solidshell.errors import InputError
 from solidshell.meshing import build_mesh
@@ -38,7 +43,7 @@ def grid(nx, ny, jitter=0.0, seed=0, affine=None, z=None):
     return ShellMesh(np.column_stack([P, Z]), quads=q, directors=D, node_sets=sets)
 
 
-PEDESTAL = build_mesh("square_on_square", "2x1x4", sheet=20, pedestal=10)   # 8 trapezoids
+PEDESTAL = build_mesh("square_on_square", "2x1x4", sheet=20, pedestal=10)  # 8 trapezoids
 
 
 # ----------------------------------------------------------------------------- geometry checks
@@ -54,10 +59,9 @@ def conformity_report(am: AdaptiveMesh, level0: ShellMesh) -> dict:
     """Geometric checks of the computational mesh of a flat state (z = 0, directors +Z)."""
     a = am.active_mesh()
     X = a.mesh.nodes[:, :2]
-    h_fine = np.sqrt(level0.area() / level0.n_quads) / 2 ** am.bg.levels
+    h_fine = np.sqrt(level0.area() / level0.n_quads) / 2**am.bg.levels
     # signed corner areas (counter-clockwise about +Z): no inverted or degenerate element
-    min_corner = min(cross2(np.roll(X[c], -1, 1) - X[c], np.roll(X[c], 1, 1) - X[c]).min()
-                     for c in _cells(a.mesh))
+    min_corner = min(cross2(np.roll(X[c], -1, 1) - X[c], np.roll(X[c], 1, 1) - X[c]).min() for c in _cells(a.mesh))
     # element edges, each with the leaf level of the element(s) owning it
     sides = np.concatenate([np.stack([c, np.roll(c, -1, 1)], 2).reshape(-1, 2) for c in _cells(a.mesh)])
     nq = len(a.mesh.quads)
@@ -79,9 +83,15 @@ def conformity_report(am: AdaptiveMesh, level0: ShellMesh) -> dict:
     bl = np.linalg.norm(np.diff(X[edges[cnt == 1]], axis=1)[:, 0], axis=1).sum()
     b0 = level0.boundary_edges()
     bl0 = np.linalg.norm(level0.nodes[b0[:, 1], :2] - level0.nodes[b0[:, 0], :2], axis=1).sum()
-    return dict(min_corner=min_corner / h_fine**2, hanging=int(hanging.sum()), shared_max=int(cnt.max()),
-                level_jump=int((hi - lo).max()), area_error=abs(qa.sum() + ta.sum() - level0.area()) / level0.area(),
-                boundary_error=abs(bl - bl0) / bl0, balance=am.balance_violations())
+    return dict(
+        min_corner=min_corner / h_fine**2,
+        hanging=int(hanging.sum()),
+        shared_max=int(cnt.max()),
+        level_jump=int((hi - lo).max()),
+        area_error=abs(qa.sum() + ta.sum() - level0.area()) / level0.area(),
+        boundary_error=abs(bl - bl0) / bl0,
+        balance=am.balance_violations(),
+    )
 
 
 def assert_conforming(am, level0):
@@ -102,8 +112,8 @@ def test_background_nodes_labels_and_sets():
     m = grid(2, 1, jitter=0.0)
     bg = BackgroundMesh.from_level0(m, 3)
     assert [len(c) for c in bg.conn] == [2, 8, 32, 128]
-    assert bg.n_nodes == (2 * 8 + 1) * (8 + 1)         # a 16 x 8 grid of finest elements
-    np.testing.assert_array_equal(bg.Xo[:m.n_nodes], m.nodes)
+    assert bg.n_nodes == (2 * 8 + 1) * (8 + 1)  # a 16 x 8 grid of finest elements
+    np.testing.assert_array_equal(bg.Xo[: m.n_nodes], m.nodes)
     # Fig. 15: child k of (l, e) is 4e + k, its first node is the parent's node k; the mid-edge node
     # of edge k is child k's node 1, the centre child k's node 2
     for l in range(3):
@@ -165,11 +175,12 @@ def test_bad_input():
     with pytest.raises(InputError, match="levels"):
         BackgroundMesh.from_level0(grid(1, 1), -1)
     with pytest.raises(InputError, match="GiB"):
-        BackgroundMesh.from_level0(PEDESTAL, 13)           # 5.4e8 elements: beyond any machine here
+        BackgroundMesh.from_level0(PEDESTAL, 13)  # 5.4e8 elements: beyond any machine here
 
 
 def test_background_that_does_not_fit_is_refused_before_any_work(monkeypatch):
     from solidshell.adapt import background
+
     # pretend 10 MiB are free: 8 quads x 4^6 ~ 8.3 MiB estimated, more than half of it
     monkeypatch.setattr(background, "_available_bytes", lambda: 10 * 2**20)
     with pytest.raises(InputError, match=r"levels = 6 on 8 level-0 quads .* GiB"):
@@ -189,14 +200,15 @@ def test_background_that_does_not_fit_is_refused_before_any_work(monkeypatch):
 # ----------------------------------------------------------------------------- patterns
 def test_patterns_cover_every_mask_and_tile_the_square():
     sq = np.array([[0.0, 0], [1, 0], [1, 1], [0, 1]])
-    pts = np.array([[0, 0], [1, 0], [1, 1], [0, 1], [.5, 0], [1, .5], [.5, 1], [0, .5], [.5, .5]])
+    pts = np.array([[0, 0], [1, 0], [1, 1], [0, 1], [0.5, 0], [1, 0.5], [0.5, 1], [0, 0.5], [0.5, 0.5]])
     for mask in range(16):
         for q, t in TABLE[mask][1]:
             # as few triangles as the parity of the boundary segments allows
             assert len(t) == bin(mask).count("1") % 2
             # counter-clockwise (positive signed areas) and tiling the square exactly
-            signed = [0.5 * cross2(pts[c] - pts[c[0]], np.roll(pts[c], -1, 0) - pts[c[0]]).sum()
-                      for c in list(q) + list(t)]
+            signed = [
+                0.5 * cross2(pts[c] - pts[c[0]], np.roll(pts[c], -1, 0) - pts[c[0]]).sum() for c in list(q) + list(t)
+            ]
             assert min(signed) > 0 and sum(signed) == pytest.approx(1.0, abs=1e-15)
             used = set(np.concatenate([np.ravel(q), np.ravel(t)]).tolist())
             assert all(4 + k in used for k in range(4) if mask >> k & 1)
@@ -209,7 +221,7 @@ def test_patterns_cover_every_mask_and_tile_the_square():
 def test_fewest_nodes_policy_leaves_the_centre_out_of_patterns_one_and_four():
     """adapt.transitions = "fewest_nodes": patterns 1 and 4 take a variant without the centre node
     (the best of those on the leaf's geometry), every other pattern what "quality" takes."""
-    pts = np.array([[0, 0], [1, 0], [1, 1], [0, 1], [.5, 0], [1, .5], [.5, 1], [0, .5], [.5, .5]])[None]
+    pts = np.array([[0, 0], [1, 0], [1, 1], [0, 1], [0.5, 0], [1, 0.5], [0.5, 1], [0, 0.5], [0.5, 0.5]])[None]
     for mask in range(16):
         pid, variants = TABLE[mask]
         q, t = variants[choose_variant(mask, pts, "fewest_nodes")[0]]
@@ -268,7 +280,7 @@ def test_memoised_transition_variants_are_each_elements_own_choice(chunk, monkey
             loc = np.concatenate([bg.conn[l][ei], ch[:, 1], ch[:1, 2]])
             assert g == choose_variant(int(m), bg.Xo[loc][None])[0]
             picked.add(int(g))
-    assert len(picked) > 1       # elements do get different variants
+    assert len(picked) > 1  # elements do get different variants
 
 
 # ----------------------------------------------------------------------------- property-based
@@ -289,9 +301,16 @@ def level0_meshes(draw):
 
 
 @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(m=level0_meshes(), levels=st.integers(1, 3), ops=st.lists(
-    st.tuples(st.sampled_from(["split", "merge"]), st.floats(0.05, 1.0), st.integers(0, 2**31)),
-    min_size=1, max_size=8), policy=st.sampled_from(TRANSITION_POLICIES))
+@given(
+    m=level0_meshes(),
+    levels=st.integers(1, 3),
+    ops=st.lists(
+        st.tuples(st.sampled_from(["split", "merge"]), st.floats(0.05, 1.0), st.integers(0, 2**31)),
+        min_size=1,
+        max_size=8,
+    ),
+    policy=st.sampled_from(TRANSITION_POLICIES),
+)
 def test_random_split_merge_sequences_stay_conforming(m, levels, ops, policy):
     bg = BackgroundMesh.from_level0(m, levels, transitions=policy)
     am = AdaptiveMesh(bg)
@@ -301,9 +320,14 @@ def test_random_split_merge_sequences_stay_conforming(m, levels, ops, policy):
         rng = np.random.default_rng(seed)
         if op == "split":
             items = am.leaves()
-        else:       # any parent whose children are all leaves, also those whose merge is vetoed
-            items = np.concatenate([np.column_stack([np.full(k.size, l), k]) for l in range(levels)
-                                    for k in [np.flatnonzero(am.leaf[l + 1].reshape(-1, 4).all(1))]])
+        else:  # any parent whose children are all leaves, also those whose merge is vetoed
+            items = np.concatenate(
+                [
+                    np.column_stack([np.full(k.size, l), k])
+                    for l in range(levels)
+                    for k in [np.flatnonzero(am.leaf[l + 1].reshape(-1, 4).all(1))]
+                ]
+            )
         pick = items[rng.random(len(items)) < frac]
         (am.split if op == "split" else am.merge)(pick)
         assert_conforming(am, m)
@@ -335,9 +359,9 @@ def test_balance_propagates_splits_and_vetoes_merges():
     am = AdaptiveMesh(BackgroundMesh.from_level0(m, 3))
     am.split([[0, 3]])
     # the finest child of element 3 touching element 2 forces element 2 to split, not more
-    e1 = 4 * 3 + 0            # child 0 of element 3: its left edge is on element 2
+    e1 = 4 * 3 + 0  # child 0 of element 3: its left edge is on element 2
     am.split([[1, e1]])
-    am.split([[2, 4 * e1 + 3]])       # child 3 (left-top) of it
+    am.split([[2, 4 * e1 + 3]])  # child 3 (left-top) of it
     assert not am.leaf[0][2] and am.leaf[0][1] and am.balance_violations() == 0
     # merging element 2 back would leave level-3 leaves next to a level-0 leaf: vetoed
     assert am.merge([[0, 2]]) == 0
@@ -349,8 +373,23 @@ def every_pattern_state(mesh_level0, nx=8, policy="quality"):
     """A state of an nx x nx level-0 grid whose computational mesh holds every transition pattern
     at level 0 and transitions at level 1 as well (variants chosen under ``policy``)."""
     am = AdaptiveMesh(BackgroundMesh.from_level0(mesh_level0, 2, transitions=policy))
-    cell = [(1, 1), (3, 1), (5, 1), (5, 3), (4, 2), (0, 5), (1, 6), (3, 5), (5, 5), (4, 4), (4, 6),
-            (6, 6), (7, 6), (6, 7), (7, 7)]
+    cell = [
+        (1, 1),
+        (3, 1),
+        (5, 1),
+        (5, 3),
+        (4, 2),
+        (0, 5),
+        (1, 6),
+        (3, 5),
+        (5, 5),
+        (4, 4),
+        (4, 6),
+        (6, 6),
+        (7, 6),
+        (6, 7),
+        (7, 7),
+    ]
     am.split([[0, j * nx + i] for i, j in cell])
     am.split([[1, 4 * (6 * nx + 6) + 2], [1, 4 * (7 * nx + 7) + 0]])
     a = am.active_mesh(check=True)
@@ -384,7 +423,9 @@ def test_rigid_motion_has_no_energy_on_an_adapted_mesh(level0, policy):
 
     # reference: a 1% random strain of the same mesh
     rng = np.random.default_rng(0)
-    Uref = np.column_stack([0.01 * rng.standard_normal((mesh.n_nodes, 3)) / 8, 0.01 * rng.standard_normal((mesh.n_nodes, 3))])
+    Uref = np.column_stack(
+        [0.01 * rng.standard_normal((mesh.n_nodes, 3)) / 8, 0.01 * rng.standard_normal((mesh.n_nodes, 3))]
+    )
     Wref, Fref = model.energy_and_force(Uref)
     W, F = model.energy_and_force(rigid(np.zeros((mesh.n_nodes, 6))))
     # strains of a rigid motion are differences of squared lengths of O(3) vectors: ~1e-15, so the
@@ -403,7 +444,7 @@ def test_membrane_patch_test_on_an_adapted_mesh(membrane, policy):
     am, a = every_pattern_state(FLAT8, policy=policy)
     mesh = a.mesh
     model = Model(mesh, ISO, membrane=membrane)
-    G = np.array([[2e-3, 1e-3], [-0.5e-3, 3e-3]])      # linear in-plane field, constant strain
+    G = np.array([[2e-3, 1e-3], [-0.5e-3, 3e-3]])  # linear in-plane field, constant strain
     U = np.zeros((mesh.n_nodes, 6))
     U[:, :2] = mesh.nodes[:, :2] @ G.T
     F = model.internal_force(U)
@@ -452,7 +493,7 @@ def test_internal_force_is_the_energy_gradient_on_an_adapted_mesh(policy):
     eps = 1e-6
     fd = np.empty_like(u)
     threads = numba.get_num_threads()
-    numba.set_num_threads(1)      # ~1200 small evaluations: thread start-up would dominate
+    numba.set_num_threads(1)  # ~1200 small evaluations: thread start-up would dominate
     try:
         for k in range(u.size):
             up, um = u.copy(), u.copy()

@@ -20,7 +20,7 @@ from solidshell.adapt.transfer import fill_new_nodes
 from solidshell.model import Model
 from verification.adapt_transfer import refine
 
-R_BEND = 8.0   # cm
+R_BEND = 8.0  # cm
 
 
 def _bent(X, Xn):
@@ -44,7 +44,7 @@ def _case():
     Ubg[:Nc] = _bent(X, coarse.directors)
     U = fill_new_nodes(bg, Ubg, np.arange(Nc, len(bg.Xo)), "dk")
     fixed = np.zeros((fine.n_nodes, 6), dtype=bool)
-    fixed[np.isclose(fine.nodes[:, 0], 0.0)] = True          # clamped edge x = 0
+    fixed[np.isclose(fine.nodes[:, 0], 0.0)] = True  # clamped edge x = 0
     loads = np.zeros((fine.n_nodes, 6))
     return model, fixed, loads, U
 
@@ -64,9 +64,9 @@ def test_settling_puts_dk_directors_at_equilibrium_and_keeps_positions():
     # Newton on a smooth block: the residual falls by the settler's rtol (1e-3) at least
     assert r_after <= 1e-3 * r_before, (r_before, r_after)
     assert np.isclose(rep.residual_before, r_before) and np.isclose(rep.residual_after, r_after)
-    assert np.array_equal(S[:, :3], U[:, :3])                 # translations untouched, bit for bit
-    assert np.array_equal(S[fixed], U[fixed])                 # and every prescribed dof
-    assert _pi(model, loads, S) < _pi(model, loads, U)       # a minimisation: the potential falls
+    assert np.array_equal(S[:, :3], U[:, :3])  # translations untouched, bit for bit
+    assert np.array_equal(S[fixed], U[fixed])  # and every prescribed dof
+    assert _pi(model, loads, S) < _pi(model, loads, U)  # a minimisation: the potential falls
     # the change is a correction of the DK directors, not a different shape: well below their length
     assert 0.0 < np.abs(S[:, 3:] - U[:, 3:]).max() < 0.1
 
@@ -96,15 +96,18 @@ def test_quasi_static_step_keeps_the_settled_dofs_at_equilibrium_one_step_behind
     entries) is first order (a tenth); the held entries are v's, bit for bit."""
     model, fixed, loads, U = _case()
     settler = DirectorSettler(model, loads, fixed)
-    S, rep = settler(U, rtol=1e-6, max_iter=20)             # residual ~1e-9: below every one below
+    S, rep = settler(U, rtol=1e-6, max_iter=20)  # residual ~1e-9: below every one below
     assert rep.converged
     idx = settler.idx
     held = np.setdiff1d(np.arange(U.size), idx)
-    res = lambda D: np.linalg.norm((loads.ravel() - model.internal_force(D.reshape(U.shape)).ravel())[idx])
-    v = np.random.default_rng(3).standard_normal(U.shape)   # a rough motion of every free dof
+
+    def res(D):
+        return np.linalg.norm((loads.ravel() - model.internal_force(D.reshape(U.shape)).ravel())[idx])
+
+    v = np.random.default_rng(3).standard_normal(U.shape)  # a rough motion of every free dof
     v[fixed] = 0.0
     r_plain, r_quasi = [], []
-    for size in (1e-4, 1e-5):                               # a time step's motion [cm]
+    for size in (1e-4, 1e-5):  # a time step's motion [cm]
         step = settler.quasi_static_step(S, size * v.ravel())
         assert np.array_equal(step[held], size * v.ravel()[held])
         r_plain.append(res(S - size * v.ravel()))
@@ -122,7 +125,7 @@ def test_settling_new_nodes_moves_only_their_positions_and_lowers_the_potential_
     settler's rtol (1e-3); the potential ends below the directors-only settling's, which is the
     same minimisation over fewer dofs."""
     model, fixed, loads, U = _case()
-    Nc = 15                                                  # the 5x3 coarse nodes come first (refine)
+    Nc = 15  # the 5x3 coarse nodes come first (refine)
     new = np.arange(Nc, model.n_nodes)
     S_dir, _ = settle_directors(model, loads, fixed, U)
     S, rep = DirectorSettler(model, loads, fixed, new)(U)

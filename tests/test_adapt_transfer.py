@@ -13,10 +13,10 @@ from scipy.spatial.transform import Rotation
 
 from solidshell import Fabric, ShellMesh
 from solidshell.adapt import criteria as C
+from solidshell.adapt.settings import parse_adapt
 from solidshell.adapt.transfer import Edges, dk_midedge, fill_new_nodes, linear_midedge, serendipity_centre
 from solidshell.errors import InputError
 from solidshell.model import Model
-from solidshell.adapt.settings import parse_adapt
 from verification.adapt_transfer import refine
 
 RNG = np.random.default_rng(20150601)
@@ -42,9 +42,10 @@ def test_dk_rigid_motion_is_exact_for_any_geometry():
     XnA, XnB, XnM = (n + 0.4 * RNG.normal(size=(K, 3))) * RNG.uniform(0.8, 1.2, size=(3, K, 1))
     Q = Rotation.random(K, random_state=1).as_matrix()
     t = RNG.normal(size=(K, 3)) * 10.0
+
     def move(X, Xn):
-        return np.concatenate([np.einsum("kij,kj->ki", Q, X) + t - X,
-                               np.einsum("kij,kj->ki", Q, Xn) - Xn], axis=-1)
+        return np.concatenate([np.einsum("kij,kj->ki", Q, X) + t - X, np.einsum("kij,kj->ki", Q, Xn) - Xn], axis=-1)
+
     UA, UB, UE = move(XoA, XnA), move(XoB, XnB), move(XoE, XnA)
     for stretch in ("length", "paper"):
         UM = dk_midedge(Edges(XoA, XoB, XoE, XoM, XnA, XnB, XnM), UA, UB, UE, stretch=stretch)
@@ -73,20 +74,24 @@ def _paper_formulas(XoA, XoB, XoE, XnA, XnB, UA, UB, UE):
     nx = np.cross(ny, nz)
     L = np.linalg.norm(XoB - XoA)
     xnA, xnB = XnA + UA[3:], XnB + UB[3:]
-    u_nA, v_nA, w_nA = nx @ xnA, ny @ xnA, nz @ xnA - 1.0                 # Eq. (30)
-    u_nB, v_nB, w_nB = nx @ xnB, ny @ xnB, nz @ xnB - 1.0                 # Eq. (31)
+    u_nA, v_nA, w_nA = nx @ xnA, ny @ xnA, nz @ xnA - 1.0  # Eq. (30)
+    u_nB, v_nB, w_nB = nx @ xnB, ny @ xnB, nz @ xnB - 1.0  # Eq. (31)
     u_oA = v_oA = w_oA = u_oB = w_oB = 0.0
     v_oB = np.linalg.norm(xB - xA) - L
-    u_oM = 0.5 * (u_oA + u_oB)                                             # Eq. (32)
+    u_oM = 0.5 * (u_oA + u_oB)  # Eq. (32)
     v_oM = 0.5 * (v_oA + v_oB)
     w_oM = 0.5 * (w_oA + w_oB) - L / 8.0 * (v_nA - v_nB)
     v_nM = 1.5 / L * (w_oA - w_oB) - 0.25 * (v_nA + v_nB)
     u_nM, w_nM = 0.5 * (u_nA + u_nB), 0.5 * (w_nA + w_nB)
     XoM, XnM = 0.5 * (XoA + XoB), _unit(XnA + XnB)
-    UcoM = UA[:3] + L / 2.0 * ny - (XoM - XoA)                            # Eq. (34)
+    UcoM = UA[:3] + L / 2.0 * ny - (XoM - XoA)  # Eq. (34)
     UcnM = nz - XnM
-    return np.concatenate([UcoM + u_oM * nx + v_oM * ny + w_oM * nz,      # Eq. (33)
-                           UcnM + u_nM * nx + v_nM * ny + w_nM * nz])
+    return np.concatenate(
+        [
+            UcoM + u_oM * nx + v_oM * ny + w_oM * nz,  # Eq. (33)
+            UcnM + u_nM * nx + v_nM * ny + w_nM * nz,
+        ]
+    )
 
 
 @pytest.mark.parametrize("size", [1e-3, 0.3])
@@ -96,16 +101,23 @@ def test_dk_reduces_to_eq32_in_the_papers_frame(size):
     from it only in its length, by second order in the director deviations."""
     XoA, XoB, XoE = np.array([0.0, 0, 0]), np.array([0.3, 1.1, 0]), np.array([-0.9, 0.2, 0])
     Xn = np.array([0.0, 0.0, 1.0])
-    Q = Rotation.from_rotvec([0.3, -0.5, 0.7]).as_matrix()        # a general plane, not z = 0
+    Q = Rotation.from_rotvec([0.3, -0.5, 0.7]).as_matrix()  # a general plane, not z = 0
     XoA, XoB, XoE, Xn = XoA @ Q.T, XoB @ Q.T, XoE @ Q.T, Xn @ Q.T
     diffs = []
     for scale in (size, size / 2):
-        UA, UB, UE = np.array(
-            [[0.1, -0.2, 0.3, 0.2, -0.1, 0.05], [-0.1, 0.3, 0.2, -0.3, 0.2, -0.1],
-             [0.2, 0.1, -0.3, 0.0, 0.0, 0.0]]) * scale
+        UA, UB, UE = (
+            np.array(
+                [[0.1, -0.2, 0.3, 0.2, -0.1, 0.05], [-0.1, 0.3, 0.2, -0.3, 0.2, -0.1], [0.2, 0.1, -0.3, 0.0, 0.0, 0.0]]
+            )
+            * scale
+        )
         ref = _paper_formulas(XoA, XoB, XoE, Xn, Xn, UA, UB, UE)
-        args = (Edges(XoA[None], XoB[None], XoE[None], 0.5 * (XoA + XoB)[None], Xn[None], Xn[None], Xn[None]),
-                UA[None], UB[None], UE[None])
+        args = (
+            Edges(XoA[None], XoB[None], XoE[None], 0.5 * (XoA + XoB)[None], Xn[None], Xn[None], Xn[None]),
+            UA[None],
+            UB[None],
+            UE[None],
+        )
         paper = dk_midedge(*args, stretch="paper")[0]
         length = dk_midedge(*args)[0]
         # round-off of O(1) numbers (measured ~1e-16)
@@ -144,8 +156,8 @@ def _bend_errors(kappa, L, method):
 
 
 def test_dk_cylindrical_bend_puts_m_on_the_arc_to_fourth_order():
-    kappa = 2.0                        # 1/cm: a fold of radius 0.5 cm in wool
-    Ls = [0.4, 0.2, 0.1]               # bend angles kappa L = 0.8, 0.4, 0.2 rad
+    kappa = 2.0  # 1/cm: a fold of radius 0.5 cm in wool
+    Ls = [0.4, 0.2, 0.1]  # bend angles kappa L = 0.8, 0.4, 0.2 rad
     pos = [_bend_errors(kappa, L, "dk") for L in Ls]
     for (ep, en), L in zip(pos, Ls):
         # the sagitta L/4 sin(kL/2) against (1 - cos(kL/2))/k: error k^3 L^4 / 384 + O(k^5 L^6)
@@ -180,8 +192,12 @@ def test_dk_literal_eq32_shortens_the_director_on_a_bend():
 def test_dk_averages_the_director_stretch():
     """Directors stretched by 1.1 at A and 1.3 at B on a flat, unmoved edge: M gets 1.2 (and the
     same direction, the normal)."""
-    XoA, XoB, XoE, XoM = (np.array([[0.0, 0, 0]]), np.array([[1.0, 0, 0]]),
-                          np.array([[0.0, 1, 0]]), np.array([[0.5, 0, 0]]))
+    XoA, XoB, XoE, XoM = (
+        np.array([[0.0, 0, 0]]),
+        np.array([[1.0, 0, 0]]),
+        np.array([[0.0, 1, 0]]),
+        np.array([[0.5, 0, 0]]),
+    )
     Xn = np.array([[0.0, 0, 1]])
     UA = np.array([[0, 0, 0, 0, 0, 0.1]])
     UB = np.array([[0, 0, 0, 0, 0, 0.3]])
@@ -199,12 +215,17 @@ def test_serendipity_centre_reproduces_quadratics():
     a, b = RNG.normal(size=(2, K, 2))
     ref = np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]], float)
     mids = 0.5 * (ref + np.roll(ref, -1, axis=0))
-    phys = lambda r: c0[:, None] + r[None, :, :1] * a[:, None] + r[None, :, 1:] * b[:, None]
-    coef = RNG.normal(size=(K, 6, 6))                      # 6 components, 6 monomials each
+
+    def phys(r):
+        return c0[:, None] + r[None, :, :1] * a[:, None] + r[None, :, 1:] * b[:, None]
+
+    coef = RNG.normal(size=(K, 6, 6))  # 6 components, 6 monomials each
+
     def f(p):
         x, y = p[..., 0], p[..., 1]
         mono = np.stack([np.ones_like(x), x, y, x * x, x * y, y * y], -1)
         return np.einsum("kcm,knm->knc", coef, mono)
+
     got = serendipity_centre(f(phys(ref)), f(phys(mids)))
     want = f(c0[:, None])[:, 0]
     assert np.abs(got - want).max() < 1e-12 * np.abs(want).max()
@@ -228,10 +249,10 @@ def test_fill_new_nodes_rigid_motion_two_levels():
     N0 = int(np.sum(bg.node_level == 0))
     U = np.zeros_like(exact)
     U[:N0] = exact[:N0]
-    new = RNG.permutation(np.arange(N0, len(U)))          # any order: filled level by level
+    new = RNG.permutation(np.arange(N0, len(U)))  # any order: filled level by level
     for method in ("dk", "linear"):
         got = fill_new_nodes(bg, U, new, method=method)
-        assert np.abs(got[:N0] - U[:N0]).max() == 0.0     # known rows untouched
+        assert np.abs(got[:N0] - U[:N0]).max() == 0.0  # known rows untouched
         if method == "dk":
             # measured 4e-15 on a 3 x 2 cm sheet
             assert np.abs(got - exact).max() < 1e-12 * 3.0
@@ -252,12 +273,11 @@ def test_fill_new_nodes_bend_uses_dk_and_serendipity():
     xn = np.stack([0 * X[:, 0], -np.sin(kappa * X[:, 1]), np.cos(kappa * X[:, 1])], 1)
     exact = np.concatenate([x - X, xn - bg.Xn], 1)
     U = exact.copy()
-    U[4:] = np.nan                                         # the unknown rows must not be read
+    U[4:] = np.nan  # the unknown rows must not be read
     got = fill_new_nodes(bg, U, np.arange(4, 9), centre="serendipity")
     mids = np.arange(4, 8)
     A, B, E = bg.mid_parent[mids].T
-    want = dk_midedge(Edges(X[A], X[B], X[E], X[mids], bg.Xn[A], bg.Xn[B], bg.Xn[mids]), exact[A], exact[B],
-                      exact[E])
+    want = dk_midedge(Edges(X[A], X[B], X[E], X[mids], bg.Xn[A], bg.Xn[B], bg.Xn[mids]), exact[A], exact[B], exact[E])
     assert np.array_equal(got[mids], want)
     cp = bg.centre_parent[8]
     assert np.allclose(got[8], serendipity_centre(got[cp[:4]][None], got[cp[4:]][None])[0], atol=1e-15)
@@ -277,11 +297,11 @@ def test_fill_new_nodes_centre_with_inactive_mids_computed_on_the_fly():
     known = np.zeros(len(U), bool)
     known[:4] = True
     part_in = U.copy()
-    part_in[[6, 7]] = 123.0                                # stale values of inactive nodes
+    part_in[[6, 7]] = 123.0  # stale values of inactive nodes
     part = fill_new_nodes(bg, part_in, [4, 5, 8], known=known)
     assert np.array_equal(part[[4, 5]], full[[4, 5]])
     assert np.allclose(part[8], full[8], atol=1e-15)
-    assert np.all(part[[6, 7]] == 123.0)                   # not written
+    assert np.all(part[[6, 7]] == 123.0)  # not written
     # linear: the centre of linear mids is the corners' average
     lin = fill_new_nodes(bg, part_in, [8], method="linear", known=known)
     assert np.allclose(lin[8], U[:4].mean(0), atol=1e-15)
@@ -310,7 +330,7 @@ def test_kirchhoff_centre_director():
     U = np.zeros_like(bend)
     U[:N0] = RNG.normal(size=(N0, 6)) * 0.1
     ser = fill_new_nodes(bg, U, new, centre="serendipity")
-    kir = fill_new_nodes(bg, U, new)                       # the default
+    kir = fill_new_nodes(bg, U, new)  # the default
     assert np.array_equal(ser[:, :3], kir[:, :3])
     cp = bg.centre_parent[cen]
     xm = bg.Xo[cp[:, 4:]] + kir[cp[:, 4:], :3]
@@ -328,7 +348,7 @@ def test_dk_refinement_of_a_bent_sheet_adds_little_energy_linear_a_lot():
     above that of the exact cylinder state is tiny with DK and large with linear transfer, whose
     chord-and-averaged-director kink loads the stiff transverse shear."""
     kappa, excess = 1.0, {}
-    for h in (0.5, 0.25):                                   # coarse bend angle per element 0.5, 0.25
+    for h in (0.5, 0.25):  # coarse bend angle per element 0.5, 0.25
         bg, fine = refine(_sheet(4, 4, h), levels=1)
         X = bg.Xo
         x = np.stack([X[:, 0], np.sin(kappa * X[:, 1]) / kappa, (1 - np.cos(kappa * X[:, 1])) / kappa], 1)
@@ -368,7 +388,7 @@ def test_bending_strain_of_a_cylindrical_bend_is_its_curvature():
     """The meaning of const: ||eps_b|| (Model.bending_strain, Eq. 6) of a cylindrical bend is kappa
     up to O((kappa L)^2), so ||eps_b|| L is the bend angle across an element."""
     kappa = 0.8
-    for h in (1.0, 0.25):                                   # kappa L = 0.8 and 0.2 rad
+    for h in (1.0, 0.25):  # kappa L = 0.8 and 0.2 rad
         mesh = _sheet(6, 4, h)
         X = mesh.nodes
         x = np.stack([X[:, 0], np.sin(kappa * X[:, 1]) / kappa, (1 - np.cos(kappa * X[:, 1])) / kappa], 1)
@@ -381,14 +401,16 @@ def test_bending_strain_of_a_cylindrical_bend_is_its_curvature():
 
 
 def test_thresholds_refused():
-    for const, eps, words in [(0.2, 0.2, r"eps = 0\.2 must be less than const = 0\.2 \(Eq\. 26\)"),
-                              (0.1, 0.2, r"eps = 0\.2 must be less than const = 0\.1 \(Eq\. 26\)"),
-                              (0.0, -0.1, r"const = 0\.0: must be a positive number \(Eq\. 25\)"),
-                              (-1.0, 0.5, r"const = -1\.0: must be a positive number"),
-                              (0.5, 0.0, r"eps = 0\.0: must be a positive number \(Eq\. 26\)"),
-                              (float("nan"), 0.1, r"const = nan: must be a positive number"),
-                              (0.5, float("inf"), r"eps = inf: must be a positive number"),
-                              ("a", 0.1, r"const = 'a', eps = 0\.1: numbers expected")]:
+    for const, eps, words in [
+        (0.2, 0.2, r"eps = 0\.2 must be less than const = 0\.2 \(Eq\. 26\)"),
+        (0.1, 0.2, r"eps = 0\.2 must be less than const = 0\.1 \(Eq\. 26\)"),
+        (0.0, -0.1, r"const = 0\.0: must be a positive number \(Eq\. 25\)"),
+        (-1.0, 0.5, r"const = -1\.0: must be a positive number"),
+        (0.5, 0.0, r"eps = 0\.0: must be a positive number \(Eq\. 26\)"),
+        (float("nan"), 0.1, r"const = nan: must be a positive number"),
+        (0.5, float("inf"), r"eps = inf: must be a positive number"),
+        ("a", 0.1, r"const = 'a', eps = 0\.1: numbers expected"),
+    ]:
         with pytest.raises(InputError, match=words):
             C.check_thresholds(const, eps)
         with pytest.raises(InputError, match=words):
@@ -403,7 +425,7 @@ def test_thresholds_refused():
 
 
 def _two_level_L():
-    bg, _ = refine(_sheet(2, 1), levels=2)                  # 1 x 1 cm level-0 quads
+    bg, _ = refine(_sheet(2, 1), levels=2)  # 1 x 1 cm level-0 quads
     return bg, C.level_side_lengths(bg)
 
 
@@ -421,7 +443,7 @@ def test_split_marks_eq25():
     eb = np.array([c / 1.0 * 1.001, c / 0.5 * 0.999, c / 0.5 * 1.001, 10.0, 0.0])
     m = C.mark(eb, leaves, L, const=c, eps=0.2)
     assert m.split.tolist() == [True, False, True, False, False]
-    m = C.mark(eb, leaves, L, const=c, eps=0.2, max_level=1)   # no level-2 children now
+    m = C.mark(eb, leaves, L, const=c, eps=0.2, max_level=1)  # no level-2 children now
     assert m.split.tolist() == [True, False, False, False, False]
     m = C.mark(eb, leaves, L, const=c, eps=0.2, max_level=0)
     assert not m.split.any()
@@ -430,16 +452,26 @@ def test_split_marks_eq25():
 def test_merge_marks_eq26():
     _, L = _two_level_L()
     c, e = 0.5, 0.2
-    lim = (c - e) / 1.0                                    # merging level-1 children of (0,1)
-    lim2 = (c - e) / 0.5                                   # merging level-2 children of (1,p)
-    leaves = np.array([[1, 4], [1, 5], [1, 6], [1, 7],     # the four children of (0,1)
-                       [2, 0], [2, 1], [2, 2], [2, 3],     # the four children of (1,0)
-                       [2, 4], [2, 5], [2, 6]])            # three of (1,1): one is split further
-    eb = np.array([lim, lim * 0.5, 0.0, lim * 0.99,
-                   lim2 * 1.001, 0.0, 0.0, 0.0,
-                   0.0, 0.0, 0.0])
+    lim = (c - e) / 1.0  # merging level-1 children of (0,1)
+    lim2 = (c - e) / 0.5  # merging level-2 children of (1,p)
+    leaves = np.array(
+        [
+            [1, 4],
+            [1, 5],
+            [1, 6],
+            [1, 7],  # the four children of (0,1)
+            [2, 0],
+            [2, 1],
+            [2, 2],
+            [2, 3],  # the four children of (1,0)
+            [2, 4],
+            [2, 5],
+            [2, 6],
+        ]
+    )  # three of (1,1): one is split further
+    eb = np.array([lim, lim * 0.5, 0.0, lim * 0.99, lim2 * 1.001, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
     m = C.mark(eb, leaves, L, const=c, eps=e)
-    assert m.merge.tolist() == [[0, 1]]                    # (1,0) vetoed by one child; (1,1) incomplete
+    assert m.merge.tolist() == [[0, 1]]  # (1,0) vetoed by one child; (1,1) incomplete
     eb[4] = lim2
     m = C.mark(eb, leaves, L, const=c, eps=e)
     assert m.merge.tolist() == [[0, 1], [1, 0]]
@@ -469,7 +501,7 @@ def test_guard_splits_below_its_threshold_and_keeps_low_siblings_apart():
     g = 0.8
     half = np.cos(0.5 * np.arccos(g))
     leaves = np.array([[0, 0], [1, 4], [1, 5], [1, 6], [1, 7], [2, 0], [2, 1], [2, 2], [2, 3]])
-    eb = np.zeros(len(leaves))                               # flat: Eq. (26) merges both parents
+    eb = np.zeros(len(leaves))  # flat: Eq. (26) merges both parents
     m = C.mark(eb, leaves, L, const=0.5, eps=0.2)
     assert m.merge.tolist() == [[0, 1], [1, 0]] and not m.split.any()
     nd = np.array([g - 1e-3, g + 1e-3, 1.0, 1.0, half - 1e-3, 1.0, 1.0, half + 1e-3, 0.5])
@@ -481,7 +513,7 @@ def test_guard_splits_below_its_threshold_and_keeps_low_siblings_apart():
     nd[8] = 1.0
     out = C.guard(m, nd, leaves, g, max_level=2)
     assert out.merge.tolist() == [[1, 0]]
-    assert C.guard(m, nd, leaves, g, max_level=0).split.sum() == 0        # capped at level 0
+    assert C.guard(m, nd, leaves, g, max_level=0).split.sum() == 0  # capped at level 0
     off = C.guard(m, np.full(len(leaves), -1.0), leaves, C.GUARD_OFF, max_level=2)
     assert off is m
     with pytest.raises(ValueError, match=r"guard threshold 1\.0 must lie in \[-1, 1\)"):

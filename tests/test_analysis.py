@@ -4,8 +4,16 @@ import numpy as np
 import pytest
 
 from solidshell import ShellMesh
-from solidshell.analysis import (asymmetry, boundary_loops, drape_coefficient, drape_summary,
-                                 fold_count, polygon_area, projected_boundary, radius_profile)
+from solidshell.analysis import (
+    asymmetry,
+    boundary_loops,
+    drape_coefficient,
+    drape_summary,
+    fold_count,
+    polygon_area,
+    projected_boundary,
+    radius_profile,
+)
 
 
 def star(R=10.0, a=0.0, k=0, n=2000, phase=0.0, center=(0.0, 0.0)):
@@ -18,7 +26,7 @@ def annulus_mesh(r_in=5.0, r_out=10.0, nr=4, nt=48):
     """Structured quad annulus (counter-clockwise quads, directors +Z)."""
     rr = np.linspace(r_in, r_out, nr + 1)
     tt = 2 * np.pi * np.arange(nt) / nt
-    R, T = np.meshgrid(rr, tt, indexing="ij")                  # node (i, j) -> i*nt + j
+    R, T = np.meshgrid(rr, tt, indexing="ij")  # node (i, j) -> i*nt + j
     nodes = np.column_stack([(R * np.cos(T)).ravel(), (R * np.sin(T)).ravel(), np.zeros(R.size)])
     i, j = np.meshgrid(np.arange(nr), np.arange(nt), indexing="ij")
     i, j = i.ravel(), j.ravel()
@@ -52,7 +60,7 @@ def test_circle_has_no_folds_and_is_symmetric():
     p = star(10.0, n=1000)
     assert fold_count(p) == 0
     a = asymmetry(p)
-    assert max(a.values()) < 1e-4      # a 1000-gon about its centre: chord sag ~ (pi/1000)^2 / 2
+    assert max(a.values()) < 1e-4  # a 1000-gon about its centre: chord sag ~ (pi/1000)^2 / 2
     _, r = radius_profile(p, n_theta=360)
     assert np.allclose(r, 10.0, rtol=1e-4)
 
@@ -60,7 +68,7 @@ def test_circle_has_no_folds_and_is_symmetric():
 def test_rounded_square_has_four_folds():
     t = np.linspace(0, 2 * np.pi, 1600, endpoint=False)
     c, s = np.cos(t), np.sin(t)
-    r = (np.abs(c) ** 4 + np.abs(s) ** 4) ** -0.25           # superellipse |x|^4 + |y|^4 = 1
+    r = (np.abs(c) ** 4 + np.abs(s) ** 4) ** -0.25  # superellipse |x|^4 + |y|^4 = 1
     p = np.column_stack([r * c, r * s]) * 7.0
     n, ang = fold_count(p, return_angles=True)
     assert n == 4
@@ -75,15 +83,15 @@ def test_ellipse_two_folds_and_rot90_asymmetry():
     assert fold_count(p) == 2
     a = asymmetry(p)
     assert a["mirror_x"] < 1e-3 and a["mirror_y"] < 1e-3
-    assert a["rot90"] == pytest.approx(4 / 10, rel=0.05)      # (12 - 8) / mean radius (~10)
+    assert a["rot90"] == pytest.approx(4 / 10, rel=0.05)  # (12 - 8) / mean radius (~10)
 
 
 def test_off_centre_and_lopsided_shape():
     p = star(10.0, 0.1, 4, phase=0.3, center=(3.0, -2.0))
     assert fold_count(p, center=(3.0, -2.0)) == 4
     a = asymmetry(p, center=(3.0, -2.0))
-    assert a["mirror_x"] > 0.05                # rotated by 0.3 rad: no longer mirror-symmetric
-    q = star(10.0, 0.1, 3)                     # three-fold: mirror about X but not 90-deg symmetric
+    assert a["mirror_x"] > 0.05  # rotated by 0.3 rad: no longer mirror-symmetric
+    q = star(10.0, 0.1, 3)  # three-fold: mirror about X but not 90-deg symmetric
     a = asymmetry(q)
     assert a["mirror_x"] < 1e-3 and a["rot90"] > 0.1
 
@@ -100,8 +108,8 @@ def test_noise_robustness(k):
 
 def test_threshold_documented_behaviour():
     # a fold whose depth is below 1 % of the radius is not counted; above it is
-    assert fold_count(star(10.0, 0.003, 6)) == 0      # peak-to-trough 0.6 % of R
-    assert fold_count(star(10.0, 0.01, 6)) == 6       # peak-to-trough 2 %
+    assert fold_count(star(10.0, 0.003, 6)) == 0  # peak-to-trough 0.6 % of R
+    assert fold_count(star(10.0, 0.01, 6)) == 6  # peak-to-trough 2 %
 
 
 # ------------------------------------------------------------------ meshes
@@ -120,7 +128,7 @@ def test_projected_boundary_and_dc_of_deformed_annulus():
     poly, nodes = projected_boundary(m, return_nodes=True)
     assert polygon_area(poly) > 0
     assert np.allclose(np.hypot(*poly.T), 10.0)
-    A_sheet = np.pi * 10.0**2                  # flat circle (polygonal area of the mesh + pedestal)
+    A_sheet = np.pi * 10.0**2  # flat circle (polygonal area of the mesh + pedestal)
     A_ped = np.pi * 5.0**2
     # undeformed: DC = 1 (areas of the 256-gon on both sides, so compare with the mesh's own)
     s = drape_summary(m, None, pedestal_area=A_ped, sheet_area=polygon_area(poly))
@@ -168,7 +176,7 @@ def test_paper_pedestal_meshes_undeformed():
     a square sheet shows its 4 corners as folds, a disc none."""
     from solidshell.meshing import build_mesh
 
-    m = build_mesh("square_on_square", "8x4x4")            # 20x20 sheet on a 10x10 pedestal
+    m = build_mesh("square_on_square", "8x4x4")  # 20x20 sheet on a 10x10 pedestal
     s = drape_summary(m, None, pedestal_area=100.0)
     assert s["sheet_area"] == pytest.approx(400.0)
     assert s["projected_area"] == pytest.approx(400.0)
@@ -198,9 +206,11 @@ def test_numpy_smoothing_and_peaks_match_scipy():
 
     rng = np.random.default_rng(5)
     th = np.linspace(0, 2 * np.pi, 720, endpoint=False)
-    cases = [rng.standard_normal(720),
-             10 + 0.3 * np.cos(8 * th) + 0.05 * rng.standard_normal(720),
-             np.round(5 + np.cos(4 * th) + 0.2 * np.cos(12 * th), 1)]      # rounded: flat tops
+    cases = [
+        rng.standard_normal(720),
+        10 + 0.3 * np.cos(8 * th) + 0.05 * rng.standard_normal(720),
+        np.round(5 + np.cos(4 * th) + 0.2 * np.cos(12 * th), 1),
+    ]  # rounded: flat tops
     for r in cases:
         for sigma in (0.7, 4.0, 9.5):
             ref = gaussian_filter1d(r, sigma, mode="wrap")

@@ -5,7 +5,7 @@ path fed with it (solidshell/solvers/linear.py)."""
 import numpy as np
 import scipy.sparse as sp
 
-from solidshell.assembly import FreeLowerPattern, SparsePattern
+from solidshell.assembly import SparsePattern
 from solidshell.material import Fabric
 from solidshell.mesh import ShellMesh
 from solidshell.model import Model
@@ -20,8 +20,7 @@ def mixed_mesh():
     X = np.column_stack([x.ravel(), y.ravel(), 0.0 * x.ravel()])
     X[:, :2] += 0.07 * np.sin(3.0 * X[:, ::-1][:, 1:])
     idx = np.arange(nx * ny).reshape(ny, nx)
-    cells = [[idx[j, i], idx[j, i + 1], idx[j + 1, i + 1], idx[j + 1, i]]
-             for j in range(ny - 1) for i in range(nx - 1)]
+    cells = [[idx[j, i], idx[j, i + 1], idx[j + 1, i + 1], idx[j + 1, i]] for j in range(ny - 1) for i in range(nx - 1)]
     quads = np.array(cells[:8])
     tris = np.concatenate([[[c[0], c[1], c[2]], [c[0], c[2], c[3]]] for c in cells[8:]])
     perm = np.random.default_rng(3).permutation(nx * ny)
@@ -50,7 +49,7 @@ def test_free_lower_assembly_is_the_restricted_lower_triangle_to_the_last_bit():
     U = 0.05 * rng.standard_normal((mesh.n_nodes, 6))
     fixed = np.zeros((mesh.n_nodes, 6), bool)
     fixed[:3] = True
-    fixed[7, [0, 4]] = True              # a partly fixed node
+    fixed[7, [0, 4]] = True  # a partly fixed node
     free = np.flatnonzero(~fixed.ravel())
     lower = m.free_lower_pattern(free)
     F, data = m.force_and_free_tangent(U, lower)

@@ -9,13 +9,23 @@ import meshio
 import numpy as np
 import pytest
 
-PAPER_SCENES = ["circle-pedestal", "hang-100", "hang-20", "large-square-pedestal", "sphere",
-                "square-on-disc", "square-pedestal", "strip-warp", "strip-weft"]
+PAPER_SCENES = [
+    "circle-pedestal",
+    "hang-100",
+    "hang-20",
+    "large-square-pedestal",
+    "sphere",
+    "square-on-disc",
+    "square-pedestal",
+    "strip-warp",
+    "strip-weft",
+]
 
 
 def cli(*args, cwd=None):
-    return subprocess.run([sys.executable, "-m", "solidshell", *map(str, args)], capture_output=True,
-                          text=True, cwd=cwd, timeout=300)
+    return subprocess.run(
+        [sys.executable, "-m", "solidshell", *map(str, args)], capture_output=True, text=True, cwd=cwd, timeout=300
+    )
 
 
 def test_scenes_lists_all_nine():
@@ -59,13 +69,22 @@ def bad_files(tmp_path_factory):
     d = tmp_path_factory.mktemp("bad")
     f = {}
     f["degenerate"] = _write(d / "degenerate.vtu", [[0, 0, 0], [1, 0, 0], [2, 0, 0], [1, 1, 0]], [[0, 1, 2, 3]])
-    f["duplicate"] = _write(d / "duplicate.vtu", [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0],
-                                                  [1, 0, 0], [2, 0, 0], [2, 1, 0], [1, 1, 0]],
-                            [[0, 1, 2, 3], [4, 5, 6, 7]])
-    f["inverted"] = _write(d / "inverted.vtu", [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [2, 0, 0], [2, 1, 0]],
-                           [[0, 1, 2, 3], [1, 4, 2, 5]])     # second quad is a bow-tie
-    f["emptyset"] = _write(d / "emptyset.vtu", [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], [[0, 1, 2, 3]],
-                           {"set:clamped": np.zeros(4, np.int32)})
+    f["duplicate"] = _write(
+        d / "duplicate.vtu",
+        [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [1, 0, 0], [2, 0, 0], [2, 1, 0], [1, 1, 0]],
+        [[0, 1, 2, 3], [4, 5, 6, 7]],
+    )
+    f["inverted"] = _write(
+        d / "inverted.vtu",
+        [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [2, 0, 0], [2, 1, 0]],
+        [[0, 1, 2, 3], [1, 4, 2, 5]],
+    )  # second quad is a bow-tie
+    f["emptyset"] = _write(
+        d / "emptyset.vtu",
+        [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]],
+        [[0, 1, 2, 3]],
+        {"set:clamped": np.zeros(4, np.int32)},
+    )
     (d / "garbage.msh").write_text("this is not a mesh\n")
     f["garbage"] = d / "garbage.msh"
     base = 'name = "mine"\ntitle = "t"\n[geometry]\nrecipe = "square"\nsize = 10.0\n[mesh]\ndensity = "4x4"\n'
@@ -139,7 +158,7 @@ def _check_one_line(code, stderr, needle, out):
     assert len(lines) == 1, stderr
     assert "Traceback" not in stderr and lines[0].startswith("solidshell: ")
     assert needle in lines[0]
-    assert not out.exists()          # nothing written, not even the folder (issue 11 part 4)
+    assert not out.exists()  # nothing written, not even the folder (issue 11 part 4)
 
 
 @pytest.mark.parametrize("i", range(len(BAD)), ids=[" ".join(a) for a, _ in BAD])
@@ -161,7 +180,7 @@ def test_version_and_help(capsys):
     from solidshell.cli import main
 
     for argv, needles in ((["--version"], ["solidshell 0."]), (["run", "--help"], ["--set", "--solver", "--mesh"])):
-        with pytest.raises(SystemExit, match="^0$") as e:       # argparse exits 0 after printing
+        with pytest.raises(SystemExit, match="^0$") as e:  # argparse exits 0 after printing
             main(argv)
         assert e.value.code == 0
         out = capsys.readouterr().out
@@ -176,7 +195,7 @@ def test_run_strip_end_to_end(tmp_path):
     s = json.loads((tmp_path / "summary.json").read_text())
     assert s["converged"] is True and s["solver"] == "static"
     assert {"result.xdmf", "result.vtu", "deformed.vtu", "top.png", "iso.png", "side.png"} <= set(s["files"])
-    assert -5.0 < s["min_z"] < -3.0        # a 5 cm wool strip droops by several cm (Fig. 4)
+    assert -5.0 < s["min_z"] < -3.0  # a 5 cm wool strip droops by several cm (Fig. 4)
 
 
 def test_readme_commands_and_ci():
@@ -189,8 +208,10 @@ def test_readme_commands_and_ci():
     assert blocks[0].startswith("python3.11 -m venv .venv && .venv/bin/pip install -e . && .venv/bin/solidshell ")
     assert "square-pedestal" in blocks[0]
     # the suite, then the whole default verify (not --quick): a failed record fails CI (issue 34)
-    assert blocks[1] == ("python3.11 -m venv .venv && .venv/bin/pip install -e '.[test,sweep]' && "
-                         ".venv/bin/python -m pytest -q && .venv/bin/solidshell verify")
+    assert blocks[1] == (
+        "python3.11 -m venv .venv && .venv/bin/pip install -e '.[test,sweep]' && "
+        ".venv/bin/python -m pytest -q && .venv/bin/solidshell verify"
+    )
     ci = (root / ".ci" / "run").read_text().strip().splitlines()
     assert ci[0] == "#!/usr/bin/env bash" and "set -euo pipefail" in ci and ci[-1] == blocks[1]
     assert os.access(root / ".ci" / "run", os.X_OK)

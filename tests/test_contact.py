@@ -6,8 +6,16 @@ import math
 import numpy as np
 import pytest
 
-from solidshell.contact import (Pedestal, Plane, RigidBody, Sphere, combined_critical_time_step, contact_forces,
-                                contact_critical_time_step, penalty_stiffness)
+from solidshell.contact import (
+    Pedestal,
+    Plane,
+    RigidBody,
+    Sphere,
+    combined_critical_time_step,
+    contact_critical_time_step,
+    contact_forces,
+    penalty_stiffness,
+)
 from solidshell.errors import InputError
 
 BODIES = {
@@ -57,9 +65,12 @@ def test_force_is_minus_gradient_of_energy(name):
         d = x - body.top_center
         if body.kind == "box":
             q = np.abs(np.column_stack([d[:, 0], d[:, 1], d[:, 2] + body.height / 2])) - np.array(
-                [*body.half_widths, body.height / 2])
+                [*body.half_widths, body.height / 2]
+            )
         else:
-            q = np.column_stack([np.hypot(d[:, 0], d[:, 1]) - body.radius, np.abs(d[:, 2] + body.height / 2) - body.height / 2])
+            q = np.column_stack(
+                [np.hypot(d[:, 0], d[:, 1]) - body.radius, np.abs(d[:, 2] + body.height / 2) - body.height / 2]
+            )
         qs = np.sort(q, axis=1)
         ok = (qs[:, -1] - qs[:, -2] > 1e-4) | (qs[:, -1] > 0)
     scale = 150.0 * 0.2
@@ -86,8 +97,11 @@ def test_symmetric_configuration_gives_symmetric_forces():
     s = np.linspace(-1.5, 1.5, 7)
     X, Y = np.meshgrid(s, s, indexing="ij")
     x = np.column_stack([X.ravel(), Y.ravel(), np.full(X.size, 1.9)])
-    for body in (Sphere((0, 0, 0), 2.0), Pedestal((0, 0, 2.0), radius=1.2),
-                 Pedestal((0, 0, 2.0), half_widths=(1.2, 1.2), edge_radius=0.1)):
+    for body in (
+        Sphere((0, 0, 0), 2.0),
+        Pedestal((0, 0, 2.0), radius=1.2),
+        Pedestal((0, 0, 2.0), half_widths=(1.2, 1.2), edge_radius=0.1),
+    ):
         f, _ = body.forces(x, 10.0)
         F = f.reshape(7, 7, 3)
         assert np.any(F != 0)
@@ -159,10 +173,10 @@ def test_friction_return_map_stick_and_slip():
     assert idx.tolist() == [0, 1, 2] and n_slip == 1
     np.testing.assert_allclose(f, [[-0.2, 0, 1.0], [0, -0.5, 1.0], [0, 0, 1.0], [0, 0, 0]], atol=1e-12)
     np.testing.assert_allclose(ft, f[:3] - [[0, 0, 1.0]] * 3, atol=1e-12)
-    np.testing.assert_allclose(new[0], [-0.002, 0.0, -0.01], atol=1e-12)   # stick: anchor stays (tangentially)
-    np.testing.assert_allclose(new[1], [1.0, -0.005, -0.01], atol=1e-12)   # slip: anchor follows
-    np.testing.assert_allclose(new[2], x[2], atol=1e-12)                   # first touch
-    assert np.all(np.isnan(new[3]))                                        # out of contact: forgotten
+    np.testing.assert_allclose(new[0], [-0.002, 0.0, -0.01], atol=1e-12)  # stick: anchor stays (tangentially)
+    np.testing.assert_allclose(new[1], [1.0, -0.005, -0.01], atol=1e-12)  # slip: anchor follows
+    np.testing.assert_allclose(new[2], x[2], atol=1e-12)  # first touch
+    assert np.all(np.isnan(new[3]))  # out of contact: forgotten
     assert e_n == pytest.approx(3 * 0.5 * 100 * 0.01**2)
     assert e_t == pytest.approx(0.5 * (0.2**2 + 0.5**2) / 100.0)
     # the cone holds for any stretch and normal force (random check)
@@ -172,7 +186,7 @@ def test_friction_return_map_stick_and_slip():
     f, _, idx, ft, _, new, _ = frictional_contact(floor, x, 100.0, 300.0, anchor)
     fn = f[idx, 2]
     assert np.all(np.linalg.norm(ft, axis=1) <= 0.5 * fn * (1 + 1e-12))
-    assert np.all(np.abs(ft[:, 2]) < 1e-12)   # tangential
+    assert np.all(np.abs(ft[:, 2]) < 1e-12)  # tangential
     np.testing.assert_allclose(-300.0 * (x[idx] - new[idx]), ft, atol=1e-12)
 
 
@@ -212,11 +226,14 @@ def test_compiled_distances_match_the_numpy_formulas(name):
         zc = d[:, 2] + 0.5 * body.height
         if body.kind == "cylinder":
             rho = np.hypot(d[:, 0], d[:, 1])
-            g0, ga = _box_sdf_reference(np.column_stack([rho, zc]), np.array([body.radius - er, 0.5 * body.height - er]))
+            g0, ga = _box_sdf_reference(
+                np.column_stack([rho, zc]), np.array([body.radius - er, 0.5 * body.height - er])
+            )
             n0 = np.column_stack([ga[:, :1] * d[:, :2] / rho[:, None], ga[:, 1]])
         else:
-            g0, n0 = _box_sdf_reference(np.column_stack([d[:, :2], zc]),
-                                        np.array([*body.half_widths, 0.5 * body.height]) - er)
+            g0, n0 = _box_sdf_reference(
+                np.column_stack([d[:, :2], zc]), np.array([*body.half_widths, 0.5 * body.height]) - er
+            )
         g0 = g0 - er
     np.testing.assert_allclose(g, g0, rtol=0, atol=1e-13 * 4)
     np.testing.assert_allclose(n, n0, rtol=0, atol=1e-13)
@@ -224,6 +241,7 @@ def test_compiled_distances_match_the_numpy_formulas(name):
 
 class _Floor(RigidBody):
     """A user's own body (no kernel code): the floor z <= 0 by its signed distance alone."""
+
     lipschitz = 1.0
 
     def __init__(self, friction=0.0):

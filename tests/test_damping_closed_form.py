@@ -36,12 +36,12 @@ from solidshell.problem import Problem
 from solidshell.solvers import explicit
 from solidshell.solvers.explicit import scaled_mass
 
-V = np.array([3.0, -2.0, 5.0])   # cm/s
+V = np.array([3.0, -2.0, 5.0])  # cm/s
 
 
 def free(model):
     n = model.n_nodes
-    return Problem(model, np.zeros((n, 6), bool), np.zeros((n, 6)))   # no support, gravity off
+    return Problem(model, np.zeros((n, 6), bool), np.zeros((n, 6)))  # no support, gravity off
 
 
 @pytest.fixture(scope="module")
@@ -64,8 +64,18 @@ def translate(sheet, alpha, dt, n_steps, ms, mode, steps):
     N = sheet.n_nodes
     V0 = np.zeros((N, 6))
     V0[:, :3] = V
-    r = explicit.run(free(sheet), dict(t_end=n_steps * dt, dt=dt, alpha=alpha, V0=V0, mass_scaling=ms,
-                                       mass_scaling_mode=mode, snapshots=[k * dt for k in steps]))
+    r = explicit.run(
+        free(sheet),
+        dict(
+            t_end=n_steps * dt,
+            dt=dt,
+            alpha=alpha,
+            V0=V0,
+            mass_scaling=ms,
+            mass_scaling_mode=mode,
+            snapshots=[k * dt for k in steps],
+        ),
+    )
     assert r.converged, r.message
     assert r.info["steps"] == n_steps and r.info["dt"] == pytest.approx(dt, rel=1e-12)
     return r, {int(round(t / dt)): U for t, U in r.frames}
@@ -85,7 +95,7 @@ def test_rigid_translation_decays_by_the_schemes_factor(sheet, alpha, dt, n_step
         # round-off (strains from x.x - X.X): measured node-to-node spread 3e-12 of |D|
         assert np.ptp(D[n][:, :3], axis=0).max() <= 1e-10 * np.abs(D[n][:, :3]).max()
         assert np.abs(D[n][:, 3:]).max() <= 1e-14
-        exact = V * (1.0 - a * a) * (1.0 - rr ** n) / alpha
+        exact = V * (1.0 - a * a) * (1.0 - rr**n) / alpha
         # measured <= 3e-13 relative.  (Eq. 23 in absolute
         # positions: its coefficients sum to 1 only to round-off, which acts as a spurious force
         # eps |D| / dt^2 and drifts ~ n eps / (alpha dt); on 8000 steps at alpha dt = 2.5e-4 it
@@ -96,7 +106,7 @@ def test_rigid_translation_decays_by_the_schemes_factor(sheet, alpha, dt, n_step
         t = n * dt
         # exact discrete decay v_n = V0 r^n: measured <= 4e-11; 1e-9 (a difference of two
         # positions loses log10(|D| / |v dt|) ~ 2-3 digits)
-        np.testing.assert_allclose(v, np.broadcast_to(V * rr ** n, (N, 3)), rtol=1e-9)
+        np.testing.assert_allclose(v, np.broadcast_to(V * rr**n, (N, 3)), rtol=1e-9)
         # ... which is the continuous e^(-alpha t) up to the scheme's own O(dt^2) error, whose
         # leading term -alpha t (alpha dt)^2 / 12 the measured deviation must match to 2 % (the
         # next term is O((alpha dt)^2) of it; round-off < 5e-11 against deviations of 1e-6
@@ -127,11 +137,11 @@ def one_quad():
     X = np.array([[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [1.0, 1.0, 0.0], [-1.0, 1.0, 0.0]])
     model = Model(ShellMesh(X, quads=[[0, 1, 2, 3]]), IsotropicShell(E=1.0e4, nu=0.3, h=0.1, density=1.0))
     phi = np.zeros((4, 6))
-    phi[:, :2] = X[:, :2]                     # the dilation pattern: radial, |phi| = |X|
+    phi[:, :2] = X[:, :2]  # the dilation pattern: radial, |phi| = |X|
     return model, phi
 
 
-MS, MODE = 1e4, "director"    # director masses x1e4: the dilation mode is then near omega_max
+MS, MODE = 1e4, "director"  # director masses x1e4: the dilation mode is then near omega_max
 
 
 def dilation(one_quad, alpha, omega_dt, periods=10, v0=1e-6):
@@ -148,8 +158,10 @@ def dilation(one_quad, alpha, omega_dt, periods=10, v0=1e-6):
     n_steps = int(np.ceil(t_end / (omega_dt / omega)))
     dt = t_end / n_steps
     snaps = [k * dt for k in range(0, n_steps + 1, max(1, n_steps // 97))]
-    r = explicit.run(free(model), dict(t_end=t_end, dt=dt, alpha=alpha, V0=v0 * phi, snapshots=snaps,
-                                       mass_scaling=MS, mass_scaling_mode=MODE))
+    r = explicit.run(
+        free(model),
+        dict(t_end=t_end, dt=dt, alpha=alpha, V0=v0 * phi, snapshots=snaps, mass_scaling=MS, mass_scaling_mode=MODE),
+    )
     assert r.converged, r.message
     t = np.array([f[0] for f in r.frames])
     U = np.stack([f[1] for f in r.frames])
@@ -163,7 +175,7 @@ def dilation(one_quad, alpha, omega_dt, periods=10, v0=1e-6):
 def test_damped_mode_follows_the_discrete_closed_form(one_quad, alpha):
     t, q, omega, dt, v0 = dilation(one_quad, alpha, omega_dt=0.2)
     a = 0.5 * alpha * dt
-    rho = np.sqrt((1.0 - a) / (1.0 + a))          # the amplitude factor per step, any omega
+    rho = np.sqrt((1.0 - a) / (1.0 + a))  # the amplitude factor per step, any omega
     theta = np.arccos((2.0 - (omega * dt) ** 2) / (2.0 * np.sqrt(1.0 - a * a)))
     n = np.rint(t / dt)
     q1 = (1.0 - a) * dt * v0
@@ -182,10 +194,10 @@ def test_damped_mode_converges_to_the_continuous_envelope(one_quad):
     errors = []
     for omega_dt in (0.2, 0.1, 0.05):
         t, q, omega, dt, v0 = dilation(one_quad, alpha, omega_dt)
-        omega_d = np.sqrt(omega ** 2 - alpha ** 2 / 4.0)
+        omega_d = np.sqrt(omega**2 - alpha**2 / 4.0)
         cont = v0 * np.exp(-0.5 * alpha * t) * np.sin(omega_d * t) / omega_d
         errors.append(np.abs(q - cont).max() / (v0 / omega))
     # second order: ratio 4 within 5 % (the next term is O((omega dt)^2) = 4 % at omega dt = 0.2)
     assert errors[0] / errors[1] == pytest.approx(4.0, rel=0.05)
     assert errors[1] / errors[2] == pytest.approx(4.0, rel=0.05)
-    assert errors[2] < 3e-3     # and small: the continuous closed form, not just some limit
+    assert errors[2] < 3e-3  # and small: the continuous closed form, not just some limit

@@ -27,8 +27,11 @@ from verification.checks import pedestal
 
 # the modal damper sets alpha from ARPACK's lowest modes: with eigsh's own random start it differed
 # from process to process in the 9th digit (solvers.linear.arpack_start fixes the start)
-RUNS = [("square-pedestal", "12x4x4", "static", {}), ("square-pedestal", "6x2x4", "relax", {}),
-        ("square-pedestal", "6x2x4", "relax", {"solver.relax.damping": "modal"})]
+RUNS = [
+    ("square-pedestal", "12x4x4", "static", {}),
+    ("square-pedestal", "6x2x4", "relax", {}),
+    ("square-pedestal", "6x2x4", "relax", {"solver.relax.damping": "modal"}),
+]
 PROBE = """
 import json, sys
 from solidshell.run import run_scene
@@ -41,10 +44,16 @@ print(json.dumps(out))
 
 
 def _run_with_threads(n: int) -> list:
-    env = dict(os.environ, NUMBA_NUM_THREADS=str(n), MKL_NUM_THREADS=str(n), OMP_NUM_THREADS=str(n),
-               OPENBLAS_NUM_THREADS=str(n))
-    p = subprocess.run([sys.executable, "-c", PROBE, json.dumps(RUNS)], env=env, capture_output=True, text=True,
-                       timeout=600)
+    env = dict(
+        os.environ,
+        NUMBA_NUM_THREADS=str(n),
+        MKL_NUM_THREADS=str(n),
+        OMP_NUM_THREADS=str(n),
+        OPENBLAS_NUM_THREADS=str(n),
+    )
+    p = subprocess.run(
+        [sys.executable, "-c", PROBE, json.dumps(RUNS)], env=env, capture_output=True, text=True, timeout=600
+    )
     assert p.returncode == 0, p.stderr[-2000:]
     return json.loads(p.stdout.strip().splitlines()[-1])
 

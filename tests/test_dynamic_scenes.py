@@ -16,10 +16,29 @@ def test_report_from_cache(tmp_path, monkeypatch):
     cache.mkdir()
     monkeypatch.setattr(dynamic_scenes, "CACHE", cache)
     monkeypatch.setattr(dynamic_scenes, "OUT", tmp_path)
-    row = dict(case="sp48-kin-dir", scene="square-pedestal", mesh="48x16x4", solver="relax", settings_label="kin-dir",
-               settings={}, overrides={}, run_dir=str(tmp_path / "none"), total_wall_s=1.0, load_start="1 1 1",
-               load_end="1 1 1", error=None, converged=True, steps=10, dt=1e-5, t_final=1e-4, wall_time_s=1.0,
-               drape_coefficient=0.5, fold_count=4, max_interpenetrated_nodes=0, energy_balance_error=1e-6)
+    row = dict(
+        case="sp48-kin-dir",
+        scene="square-pedestal",
+        mesh="48x16x4",
+        solver="relax",
+        settings_label="kin-dir",
+        settings={},
+        overrides={},
+        run_dir=str(tmp_path / "none"),
+        total_wall_s=1.0,
+        load_start="1 1 1",
+        load_end="1 1 1",
+        error=None,
+        converged=True,
+        steps=10,
+        dt=1e-5,
+        t_final=1e-4,
+        wall_time_s=1.0,
+        drape_coefficient=0.5,
+        fold_count=4,
+        max_interpenetrated_nodes=0,
+        energy_balance_error=1e-6,
+    )
     (cache / "sp48-kin-dir.json").write_text(json.dumps(row))
     rows = dynamic_scenes.report()
     assert len(rows) == 1
@@ -36,18 +55,40 @@ def _crit(**kw):
 def test_step_above_critical_refused():
     dtc = _crit()
     with pytest.raises(InputError, match="critical"):
-        run_scene("strip-warp", mesh="10x1", solver="explicit", progress=False, t_end=50 * dtc, dt=1.1 * dtc,
-                  critical_time_step=dtc)
+        run_scene(
+            "strip-warp",
+            mesh="10x1",
+            solver="explicit",
+            progress=False,
+            t_end=50 * dtc,
+            dt=1.1 * dtc,
+            critical_time_step=dtc,
+        )
 
 
 def test_forced_unstable_step_detected_and_stable_step_fine():
     dtc = _crit()
-    bad = run_scene("strip-warp", mesh="10x1", solver="explicit", progress=False, t_end=2000 * 1.2 * dtc,
-                    dt=1.2 * dtc, critical_time_step=dtc, allow_unstable=True)
+    bad = run_scene(
+        "strip-warp",
+        mesh="10x1",
+        solver="explicit",
+        progress=False,
+        t_end=2000 * 1.2 * dtc,
+        dt=1.2 * dtc,
+        critical_time_step=dtc,
+        allow_unstable=True,
+    )
     assert bad.summary["converged"] is False
     assert bad.summary["message"]
-    good = run_scene("strip-warp", mesh="10x1", solver="explicit", progress=False, t_end=2000 * 0.9 * dtc,
-                     dt=0.9 * dtc, critical_time_step=dtc)
+    good = run_scene(
+        "strip-warp",
+        mesh="10x1",
+        solver="explicit",
+        progress=False,
+        t_end=2000 * 0.9 * dtc,
+        dt=0.9 * dtc,
+        critical_time_step=dtc,
+    )
     assert good.summary["converged"] is True
     assert good.summary["energy_balance_error"] < 1e-2
 
@@ -56,8 +97,8 @@ def test_sphere_scene_friction_key():
     """[[contact]] friction: the sphere scene sets mu = 0.3 (frictionless sphere: the cloth slides
     off); a negative or non-finite coefficient is refused with the key named; the runner passes it
     to the body; 0 is the default."""
-    from solidshell.scenes.build import contact_bodies
     from solidshell.scenes import load as load_scene
+    from solidshell.scenes.build import contact_bodies
 
     sc = load_scene("sphere")
     assert sc.contact[0]["friction"] == 0.3
@@ -77,13 +118,38 @@ def test_sphere_study_report_from_cache(tmp_path, monkeypatch):
     cache.mkdir()
     monkeypatch.setattr(dynamic_sphere, "CACHE", cache)
     monkeypatch.setattr(dynamic_sphere, "OUT", tmp_path)
-    row = dict(case="s30-green-uni", mesh="30x30", label="x", settings={}, overrides={}, thickness_strain="green",
-               run_dir="none", load_start="1 1 1", load_end="2 2 2", error=None, steady_state_reached=True,
-               status="steady", message="steady", steps=10, dt=1e-5, critical_time_step=1.1e-5, t_final=1e-4,
-               wall_time_s=3.0, element_steps_per_second=1e6, fold_count=4, drape_coefficient=0.2,
-               max_interpenetrated_nodes=3, max_interpenetration_time=0.5, interpenetrated_nodes=0,
-               energy_balance_error=1e-5, external_work=10.0, friction_work=1.0, friction=[0.3],
-               mass_scaling=100, mass_scaling_mode="uniform")
+    row = dict(
+        case="s30-green-uni",
+        mesh="30x30",
+        label="x",
+        settings={},
+        overrides={},
+        thickness_strain="green",
+        run_dir="none",
+        load_start="1 1 1",
+        load_end="2 2 2",
+        error=None,
+        steady_state_reached=True,
+        status="steady",
+        message="steady",
+        steps=10,
+        dt=1e-5,
+        critical_time_step=1.1e-5,
+        t_final=1e-4,
+        wall_time_s=3.0,
+        element_steps_per_second=1e6,
+        fold_count=4,
+        drape_coefficient=0.2,
+        max_interpenetrated_nodes=3,
+        max_interpenetration_time=0.5,
+        interpenetrated_nodes=0,
+        energy_balance_error=1e-5,
+        external_work=10.0,
+        friction_work=1.0,
+        friction=[0.3],
+        mass_scaling=100,
+        mass_scaling_mode="uniform",
+    )
     (cache / "s30-green-uni.json").write_text(json.dumps(row))
     rows = dynamic_sphere.report()
     assert len(rows) == 1
@@ -102,8 +168,21 @@ def test_relaxation_with_contact_and_friction_does_not_depend_on_threads():
 
     if numba.config.NUMBA_NUM_THREADS < 2:
         pytest.skip("needs 2 numba threads")
-    out = [run_scene("sphere", mesh="20x20", solver="relax", progress=False, damping="rayleigh", alpha=50.0,
-                     mass_scaling=100.0, mass_scaling_mode="director", max_steps=1500, threads=th) for th in (1, 2)]
+    out = [
+        run_scene(
+            "sphere",
+            mesh="20x20",
+            solver="relax",
+            progress=False,
+            damping="rayleigh",
+            alpha=50.0,
+            mass_scaling=100.0,
+            mass_scaling_mode="director",
+            max_steps=1500,
+            threads=th,
+        )
+        for th in (1, 2)
+    ]
     # the sheet has fallen around the sphere with nodes in contact and slipping (5 and 4 when written)
     s = out[0].summary
     assert s["min_z"] < -1.0 and s["max_contact_nodes"] >= 3 and s["max_slipping_nodes"] >= 1

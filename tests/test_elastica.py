@@ -20,7 +20,7 @@ def test_small_deflection_limit():
 
 def test_heavy_strip_bvp_matches_shooting():
     r = el.heavy_cantilever(0.083, 0.019, 5.0, n_out=51)
-    assert r["bvp_vs_shooting_max_abs"] < 1e-8          # both solved to ~1e-10 or better
+    assert r["bvp_vs_shooting_max_abs"] < 1e-8  # both solved to ~1e-10 or better
     # inextensible: the curve has length L (chord sum of a fine resampling approaches L from below)
     seg = np.hypot(np.diff(r["x"]), np.diff(r["z"]))
     assert seg.sum() == pytest.approx(5.0, rel=2e-4)

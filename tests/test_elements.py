@@ -180,7 +180,7 @@ def test_interpenetration_indicator():
     model = Model(mesh, Fabric.wool())
     U = np.zeros((mesh.n_nodes, 6))
     assert not model.interpenetrated_nodes(U).any()
-    U[4, 3:] = -2.0 * mesh.directors[4]            # reverse the centre node's director
+    U[4, 3:] = -2.0 * mesh.directors[4]  # reverse the centre node's director
     flags = model.interpenetrated_nodes(U)
     assert flags[4] and flags.sum() == 1
 
@@ -208,7 +208,7 @@ def test_interpenetration_kernel_is_the_numpy_definition_bit_for_bit(scale):
     rng = np.random.default_rng(7)
     q = flat_grid(6)
     X = q.nodes + np.column_stack([rng.normal(0, 0.02, (q.n_nodes, 2)), rng.normal(0, 0.05, q.n_nodes)])
-    top = q.quads[18:]                               # rows 3-5 of the 6x6 grid as triangles
+    top = q.quads[18:]  # rows 3-5 of the 6x6 grid as triangles
     mesh = ShellMesh(X, quads=q.quads[:18], tris=np.concatenate([top[:, [0, 1, 2]], top[:, [0, 2, 3]]]))
     U = rng.normal(0.0, scale, (mesh.n_nodes, 6))
     got = Model(mesh, Fabric.wool()).interpenetration(U)
@@ -239,11 +239,21 @@ def test_assumed_membrane_sees_no_stretch_where_the_edges_keep_their_lengths(sha
     shear leaks into the Cartesian normal strains, < 1/10 of it (measured 1/17 .. 1/12).  The
     paper's 2x2 membrane ("full") stores the parasitic stretch."""
     from types import SimpleNamespace
-    sec = SimpleNamespace(C_m=np.diag([1.0, 1.0, 0.0]), C_b=np.zeros((3, 3)), C_t=np.zeros((2, 2)),
-                          E_z=0.0, warp_angle_rad=0.0, thickness=0.01, mass_per_area=1.0)
-    X = {"square": [[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]],
-         "rectangle": [[-2, -1, 0], [2, -1, 0], [2, 1, 0], [-2, 1, 0]],
-         "distorted": [[-1.2, -0.9, 0], [1.1, -1, 0], [0.8, 1.3, 0], [-0.9, 1, 0]]}[shape]
+
+    sec = SimpleNamespace(
+        C_m=np.diag([1.0, 1.0, 0.0]),
+        C_b=np.zeros((3, 3)),
+        C_t=np.zeros((2, 2)),
+        E_z=0.0,
+        warp_angle_rad=0.0,
+        thickness=0.01,
+        mass_per_area=1.0,
+    )
+    X = {
+        "square": [[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]],
+        "rectangle": [[-2, -1, 0], [2, -1, 0], [2, 1, 0], [-2, 1, 0]],
+        "distorted": [[-1.2, -0.9, 0], [1.1, -1, 0], [0.8, 1.3, 0], [-0.9, 1, 0]],
+    }[shape]
     X = np.array(X, dtype=float)
     mesh = ShellMesh(X, quads=[[0, 1, 2, 3]])
     axis = (X[2] - X[0]) / np.linalg.norm(X[2] - X[0])
@@ -259,7 +269,6 @@ def test_assumed_membrane_sees_no_stretch_where_the_edges_keep_their_lengths(sha
         assert ans <= (1e-12 if shape != "distorted" else 0.1) * full
 
 
-
 def test_membrane_per_quadrilateral():
     """A per-quad membrane choice (the adaptive mesh's coarse quads "ans", its finest "full") is
     each element's own formulation: the mixed model's element energies are the single-choice
@@ -273,11 +282,10 @@ def test_membrane_per_quadrilateral():
     mixed = Model(mesh, WOOL30, membrane=choice)
     assert [len(b.conn) for b in mixed.blocks] == [1, 1, len(mesh.tris)]
     nq = len(mesh.quads)
-    want = np.concatenate([ans.element_energies(U)[:1], full.element_energies(U)[1:nq],
-                           full.element_energies(U)[nq:]])
+    want = np.concatenate([ans.element_energies(U)[:1], full.element_energies(U)[1:nq], full.element_energies(U)[nq:]])
     np.testing.assert_allclose(mixed.element_energies(U), want, rtol=1e-13)
     same = Model(mesh, WOOL30, membrane=["full"] * nq)
-    assert np.array_equal(same.internal_force(U), full.internal_force(U))   # one block: bitwise
+    assert np.array_equal(same.internal_force(U), full.internal_force(U))  # one block: bitwise
     with pytest.raises(InputError, match="needs 2 values"):
         Model(mesh, WOOL30, membrane=["ans"])
     with pytest.raises(InputError, match="'sri'"):

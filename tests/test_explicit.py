@@ -11,10 +11,10 @@ import scipy.linalg
 
 from solidshell import Fabric, InputError, IsotropicShell, ShellMesh
 from solidshell.contact import Plane, Sphere
+from solidshell.model import Model
 from solidshell.problem import Problem
 from solidshell.solvers import explicit, get
 from solidshell.solvers.timestep import critical_time_step, estimate_omega_max
-from solidshell.model import Model
 from solidshell.units import G0
 
 
@@ -168,8 +168,8 @@ def test_mass_scaling_modes(strip):
     dire = explicit.run(strip, {"t_end": 1e-4, "alpha": 0.0, "mass_scaling": 100, "mass_scaling_mode": "director"})
     r_uni = uni.info["critical_time_step"] / base.info["critical_time_step"]
     r_dir = dire.info["critical_time_step"] / base.info["critical_time_step"]
-    assert r_uni == pytest.approx(10.0, rel=1e-5)   # omega^2 scales exactly as 1/s
-    assert 1.5 < r_dir <= 10.0 * (1 + 1e-6)          # director scaling gains, at most sqrt(s)
+    assert r_uni == pytest.approx(10.0, rel=1e-5)  # omega^2 scales exactly as 1/s
+    assert 1.5 < r_dir <= 10.0 * (1 + 1e-6)  # director scaling gains, at most sqrt(s)
     with pytest.raises(InputError, match="mass_scaling_mode = 'nodes': Input should be 'uniform' or 'director'"):
         explicit.run(strip, {"t_end": 1e-4, "mass_scaling_mode": "nodes"})
 
@@ -182,8 +182,9 @@ def test_uniform_mass_scaling_is_a_time_stretch():
     s, alpha, n = 100.0, 5.0, 400
     dt = 0.5 * explicit.run(prob, {"t_end": 1e-6, "alpha": 0.0}).info["critical_time_step"]
     ref = explicit.run(prob, {"t_end": n * dt * (1 - 1e-9), "dt": dt, "alpha": alpha * math.sqrt(s)})
-    sc = explicit.run(prob, {"t_end": n * math.sqrt(s) * dt * (1 - 1e-9), "dt": math.sqrt(s) * dt,
-                             "alpha": alpha, "mass_scaling": s})
+    sc = explicit.run(
+        prob, {"t_end": n * math.sqrt(s) * dt * (1 - 1e-9), "dt": math.sqrt(s) * dt, "alpha": alpha, "mass_scaling": s}
+    )
     assert ref.info["steps"] == sc.info["steps"] == n
     d = np.max(np.abs(ref.U - sc.U))
     moved = np.max(np.abs(ref.U[:, :3]))
@@ -241,8 +242,9 @@ def test_stable_below_critical_step(strip, factor):
     pre = explicit.run(strip, {"t_end": 1e-5, "alpha": 0.0})
     dtc = pre.info["critical_time_step"]
     gstrip = cantilever(gravity=0.01)
-    res = explicit.run(gstrip, {"t_end": 4000 * factor * dtc * (1 - 1e-9), "dt": factor * dtc, "alpha": 0.0,
-                                "critical_time_step": dtc})
+    res = explicit.run(
+        gstrip, {"t_end": 4000 * factor * dtc * (1 - 1e-9), "dt": factor * dtc, "alpha": 0.0, "critical_time_step": dtc}
+    )
     assert res.converged and np.all(np.isfinite(res.U)) and res.info["steps"] == 4000
     # a stable run keeps the energy balance (4000 steps of a suddenly applied weight)
     assert res.info["energy_balance_error"] < 1e-3
@@ -258,8 +260,13 @@ def test_step_above_critical_is_refused_reduced_or_detected(strip):
     assert red.info["dt"] <= 0.9 * dtc * (1 + 1e-12) and red.info["dt_requested"] == 1.05 * dtc
     # forced through: the run blows up (the highest mode grows by ~1.8x per step at 1.05 dt_crit).
     # The sampled energy balance catches it first (it creates energy) ...
-    forced = {"t_end": 4000 * 1.05 * dtc, "dt": 1.05 * dtc, "allow_unstable": True, "critical_time_step": dtc,
-              "sample_every": 10}
+    forced = {
+        "t_end": 4000 * 1.05 * dtc,
+        "dt": 1.05 * dtc,
+        "allow_unstable": True,
+        "critical_time_step": dtc,
+        "sample_every": 10,
+    }
     bad = explicit.run(gstrip, forced)
     assert not bad.converged and bad.info["status"] == "diverged", bad.message
     assert "creating energy" in bad.message and "last good state" in bad.message
@@ -298,8 +305,14 @@ def _interrupted_then_resumed(prob, s, ck, every, frac, before_resume=None):
 def test_checkpoint_restart_bit_for_bit(tmp_path, every):
     prob = cantilever(gravity=0.01)
     # interval frames thinned twice or more (50 intervals, at most 8 kept): their state is restored too
-    s = {"t_end": 0.1, "alpha": 5.0, "snapshots": [0.01, 0.03], "sample_every": 7, "frame_interval": 0.002,
-         "max_frames": 8}
+    s = {
+        "t_end": 0.1,
+        "alpha": 5.0,
+        "snapshots": [0.01, 0.03],
+        "sample_every": 7,
+        "frame_interval": 0.002,
+        "max_frames": 8,
+    }
     full = explicit.run(prob, s)
     ck = str(tmp_path / "run.ckpt.npz")
     resumed = _interrupted_then_resumed(prob, s, ck, every, 0.55)
@@ -317,8 +330,7 @@ def test_checkpoint_restart_bit_for_bit(tmp_path, every):
 # ------------------------------------------------------------------------------ gravity, relaxation
 def test_damped_gravity_run_stays_bounded():
     prob = cantilever(Fabric.wool(), nx=6, ny=1, L=3.0, W=0.5, gravity=1.0)
-    res = get("explicit")(prob, {"t_end": 1.0, "alpha": 5.0, "mass_scaling": 100,
-                                 "mass_scaling_mode": "director"})
+    res = get("explicit")(prob, {"t_end": 1.0, "alpha": 5.0, "mass_scaling": 100, "mass_scaling_mode": "director"})
     i = res.info
     assert res.converged and i["steps"] > 5000
     L = 3.0
@@ -338,7 +350,7 @@ def test_dynamic_relaxation_stops_itself_and_damping_modes_agree():
         assert r.converged and r.info["steady_state_reached"], r.message
         assert r.info["final_relative_residual"] < 1e-4
     assert kin.info["kinetic_resets"] > 0
-    t = [f[0] for f in ray.frames]   # the default time series: t = 0, every 0.05 s, the steady state
+    t = [f[0] for f in ray.frames]  # the default time series: t = 0, every 0.05 s, the steady state
     assert t[0] == 0.0 and t[-1] == ray.info["t_final"] and 0.05 <= t[1] < 0.05 + 2 * ray.info["dt"]
     assert len(t) >= min(ray.info["t_final"] / 0.05, 50)
     # both reach the same static equilibrium: residual 1e-4 of the weight on a strip whose tip
@@ -387,13 +399,15 @@ def test_dropped_sheet_does_not_pass_through(body):
     # stiffer than the rule's (k from twice the node mass: floor 0.083) fails here, passed 10 %.
     dt = i["dt"]
     w_c_dt = math.sqrt(0.1) * w_sheet * dt
-    assert i["energy_balance_error"] < w_c_dt ** 2 / (4 - w_c_dt ** 2), (i["energy_balance_error"], w_c_dt)
+    assert i["energy_balance_error"] < w_c_dt**2 / (4 - w_c_dt**2), (i["energy_balance_error"], w_c_dt)
     fine = explicit.run(prob, {"t_end": 0.05, "alpha": 5.0, "dt": dt / 4})
     assert fine.converged, fine.message
     # a quarter of the step: O(dt^2) falls 16-fold, O(dt) 4-fold; 8-fold (their geometric middle)
     # tells them apart
-    assert fine.info["energy_balance_error"] < i["energy_balance_error"] / 8, \
-        (fine.info["energy_balance_error"], i["energy_balance_error"])
+    assert fine.info["energy_balance_error"] < i["energy_balance_error"] / 8, (
+        fine.info["energy_balance_error"],
+        i["energy_balance_error"],
+    )
 
 
 # ------------------------------------------------------------------------------ re-checked step
@@ -423,9 +437,9 @@ class StiffeningOscillators:
 def test_recheck_shortens_the_step_when_the_state_stiffens(tmp_path):
     model = StiffeningOscillators()
     loads = np.zeros((3, 6))
-    loads[:, :3] = 1.0                     # static u = 1: fast frequency 100 -> 200
+    loads[:, :3] = 1.0  # static u = 1: fast frequency 100 -> 200
     U0 = np.zeros((3, 6))
-    U0[:, 3:] = 1e-8                       # a seed in the fast dofs (else they stay exactly zero)
+    U0[:, 3:] = 1e-8  # a seed in the fast dofs (else they stay exactly zero)
     prob = Problem(model, np.zeros((3, 6), bool), loads)
     s = {"t_end": 6.0, "alpha": 1.0, "U0": U0, "sample_every": 5}
     # without re-checking, 0.9 x the initial critical step turns unstable once u > 0.28
@@ -435,9 +449,9 @@ def test_recheck_shortens_the_step_when_the_state_stiffens(tmp_path):
     i = good.info
     assert good.converged, good.message
     assert i["time_step_reductions"] > 0 and i["dt"] < 0.6 * i["dt_initial"]
-    assert i["critical_time_step_min"] < 0.6 * i["critical_time_step"]   # omega roughly doubled
-    assert i["t_final"] == pytest.approx(6.0, rel=1e-12)              # still lands on t_end
-    assert np.all(np.abs(good.U[:, 3:]) < 1e-6)                         # the fast dofs stayed quiet
+    assert i["critical_time_step_min"] < 0.6 * i["critical_time_step"]  # omega roughly doubled
+    assert i["t_final"] == pytest.approx(6.0, rel=1e-12)  # still lands on t_end
+    assert np.all(np.abs(good.U[:, 3:]) < 1e-6)  # the fast dofs stayed quiet
     # each step change keeps v_n-1/2, a first-order jolt of O(dt^2 a) in the position history: the
     # balance closes to ~1e-3 (measured 1.5e-3 over ~8 reductions) instead of ~1e-4; bound 1e-2
     assert i["energy_balance_error"] < 1e-2
@@ -463,16 +477,18 @@ def test_strip_relaxes_over_a_pedestal_edge_without_entering_it():
     from solidshell.contact import Pedestal
 
     h = Fabric.wool().thickness
-    mesh = plate(12, 1, 4.0, 1.0, z=h / 2)   # lower face on the pedestal top (z = 0)
+    mesh = plate(12, 1, 4.0, 1.0, z=h / 2)  # lower face on the pedestal top (z = 0)
     mesh.nodes[:, :2] -= 0.5
     model = Model(mesh, Fabric.wool())
     fixed = np.zeros((mesh.n_nodes, 6), bool)
-    fixed[mesh.nodes[:, 0] < 0.1] = True      # held at the left end only: the rest lies free on top
+    fixed[mesh.nodes[:, 0] < 0.1] = True  # held at the left end only: the rest lies free on top
     loads = np.zeros((mesh.n_nodes, 6))
     loads[:, 2] = -model.lumped_mass()[:, 0] * G0
     ped = Pedestal((0, 0, 0), half_widths=(1.0, 1.0), edge_radius=0.1, offset=h / 2)
-    res = get("relax")(Problem(model, fixed, loads, contact=[ped]),
-                       {"damping": "kinetic", "mass_scaling": 1e4, "mass_scaling_mode": "director"})
+    res = get("relax")(
+        Problem(model, fixed, loads, contact=[ped]),
+        {"damping": "kinetic", "mass_scaling": 1e4, "mass_scaling_mode": "director"},
+    )
     assert res.converged, res.message
     x = mesh.nodes + res.U[:, :3]
     gap, _ = ped.penetration(x)
@@ -480,9 +496,9 @@ def test_strip_relaxes_over_a_pedestal_edge_without_entering_it():
     # with the director masses x1e4); 1e-3 cm is 1/60 of the thickness
     assert gap.min() > -1e-3 and res.info["max_contact_penetration"] < 1e-3
     assert res.info["max_contact_nodes"] > 0
-    assert x[:, 2].min() < -1.0                           # the overhang droops over the edge
+    assert x[:, 2].min() < -1.0  # the overhang droops over the edge
     on_top = x[:, 0] < 0.9
-    assert np.all(x[on_top, 2] > h / 2 - 1e-3)             # nothing sinks into the top face
+    assert np.all(x[on_top, 2] > h / 2 - 1e-3)  # nothing sinks into the top face
 
 
 def test_relaxation_without_loads_from_a_prescribed_displacement():
@@ -490,10 +506,11 @@ def test_relaxation_without_loads_from_a_prescribed_displacement():
     # still be recognised (E_kin relative to the strain energy, residual relative to the reactions)
     prob = cantilever(Fabric.wool(), nx=6, ny=1, L=3.0, W=0.5)
     tip = np.isclose(prob.model.mesh.nodes[:, 0], 3.0)
-    prob.fixed[tip, 1:3] = True   # y and z held; x free, else the strip would have to stretch
+    prob.fixed[tip, 1:3] = True  # y and z held; x free, else the strip would have to stretch
     prob.prescribed[tip, 2] = 0.2
-    r = get("relax")(prob, {"damping": "kinetic", "mass_scaling": 1e4, "mass_scaling_mode": "director",
-                            "tol_residual": 1e-6})
+    r = get("relax")(
+        prob, {"damping": "kinetic", "mass_scaling": 1e4, "mass_scaling_mode": "director", "tol_residual": 1e-6}
+    )
     assert r.converged, r.message
     assert r.info["final_relative_residual"] < 1e-6
     mid = np.isclose(prob.model.mesh.nodes[:, 0], 1.5)
@@ -507,11 +524,12 @@ def test_snapshots_and_frames(strip):
     t = [f[0] for f in r.frames]
     assert t[0] == 0.0 and t[-1] == pytest.approx(0.01) and len(t) == 3
     assert abs(t[1] - 0.004) <= r.info["dt"] / 2
-    assert r.info["snapshots_after_t_end_dropped"] == [0.5]   # e.g. a scene's times, shorter t_end
+    assert r.info["snapshots_after_t_end_dropped"] == [0.5]  # e.g. a scene's times, shorter t_end
     # interval frames: every frame_interval of simulated time, thinned past max_frames by dropping
     # every other one and doubling the interval; t = 0, snapshots and the end are always kept
-    r = explicit.run(strip, {"t_end": 0.01, "snapshots": [0.0, 0.004], "alpha": 0.0, "frame_interval": 5e-4,
-                             "max_frames": 6})
+    r = explicit.run(
+        strip, {"t_end": 0.01, "snapshots": [0.0, 0.004], "alpha": 0.0, "frame_interval": 5e-4, "max_frames": 6}
+    )
     t, dt = np.array([f[0] for f in r.frames]), r.info["dt"]
     assert t[0] == 0.0 and t[-1] == pytest.approx(0.01) and np.any(np.abs(t - 0.004) <= dt / 2)
     iv = t[(np.abs(t - 0.004) > dt / 2) & (t > 0) & (t < t[-1])]
@@ -567,7 +585,7 @@ def test_block_on_incline_sticks_or_slides_with_coulomb_acceleration(theta, mu):
     i = res.info
     if math.tan(th) < mu:
         w = 2 / i["critical_time_step_sheet"]
-        stretch = gs / (0.1 * w * w)          # k_t = k = 0.1 m w_max^2 per node
+        stretch = gs / (0.1 * w * w)  # k_t = k = 0.1 m w_max^2 per node
         assert np.max(np.abs(s)) < 2.5 * stretch
     else:
         assert s[-1] > 0.4 * a_exact * 0.2**2

@@ -9,15 +9,14 @@ import time
 
 import numpy as np
 import pytest
+from test_explicit import ISO, cantilever, incline, plate
 
 from solidshell import Fabric, InputError, IsotropicShell
 from solidshell.model import Model
 from solidshell.problem import Problem
-from solidshell.units import G0
-from solidshell.solvers import validate
-from solidshell.solvers import explicit
+from solidshell.solvers import explicit, validate
 from solidshell.solvers.explicit import Integrator, checkpoint
-from test_explicit import ISO, cantilever, incline, plate
+from solidshell.units import G0
 
 # keys that measure the machine, not the run
 CLOCK = ("wall_time_s", "element_steps_per_second", "time_step_estimate_s")
@@ -34,12 +33,25 @@ def same_run(a, b):
 
 CASES = {
     # snapshots, thinned interval frames and critical-step re-checks on a hanging strip
-    "explicit": (lambda: cantilever(gravity=0.01), dict(t_end=0.05, alpha=5.0, snapshots=[0.01, 0.03],
-                                                        sample_every=7, frame_interval=0.002, max_frames=8,
-                                                        recheck_every=150), False),
+    "explicit": (
+        lambda: cantilever(gravity=0.01),
+        dict(
+            t_end=0.05,
+            alpha=5.0,
+            snapshots=[0.01, 0.03],
+            sample_every=7,
+            frame_interval=0.002,
+            max_frames=8,
+            recheck_every=150,
+        ),
+        False,
+    ),
     # kinetic damping resets and the steady-state test
-    "relax": (lambda: cantilever(Fabric.wool(), nx=6, ny=1, L=3.0, W=0.5, gravity=1.0),
-              dict(damping="kinetic", mass_scaling=1e4, mass_scaling_mode="director", max_steps=3000), True),
+    "relax": (
+        lambda: cantilever(Fabric.wool(), nx=6, ny=1, L=3.0, W=0.5, gravity=1.0),
+        dict(damping="kinetic", mass_scaling=1e4, mass_scaling_mode="director", max_steps=3000),
+        True,
+    ),
     # Coulomb friction anchors
     "friction": (lambda: incline(30.0, 0.55)[0], dict(t_end=0.02, alpha=1.0, sample_every=7), False),
 }
@@ -135,7 +147,7 @@ def test_from_state_onto_a_refined_mesh_of_a_falling_sheet():
     a.advance(a.end_step // 2)
     st, t_mid, n_mid, dt_old = a.state, a.state.t, a.state.step, a.state.dt
     w, wp = st.D[2], st.D_prev[2]
-    assert np.all(st.D.reshape(-1, 6)[:, 2] == w)                # rigid: every node the same
+    assert np.all(st.D.reshape(-1, 6)[:, 2] == w)  # rigid: every node the same
     fine = falling_plate(4)
     N = fine.model.n_nodes
     st.D, st.D_prev = np.zeros((N, 6)), np.zeros((N, 6))
@@ -144,7 +156,7 @@ def test_from_state_onto_a_refined_mesh_of_a_falling_sheet():
     dt = b.state.dt
     assert dt < 0.75 * dt_old and b.state.t == t_mid
     v = (w - wp) / dt_old
-    assert (b.state.D[2] - b.state.D_prev[2]) / dt == pytest.approx(v, rel=1e-12)   # velocity kept
+    assert (b.state.D[2] - b.state.D_prev[2]) / dt == pytest.approx(v, rel=1e-12)  # velocity kept
     b.advance()
     r = b.result()
     i = r.info
@@ -179,8 +191,14 @@ def relax_whole_and_restarted(prob, s, ck):
 
 def test_relaxation_restart_bit_for_bit(tmp_path):
     prob = cantilever(Fabric.wool(), nx=6, ny=1, L=3.0, W=0.5, gravity=1.0)
-    s = dict(damping="kinetic", mass_scaling=1e4, mass_scaling_mode="director", tol_residual=1e-4,
-             tol_kinetic=1e-8, sample_every=7)
+    s = dict(
+        damping="kinetic",
+        mass_scaling=1e4,
+        mass_scaling_mode="director",
+        tol_residual=1e-4,
+        tol_kinetic=1e-8,
+        sample_every=7,
+    )
     full, again = relax_whole_and_restarted(prob, s, str(tmp_path / "relax.npz"))
     assert full.converged and full.info["kinetic_resets"] > 0
     assert 0 < again.info["restarted_from_step"] < full.info["steps"]
@@ -196,7 +214,7 @@ def test_checkpoint_keeps_extra_arrays_and_is_atomic(tmp_path):
     p = tmp_path / "c.npz"
     levels = np.arange(12).reshape(3, 4)
     checkpoint.save(p, integ.state, {"levels": levels})
-    assert os.listdir(tmp_path) == ["c.npz"]        # no temporary file left behind
+    assert os.listdir(tmp_path) == ["c.npz"]  # no temporary file left behind
     st, extra = checkpoint.load(p)
     assert np.array_equal(extra["levels"], levels) and st.step == 20
     assert np.array_equal(st.D, integ.state.D) and st.fingerprint == integ.fingerprint
@@ -221,8 +239,10 @@ def test_restart_of_another_run_is_refused_naming_what_differs(tmp_path):
     with pytest.raises(InputError, match="setting t_end"):
         explicit.run(cantilever(gravity=0.01), {**s, "t_end": 0.02, "restart": s["checkpoint"]})
     # the restart-neutral settings may change (checkpoint interval, wall-time limit, threads)
-    r = explicit.run(cantilever(gravity=0.01), {**s, "checkpoint_every": 7, "max_wall_time": 100.0, "threads": 1,
-                                                "restart": s["checkpoint"]})
+    r = explicit.run(
+        cantilever(gravity=0.01),
+        {**s, "checkpoint_every": 7, "max_wall_time": 100.0, "threads": 1, "restart": s["checkpoint"]},
+    )
     assert r.converged and r.info["restarted_from_step"] > 0
 
 
@@ -254,31 +274,48 @@ def test_ctrl_c_returns_the_last_completed_step(tmp_path, how):
 def test_late_snapshots_warn_and_progress_is_prompt_monotone_and_clean():
     calls = []
     t0 = time.perf_counter()
-    r = explicit.run(cantilever(gravity=0.01), dict(t_end=0.01, snapshots=[0.004, 0.5, 0.7]),
-                     progress=lambda f, t: calls.append((time.perf_counter() - t0, f, t)))
+    r = explicit.run(
+        cantilever(gravity=0.01),
+        dict(t_end=0.01, snapshots=[0.004, 0.5, 0.7]),
+        progress=lambda f, t: calls.append((time.perf_counter() - t0, f, t)),
+    )
     (w,) = r.info["warnings"]
     assert "0.5" in w and "0.7" in w and "\n" not in w and r.info["snapshots_after_t_end_dropped"] == [0.5, 0.7]
-    assert calls[0][0] < 1.0                                # the first call before any real work
+    assert calls[0][0] < 1.0  # the first call before any real work
     fr = [f for _, f, _ in calls]
     assert fr == sorted(fr) and fr[-1] == 1.0 and all("\n" not in t for _, _, t in calls)
     # a relaxation's fraction moves with the residual, not with t / t_max (t_max = 60 s, the
     # strip settles in ~1-3 s): the last fraction before the end is far above t / t_max
     calls.clear()
-    rr = explicit.run_relax(cantilever(Fabric.wool(), nx=6, ny=1, L=3.0, W=0.5, gravity=1.0),
-                            dict(damping="kinetic", mass_scaling=1e4, mass_scaling_mode="director", progress_every=50),
-                            progress=lambda f, t: calls.append((0, f, t)))
+    rr = explicit.run_relax(
+        cantilever(Fabric.wool(), nx=6, ny=1, L=3.0, W=0.5, gravity=1.0),
+        dict(damping="kinetic", mass_scaling=1e4, mass_scaling_mode="director", progress_every=50),
+        progress=lambda f, t: calls.append((0, f, t)),
+    )
     fr = [f for _, f, _ in calls]
     assert rr.converged and fr == sorted(fr)
     assert fr[-2] > 0.5 and fr[-2] > 10 * rr.info["t_final"] / 60.0
 
 
-@pytest.mark.parametrize("key,value,match", [
-    ("U0", "abc", "U0"), ("U0", np.zeros((3, 6)), "U0 has 3 rows"), ("V0", [np.nan] * 6, "finite"),
-    ("checkpoint", 5, "checkpoint"), ("restart", 5.0, "restart"), ("safety", 1.2, "safety"),
-    ("t_end", -1.0, "t_end"), ("sample_every", 2.5, "sample_every"), ("recheck_every", -1, "recheck_every"),
-    ("critical_step_method", "qr", "critical_step_method"), ("snapshots", ["a"], "snapshots"),
-    ("alpha", math.inf, "alpha"), ("max_frames", 0, "max_frames"), ("tend", 1.0, "unknown explicit setting"),
-])
+@pytest.mark.parametrize(
+    "key,value,match",
+    [
+        ("U0", "abc", "U0"),
+        ("U0", np.zeros((3, 6)), "U0 has 3 rows"),
+        ("V0", [np.nan] * 6, "finite"),
+        ("checkpoint", 5, "checkpoint"),
+        ("restart", 5.0, "restart"),
+        ("safety", 1.2, "safety"),
+        ("t_end", -1.0, "t_end"),
+        ("sample_every", 2.5, "sample_every"),
+        ("recheck_every", -1, "recheck_every"),
+        ("critical_step_method", "qr", "critical_step_method"),
+        ("snapshots", ["a"], "snapshots"),
+        ("alpha", math.inf, "alpha"),
+        ("max_frames", 0, "max_frames"),
+        ("tend", 1.0, "unknown explicit setting"),
+    ],
+)
 def test_bad_settings_are_one_line_input_errors(key, value, match):
     s = {"t_end": 1e-4, key: value}
     with pytest.raises(InputError, match=match) as e:
@@ -290,8 +327,14 @@ def test_settings_schema_defaults_and_registry():
     ex = validate("explicit", {"t_end": 1.0})
     rx = validate("relax", {})
     assert (ex.alpha, ex.mass_scaling, ex.safety, ex.recheck_every, ex.max_frames) == (5.0, 1.0, 0.9, 10000, 100)
-    assert (rx.mass_scaling, rx.damping, rx.tol_kinetic, rx.tol_residual, rx.t_max, rx.check_every) == \
-        (100.0, "rayleigh", 1e-6, 1e-3, 60.0, 100)
+    assert (rx.mass_scaling, rx.damping, rx.tol_kinetic, rx.tol_residual, rx.t_max, rx.check_every) == (
+        100.0,
+        "rayleigh",
+        1e-6,
+        1e-3,
+        60.0,
+        100,
+    )
     assert validate("explicit", {"t_end": 1.0, "safety": 1.5, "allow_unstable": True}).safety == 1.5
     with pytest.raises(InputError, match="t_end"):
         validate("explicit", {})
@@ -311,7 +354,7 @@ def test_fire_on_a_new_mesh_steps_at_that_mesh_s_own_stable_step():
     a = Integrator(falling_plate(4), s, relax=True)
     a.advance(100)
     st, dtc_fine = a.state, a.lim.dt_crit
-    w, wp, resets = st.D[2], st.D_prev[2], st.resets      # (the start on the fine mesh froze thrice)
+    w, wp, resets = st.D[2], st.D_prev[2], st.resets  # (the start on the fine mesh froze thrice)
     coarse = falling_plate(2)
     N = coarse.model.n_nodes
     st.D, st.D_prev = np.zeros((N, 6)), np.zeros((N, 6))
@@ -334,8 +377,9 @@ def test_fingerprint_tells_per_quad_membranes_apart():
 
     def fp(membrane):
         m = Model(mesh, ISO, membrane=membrane)
-        return checkpoint.fingerprint(Problem(m, np.zeros((mesh.n_nodes, 6), bool), np.zeros((mesh.n_nodes, 6))),
-                                      {}, m.lumped_mass())["material"]
+        return checkpoint.fingerprint(
+            Problem(m, np.zeros((mesh.n_nodes, 6), bool), np.zeros((mesh.n_nodes, 6))), {}, m.lumped_mass()
+        )["material"]
 
     mixed = ["ans"] + ["full"] * (n - 1)
     assert fp(tuple(mixed)) == fp(list(mixed))

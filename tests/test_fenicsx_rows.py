@@ -28,8 +28,11 @@ def _stored():
 def _fx_rows(scale=1.0):
     """DOLFINx's pedestal rows of the stored report (24x8x4 .. 48x16x4), DCs times ``scale``."""
     d = json.loads((ROOT / "verification" / "out" / "fenicsx" / "fenicsx_crosscheck.json").read_text())
-    rows = [dict(t, drape_coefficient=scale * t["drape_coefficient"]) for t in d["runs"]
-            if t["problem"] == "square-pedestal" and t["code"] == "fenicsx"]
+    rows = [
+        dict(t, drape_coefficient=scale * t["drape_coefficient"])
+        for t in d["runs"]
+        if t["problem"] == "square-pedestal" and t["code"] == "fenicsx"
+    ]
     assert [r["mesh"] for r in rows][-3:] == ["24x8x4", "36x12x4", "48x16x4"]
     return rows
 
@@ -52,8 +55,9 @@ def test_paper_uniform_rows_pass_on_the_codes_numbers_and_a_bare_1_percent_would
     assert all("d_ss" in r["why"] and "like with like" in r["why"] for r in rows)
 
 
-@pytest.mark.parametrize("variant", [PAPER, "assumed membrane, uniform meshes",
-                                     "paper element, graded meshes (grading 8)", AM_GRADED])
+@pytest.mark.parametrize(
+    "variant", [PAPER, "assumed membrane, uniform meshes", "paper element, graded meshes (grading 8)", AM_GRADED]
+)
 def test_every_variant_passes_on_the_codes_numbers(variant):
     assert all(r["passed"] is True for r in _rows(_fx_rows(), variant))
 
@@ -79,14 +83,26 @@ def test_synthetic_series_with_a_common_limit_pass_and_different_limits_fail():
         return [L + C * (1.0 / n) ** p for n in ns]
 
     ss = series(0.55, 0.9, 1.3, (24, 48, 96))
-    variant = {"variant": "synthetic", "rows": [dict(mesh=f"{n}x{n // 3}x4", drape_coefficient=q, converged=True)
-                                                for n, q in zip((24, 48, 96), ss)],
-               "richardson_limit": 0.55, "observed_order": 1.3}
+    variant = {
+        "variant": "synthetic",
+        "rows": [dict(mesh=f"{n}x{n // 3}x4", drape_coefficient=q, converged=True) for n, q in zip((24, 48, 96), ss)],
+        "richardson_limit": 0.55,
+        "observed_order": 1.3,
+    }
     for L_fx, ok in ((0.55, True), (0.55 * 1.08, False)):
         fx = series(L_fx, 0.3, 2.4, (24, 36, 48))
         lim, order = cc.richardson((24, 36, 48), fx)
-        rows = cc.dc_series_rows(dict(mesh="48x16x4", dc=fx[-1], limit=lim, order=order,
-                                      meshes=["24x8x4", "36x12x4", "48x16x4"], wall_time_s=1.0), variant)
+        rows = cc.dc_series_rows(
+            dict(
+                mesh="48x16x4",
+                dc=fx[-1],
+                limit=lim,
+                order=order,
+                meshes=["24x8x4", "36x12x4", "48x16x4"],
+                wall_time_s=1.0,
+            ),
+            variant,
+        )
         assert [r["passed"] for r in rows] == [ok] * 3, (L_fx, [(r["error"], r["tolerance"]) for r in rows])
 
 

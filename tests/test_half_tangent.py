@@ -8,6 +8,7 @@ finite-difference consistency and symmetry are tested in tests/test_elements.py
 import numpy as np
 import pytest
 from numba import get_num_threads
+from test_assembly import mixed_mesh
 
 import solidshell.model as model_mod
 from solidshell.assembly import _lower_free, scatter_add_mat, scatter_add_vec
@@ -15,7 +16,6 @@ from solidshell.elements import core
 from solidshell.material import Fabric
 from solidshell.mesh import ShellMesh
 from solidshell.model import Model
-from test_assembly import mixed_mesh
 
 
 def warped_quads(nx=7, ny=5, seed=4):
@@ -26,8 +26,9 @@ def warped_quads(nx=7, ny=5, seed=4):
     X = np.column_stack([x.ravel(), y.ravel(), 0.2 * np.sin(x.ravel()) * np.cos(y.ravel())])
     X[:, :2] += 0.05 * rng.uniform(-1, 1, (X.shape[0], 2))
     idx = np.arange(nx * ny).reshape(ny, nx)
-    quads = np.array([[idx[j, i], idx[j, i + 1], idx[j + 1, i + 1], idx[j + 1, i]]
-                      for j in range(ny - 1) for i in range(nx - 1)])
+    quads = np.array(
+        [[idx[j, i], idx[j, i + 1], idx[j + 1, i + 1], idx[j + 1, i]] for j in range(ny - 1) for i in range(nx - 1)]
+    )
     perm = rng.permutation(nx * ny)
     inv = np.argsort(perm)
     return ShellMesh(X[perm], quads=inv[quads])
@@ -48,8 +49,7 @@ def whole_matrix_assembly(m, U, free):
     for b, pos in zip(m.blocks, p.pos):
         M, nd = len(b.conn), 6 * b.nn
         fe, we, Ke = np.empty((M, b.nn, 6)), np.empty(M), np.empty((M, nd, nd))
-        core.force_tangent(*b.args(xo, xn, Uc, m.quasi, m.mu), b.gp_membrane, fe, we, Ke,
-                           get_num_threads())
+        core.force_tangent(*b.args(xo, xn, Uc, m.quasi, m.mu), b.gp_membrane, fe, we, Ke, get_num_threads())
         scatter_add_vec(b.dofs, fe.reshape(M, -1), F)
         scatter_add_mat(to_lower[pos], Ke, data)
     return F.reshape(-1, 6), data
@@ -67,8 +67,7 @@ CASES = {
     "quads": (warped_quads, {}),
     "quads-ans-quasi": (warped_quads, dict(membrane="ans", thickness_strain="quasi")),
     "mixed": (mixed_mesh, {}),
-    "mixed-quasi-per-quad-membrane": (mixed_mesh, dict(membrane=["ans", "full"] * 4,
-                                                       thickness_strain="quasi")),
+    "mixed-quasi-per-quad-membrane": (mixed_mesh, dict(membrane=["ans", "full"] * 4, thickness_strain="quasi")),
 }
 
 
@@ -109,10 +108,11 @@ def test_half_element_matrices_are_entries_of_the_whole_ones():
             core.half_slots(b.conn[e], slot)
             local = np.empty(nd, dtype=np.int64)
             local[(6 * slot[:, None] + np.arange(6)).ravel()] = np.arange(nd)
-            g = (6 * b.conn[e][:, None] + np.arange(6)).ravel()[local]     # global dof per half dof
+            g = (6 * b.conn[e][:, None] + np.arange(6)).ravel()[local]  # global dof per half dof
             # the formed entries are exactly those with global column >= global row
-            assert np.array_equal(np.sort(np.flatnonzero((g[:, None] <= g[None, :]).ravel())),
-                                  np.sort(rows * nd + cols))
+            assert np.array_equal(
+                np.sort(np.flatnonzero((g[:, None] <= g[None, :]).ravel())), np.sort(rows * nd + cols)
+            )
             assert np.array_equal(K2[e][rows, cols], K1[e][local[rows], local[cols]])
 
 

@@ -24,7 +24,7 @@ def test_atomic_write_exception_leaves_nothing(tmp_path):
             f.write('{"half": ')
             raise RuntimeError("crash mid-write")
     assert not p.exists()
-    assert _leftovers(tmp_path) == []            # no temporary left either
+    assert _leftovers(tmp_path) == []  # no temporary left either
 
 
 def test_atomic_write_keeps_old_file_on_failure(tmp_path):
@@ -66,8 +66,10 @@ def test_write_json_unserialisable_leaves_nothing(tmp_path):
 
 
 def test_write_json_numpy_and_nan(tmp_path):
-    p = io.write_json(tmp_path / "s.json", {"a": np.float64(1.5), "b": np.arange(3), "c": float("nan"),
-                                            "d": (np.int32(2), np.bool_(True)), "e": tmp_path})
+    p = io.write_json(
+        tmp_path / "s.json",
+        {"a": np.float64(1.5), "b": np.arange(3), "c": float("nan"), "d": (np.int32(2), np.bool_(True)), "e": tmp_path},
+    )
     assert json.loads(p.read_text()) == {"a": 1.5, "b": [0, 1, 2], "c": None, "d": [2, True], "e": str(tmp_path)}
 
 
@@ -186,8 +188,14 @@ def fake_solver(record, converged=True):
         U[problem.fixed] = 0.0
         progress(0.5, "half way")
         frames = [(0.0, 0 * U), (0.1, 0.3 * U), (0.4, U)]
-        return SolveResult(U=U, converged=converged, message="fake solver" if converged else "ran out of steps",
-                           info={"iterations": 3, "solver": "fake", "residual": 1e-9}, frames=frames)
+        return SolveResult(
+            U=U,
+            converged=converged,
+            message="fake solver" if converged else "ran out of steps",
+            info={"iterations": 3, "solver": "fake", "residual": 1e-9},
+            frames=frames,
+        )
+
     return solve
 
 
@@ -195,14 +203,14 @@ def fake_solver(record, converged=True):
 def fake(monkeypatch):
     from solidshell import solvers
 
-    class Model:                     # stands in for solidshell.model.Model (no numba compile here)
+    class Model:  # stands in for solidshell.model.Model (no numba compile here)
         def __init__(self, mesh, material, thickness_strain="green", mu=0.5, membrane="full", constants=None):
             self.mesh, self.material, self.n_nodes = mesh, material, mesh.n_nodes
 
-        def nodal_areas(self):       # equal shares: the wiring, not the lumping, is under test here
+        def nodal_areas(self):  # equal shares: the wiring, not the lumping, is under test here
             return np.full(self.mesh.n_nodes, self.mesh.area() / self.mesh.n_nodes)
 
-        def interpenetrated_nodes(self, U):    # none: the summary's wiring, not Section 4.3, is under test
+        def interpenetrated_nodes(self, U):  # none: the summary's wiring, not Section 4.3, is under test
             return np.zeros(self.n_nodes, dtype=bool)
 
     import solidshell.model
@@ -232,14 +240,30 @@ def test_run_scene_dynamic_outputs(tmp_path, fake):
     assert s == out.summary
     assert s["solver"] == "explicit" and s["converged"] is True and s["message"] == "fake solver"
     assert s["iterations"] == 3 and s["residual"] == 1e-9 and "solver_solver" not in s
-    assert s["counts"]["nodes"] == 25 and s["counts"]["fixed_dofs"] == 6       # two hung corners, U_o
+    assert s["counts"]["nodes"] == 25 and s["counts"]["fixed_dofs"] == 6  # two hung corners, U_o
     assert fake["settings"]["t_end"] == 0.4 and fake["settings"]["alpha"] == 5.0
     assert fake["settings"]["snapshots"] == [0.0, 0.1, 0.4, 2.1]
     assert fake["problem"].loads[:, 2].sum() == pytest.approx(-0.019 * 400.0)  # the weight, gf
     assert s["total_weight"] == pytest.approx(0.019 * 400.0)
-    assert {"mesh.xdmf", "mesh.vtu", "result.xdmf", "result.vtu", "deformed.vtu", "series.xdmf",
-            "top.png", "iso.png", "side_yz.png", "iso_t0.000.png", "iso_t0.100.png", "iso_t0.400.png",
-            "summary.json"} == set(s["files"]) == set(_leftovers(tmp_path))
+    assert (
+        {
+            "mesh.xdmf",
+            "mesh.vtu",
+            "result.xdmf",
+            "result.vtu",
+            "deformed.vtu",
+            "series.xdmf",
+            "top.png",
+            "iso.png",
+            "side_yz.png",
+            "iso_t0.000.png",
+            "iso_t0.100.png",
+            "iso_t0.400.png",
+            "summary.json",
+        }
+        == set(s["files"])
+        == set(_leftovers(tmp_path))
+    )
     assert s["versions"]["meshio"] and s["units"]["length"] == "cm" and s["timings"]["total"] > 0
     assert seen[0] == 0.0 and seen[-1] == 1.0 and seen == sorted(seen)
     _, U = io.read_state(tmp_path / "result.vtu")
@@ -249,8 +273,9 @@ def test_run_scene_dynamic_outputs(tmp_path, fake):
 def test_run_scene_pedestal_analysis(tmp_path, fake):
     from solidshell.run import run_scene
 
-    out = run_scene("square-pedestal", mesh="8x3x4", out_dir=tmp_path, progress=False,
-                    overrides={"solver.static.c": 2e-3})
+    out = run_scene(
+        "square-pedestal", mesh="8x3x4", out_dir=tmp_path, progress=False, overrides={"solver.static.c": 2e-3}
+    )
     s = out.summary
     assert fake["settings"] == {"c": 2e-3}
     assert s["counts"]["fixed_dofs"] == 6 * 32 and s["pedestal_area"] == 100.0

@@ -63,8 +63,9 @@ def test_cached_tangent_kernel_gives_the_bits_of_the_freshly_compiled_one(tmp_pa
     tests_dir = os.path.dirname(os.path.abspath(__file__))
     runs = []
     for _ in range(2):
-        p = subprocess.run([sys.executable, "-c", PROBE, tests_dir], env=env, capture_output=True, text=True,
-                           timeout=600)
+        p = subprocess.run(
+            [sys.executable, "-c", PROBE, tests_dir], env=env, capture_output=True, text=True, timeout=600
+        )
         assert p.returncode == 0, p.stderr[-2000:]
         loaded, digest = p.stdout.split()[-2:]
         runs.append((int(loaded), digest))

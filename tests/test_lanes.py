@@ -50,9 +50,22 @@ def test_lane_kernel_matches_core(thickness):
     L = lanes.LANES
     fs = np.full((pk["B"], 24 * L), np.nan)
     ws = np.full((pk["B"], L), np.nan)
-    lanes.quad_forces(mesh.nodes, mesh.directors, Uc, pk["conn"], pk["Cmb"], pk["Cs"], pk["Cz"], pk["r_z"],
-                      model.quasi, model.mu, np.empty((pk["B"], 48 * L)), fs, ws)
-    assert pk["B"] * L > M                                        # a padded block is exercised
+    lanes.quad_forces(
+        mesh.nodes,
+        mesh.directors,
+        Uc,
+        pk["conn"],
+        pk["Cmb"],
+        pk["Cs"],
+        pk["Cz"],
+        pk["r_z"],
+        model.quasi,
+        model.mu,
+        np.empty((pk["B"], 48 * L)),
+        fs,
+        ws,
+    )
+    assert pk["B"] * L > M  # a padded block is exercised
     scale = np.abs(fe).max()
     assert np.abs(lanes.unpack_forces(fs, M) - fe).max() <= 1e-13 * scale
     assert np.abs(ws.ravel()[:M] - we).max() <= 1e-13 * np.abs(we).max()
@@ -167,7 +180,7 @@ def test_chunked_scatter_is_the_scatter_order_but_at_chunk_boundaries():
     from solidshell.assembly import scatter_add_vec
     from solidshell.solvers.explicit.fused import CHUNKS
 
-    mesh = warped_mesh(30, 20, 600)                # 600 quads = 38 blocks, padded; 0 triangles
+    mesh = warped_mesh(30, 20, 600)  # 600 quads = 38 blocks, padded; 0 triangles
     model = Model(mesh, Fabric.wool())
     U = 0.05 * np.random.default_rng(6).standard_normal((mesh.n_nodes, 6))
     ff = FusedForces(model)

@@ -58,8 +58,9 @@ def test_factorised_membrane_is_the_dense_one(thickness):
     Cm = quad4.dense_membrane(mesh.nodes[mesh.quads], b.c, WOOL30.C_m)
     sv = np.linalg.svd(Cm, compute_uv=False)
     assert np.all(sv[:, 5] <= 1e-14 * sv[:, 0]) and np.all(sv[:, 4] > 1e-4 * sv[:, 0])
-    np.testing.assert_allclose(b.c["Cs"][:, 4:, 4:], quad4.R_MEM.T @ Cm @ quad4.R_MEM,
-                               rtol=0, atol=1e-13 * np.abs(Cm).max())
+    np.testing.assert_allclose(
+        b.c["Cs"][:, 4:, 4:], quad4.R_MEM.T @ Cm @ quad4.R_MEM, rtol=0, atol=1e-13 * np.abs(Cm).max()
+    )
 
     M = len(mesh.quads)
     Cs = np.zeros((M, 26, 26))
@@ -93,8 +94,21 @@ def _lane_forces(model, U):
     L = lanes.LANES
     fs = np.full((pk["B"], 24 * L), np.nan)
     ws = np.full((pk["B"], L), np.nan)
-    lanes_ans.quad_forces(mesh.nodes, mesh.directors, Uc, pk["conn"], pk["Cmb"], pk["Cs"], pk["Cz"],
-                          pk["r_z"], model.quasi, model.mu, np.empty((pk["B"], 48 * L)), fs, ws)
+    lanes_ans.quad_forces(
+        mesh.nodes,
+        mesh.directors,
+        Uc,
+        pk["conn"],
+        pk["Cmb"],
+        pk["Cs"],
+        pk["Cz"],
+        pk["r_z"],
+        model.quasi,
+        model.mu,
+        np.empty((pk["B"], 48 * L)),
+        fs,
+        ws,
+    )
     return pk, fs, ws
 
 
@@ -115,7 +129,7 @@ def test_lane_kernel_matches_core(thickness, seed):
     core.energy_force(*b.args(xo, xn, Uc, model.quasi, model.mu), fe, we, 1)
     pk, fs, ws = _lane_forces(model, U)
     L = lanes.LANES
-    assert pk["B"] * L > M                                        # a padded block is exercised
+    assert pk["B"] * L > M  # a padded block is exercised
     assert np.abs(lanes.unpack_forces(fs, M) - fe).max() <= 1e-13 * np.abs(fe).max()
     assert np.abs(ws.ravel()[:M] - we).max() <= 1e-13 * np.abs(we).max()
     assert np.all(fs.reshape(-1, 24, L).transpose(0, 2, 1).reshape(-1, 24)[M:] == 0.0)
@@ -136,7 +150,7 @@ def test_lane_kernel_membrane_alone_matches_core():
     fe, we = np.empty((M, 4, 6)), np.empty(M)
     core.energy_force(*b.args(xo, xn, Uc, model.quasi, model.mu), fe, we, 1)
     _, fs, ws = _lane_forces(model, U)
-    assert np.abs(fe[:, :, 3:]).max() <= 1e-12 * np.abs(fe).max()      # no director force
+    assert np.abs(fe[:, :, 3:]).max() <= 1e-12 * np.abs(fe).max()  # no director force
     assert np.abs(lanes.unpack_forces(fs, M) - fe).max() <= 1e-12 * np.abs(fe).max()
     assert np.abs(ws.ravel()[:M] - we).max() <= 1e-12 * np.abs(we).max()
 
@@ -155,9 +169,9 @@ def test_fused_step_with_assumed_membrane_follows_the_previous_path():
     lane kernel (the triangles through lanes_tri's), and 60 steps of a sheet falling onto a plane
     follow Model.internal_force + central_step to round-off (1e-11 relative: per-step differences
     of 1e-16 grown by 60 steps of a stable scheme)."""
-    from solidshell.solvers.explicit.fused import (FusedForces, lanes_ans_scatter, lanes_scatter,
-                                                   lanes_tri_scatter)
     from test_lanes import fused_follows_previous_path, fused_force_matches_model
+
+    from solidshell.solvers.explicit.fused import FusedForces, lanes_ans_scatter, lanes_scatter, lanes_tri_scatter
 
     base = distorted_warped_mesh()
     q = base.quads
@@ -166,8 +180,12 @@ def test_fused_step_with_assumed_membrane_follows_the_previous_path():
     choice = ["ans"] * 12 + ["full"] * 6 + ["ans"] * 7
     model = Model(mesh, WOOL30, thickness_strain="quasi", membrane=choice)
     ff = FusedForces(model)
-    assert [p[2]["kernel"] for p in ff.parts if p[0] == "lanes"] == \
-        [lanes_ans_scatter, lanes_scatter, lanes_ans_scatter, lanes_tri_scatter]
-    fused_follows_previous_path(model, z_plane=mesh.nodes[:, 2].min() + 0.01)   # the lowest nodes start in contact
+    assert [p[2]["kernel"] for p in ff.parts if p[0] == "lanes"] == [
+        lanes_ans_scatter,
+        lanes_scatter,
+        lanes_ans_scatter,
+        lanes_tri_scatter,
+    ]
+    fused_follows_previous_path(model, z_plane=mesh.nodes[:, 2].min() + 0.01)  # the lowest nodes start in contact
     # and the force itself at a deformed state, on one and two threads
     fused_force_matches_model(ff, model, random_motion(mesh, 8))

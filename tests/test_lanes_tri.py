@@ -27,8 +27,11 @@ def loose_triangles(M, seed, shape):
     ``shape`` "regular" (near-equilateral), "obtuse" (one angle ~150 deg) or "slender" (aspect
     ~20); each slightly curved (its directors tilted from the normal by up to ~0.15 rad)."""
     rng = np.random.default_rng(seed)
-    base = {"regular": [[0, 0], [1, 0], [0.5, 0.87]], "obtuse": [[0, 0], [1, 0], [0.9, 0.14]],
-            "slender": [[0, 0], [1, 0], [0.5, 0.05]]}[shape]
+    base = {
+        "regular": [[0, 0], [1, 0], [0.5, 0.87]],
+        "obtuse": [[0, 0], [1, 0], [0.9, 0.14]],
+        "slender": [[0, 0], [1, 0], [0.5, 0.05]],
+    }[shape]
     P = np.array(base, float)[None] + 0.01 * rng.uniform(-1, 1, (M, 3, 2))
     size = np.exp(rng.uniform(np.log(0.05), np.log(5.0), M))
     X = np.concatenate([P * size[:, None, None], np.zeros((M, 3, 1))], 2)
@@ -61,8 +64,21 @@ def core_and_lanes(model, U, nth=None):
     old = numba.get_num_threads()
     try:
         numba.set_num_threads(nth or old)
-        lanes_tri.tri_forces(model.mesh.nodes, model.mesh.directors, Uc, pk["conn"], pk["Cmb"], pk["Cs"],
-                             pk["Cz"], pk["r_z"], model.quasi, model.mu, np.empty((pk["B"], 36 * L)), fs, ws)
+        lanes_tri.tri_forces(
+            model.mesh.nodes,
+            model.mesh.directors,
+            Uc,
+            pk["conn"],
+            pk["Cmb"],
+            pk["Cs"],
+            pk["Cz"],
+            pk["r_z"],
+            model.quasi,
+            model.mu,
+            np.empty((pk["B"], 36 * L)),
+            fs,
+            ws,
+        )
     finally:
         numba.set_num_threads(old)
     return fe, we, fs, ws
@@ -100,9 +116,14 @@ def test_lane_kernel_matches_core(shape, thickness):
 
 
 @settings(max_examples=40, deadline=None)
-@given(M=st.integers(1, 3 * L + 5), seed=st.integers(0, 2**31 - 1),
-       shape=st.sampled_from(["regular", "obtuse", "slender"]), scale=st.sampled_from([1e-6, 1e-3, 0.05, 0.5]),
-       quasi=st.booleans(), iso=st.booleans())
+@given(
+    M=st.integers(1, 3 * L + 5),
+    seed=st.integers(0, 2**31 - 1),
+    shape=st.sampled_from(["regular", "obtuse", "slender"]),
+    scale=st.sampled_from([1e-6, 1e-3, 0.05, 0.5]),
+    quasi=st.booleans(),
+    iso=st.booleans(),
+)
 def test_lane_kernel_matches_core_property(M, seed, shape, scale, quasi, iso):
     """Any number of elements (1 .. 3 blocks + 5, mostly padded), any deformation from 1e-6 (where
     a non-displacement form would lose ten digits) to 50 %, both thickness strains, an isotropic
@@ -136,6 +157,7 @@ def adapted_mesh():
     """test_adapt_mesh's adapted curved grid holding every transition pattern (quads and
     triangles, levels 0-2)."""
     from test_adapt_mesh import CURVED8, every_pattern_state
+
     return every_pattern_state(CURVED8)[1].mesh
 
 
@@ -154,10 +176,14 @@ def test_fused_forces_on_an_adapted_mesh_are_the_models(thickness):
     choice = ["ans"] * (nq // 3) + ["full"] * (nq // 3) + ["ans"] * (nq - 2 * (nq // 3))
     model = Model(mesh, WOOL30, thickness_strain=thickness, membrane=choice)
     ff = FusedForces(model)
-    assert [p[2]["kernel"] for p in ff.parts] == [lanes_ans_scatter, lanes_scatter, lanes_ans_scatter,
-                                                  lanes_tri_scatter]
+    assert [p[2]["kernel"] for p in ff.parts] == [
+        lanes_ans_scatter,
+        lanes_scatter,
+        lanes_ans_scatter,
+        lanes_tri_scatter,
+    ]
     assert not ff.needs_current
-    ff.model = None                                   # element_pass must not reach for Model._current
+    ff.model = None  # element_pass must not reach for Model._current
     fused_force_matches_model(ff, model, 0.05 * np.random.default_rng(9).standard_normal((mesh.n_nodes, 6)))
 
 
@@ -166,6 +192,7 @@ def test_fused_step_with_triangles_follows_the_previous_path():
     step with the triangle lanes follows Model.internal_force + central_step to round-off
     (test_lanes.fused_follows_previous_path: 1e-11 relative)."""
     from test_lanes import fused_follows_previous_path
+
     mesh = adapted_mesh()
     model = Model(mesh, WOOL30, thickness_strain="quasi")
     assert any(p[2] is not None and p[2]["kernel"] is lanes_tri_scatter for p in FusedForces(model).parts)
@@ -180,6 +207,7 @@ def test_rigid_rotation_of_a_triangle_mesh_has_no_force(thickness):
     the force of a unit strain (measured from a 1e-6 stretch: linear there to 1e-6) and energy
     1e-24 of its energy (observed 6e-15 and 3e-30) -- a non-objective term would give O(1)."""
     from test_adapt_mesh import CURVED8
+
     q = CURVED8.quads
     mesh = ShellMesh(CURVED8.nodes, tris=np.vstack([q[:, [0, 1, 2]], q[:, [0, 2, 3]]]))
     model = Model(mesh, WOOL30, thickness_strain=thickness)
@@ -191,6 +219,6 @@ def test_rigid_rotation_of_a_triangle_mesh_has_no_force(thickness):
     stretch = np.zeros_like(U)
     stretch[:, :2] = 1e-6 * mesh.nodes[:, :2]
     Fu, Wu = ff.internal(stretch.ravel(), True)
-    Fu, Wu = Fu / 1e-6, Wu / 1e-12                   # per unit strain
+    Fu, Wu = Fu / 1e-6, Wu / 1e-12  # per unit strain
     assert np.abs(F).max() <= 1e-12 * np.abs(Fu).max()
     assert abs(W) <= 1e-24 * Wu

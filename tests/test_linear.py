@@ -10,9 +10,12 @@ from solidshell.errors import InputError
 from solidshell.solvers import linear, pardiso
 from solidshell.solvers.linear import Cholesky, ldl_inertia, positive_definite_factor
 
-KINDS = [pytest.param("cholmod"),
-         pytest.param("pardiso", marks=pytest.mark.skipif(not pardiso.available(),
-                                                          reason=str(pardiso.unavailable_reason())))]
+KINDS = [
+    pytest.param("cholmod"),
+    pytest.param(
+        "pardiso", marks=pytest.mark.skipif(not pardiso.available(), reason=str(pardiso.unavailable_reason()))
+    ),
+]
 
 
 def laplacian(n, shift=0.0):
@@ -67,8 +70,8 @@ def test_pardiso_and_cholmod_agree_on_a_drape_tangent_and_repeat_bit_for_bit():
     membrane), and shifted by 0.1 of its diagonal as the energy Newton's first Levenberg steps
     factorise it: both factorisations agree on definiteness, their solutions agree to cond * 1e-16,
     and PARDISO, sequential, gives the same bits on a repeated factorisation."""
-    from solidshell.scenes.build import build_problem, build_scene_mesh
     from solidshell.scenes import load
+    from solidshell.scenes.build import build_problem, build_scene_mesh
     from solidshell.solvers.static.system import System
 
     sc = load("square-pedestal")
@@ -76,7 +79,7 @@ def test_pardiso_and_cholmod_agree_on_a_drape_tangent_and_repeat_bit_for_bit():
     pb = build_problem(sc, mesh)
     sys_ = System(pb.model, pb.fixed, pb.loads, pb.prescribed, pb.contact, None, "pardiso")
     U = np.zeros((mesh.n_nodes, 6))
-    U[:, 2] = -0.05 * np.hypot(mesh.nodes[:, 0], mesh.nodes[:, 1])       # a sag, 0.7 cm at the corners
+    U[:, 2] = -0.05 * np.hypot(mesh.nodes[:, 0], mesh.nodes[:, 1])  # a sag, 0.7 cm at the corners
     _, A = sys_.free_tangent(U.ravel())
     P, C = positive_definite_factor("pardiso"), Cholesky()
     assert not P.factor(A) and not C.factor(A)
@@ -175,7 +178,7 @@ def test_factorization_names_resolve_and_a_missing_mkl_is_one_input_error_line(m
     assert linear.resolve_factorization("auto") == ("pardiso" if pardiso.available() else "cholmod")
     big, small = linear.PARDISO_MIN_DOFS, linear.PARDISO_MIN_DOFS - 1
     assert linear.resolve_factorization("auto", big) == linear.resolve_factorization("auto")
-    assert linear.resolve_factorization("auto", small) == "cholmod"      # MKL not loaded for it
+    assert linear.resolve_factorization("auto", small) == "cholmod"  # MKL not loaded for it
     assert linear.resolve_factorization("cholmod", big) == "cholmod"
     with pytest.raises(InputError, match="factorization must be one of"):
         linear.resolve_factorization("mumps")
@@ -220,7 +223,7 @@ def test_pardiso_ldl_leaves_a_singular_matrix_to_superlu():
     N = laplacian(n).tolil()
     N[0, 0] = N[n - 1, n - 1] = 1.0
     assert PardisoLDL().ldl(N.tocsc()) is None
-    with pytest.raises(RuntimeError, match="Factor is exactly singular"):      # SuperLU's message
+    with pytest.raises(RuntimeError, match="Factor is exactly singular"):  # SuperLU's message
         ldl_inertia(N.tocsc())
 
 

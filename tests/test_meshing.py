@@ -12,23 +12,23 @@ from solidshell.meshing import RECIPES, build_mesh, from_file, parse_density
 
 # (recipe, density, geometry, quads, nodes): every mesh named in the paper, §3.1-§6.4
 PAPER_MESHES = [
-    ("strip", "10x1", {}, 10, 22),                                            # §3.1
-    ("strip", "20x1", {}, 20, 42),                                            # §3.1
-    ("square_on_square", "24x8x4", {}, 768, 864),                             # §3.2
-    ("square_on_square", "48x16x4", {}, 3072, 3264),                          # §3.2
-    ("square_on_square", "6x2x4", {}, 48, 72),                                # §6.1 level 0
+    ("strip", "10x1", {}, 10, 22),  # §3.1
+    ("strip", "20x1", {}, 20, 42),  # §3.1
+    ("square_on_square", "24x8x4", {}, 768, 864),  # §3.2
+    ("square_on_square", "48x16x4", {}, 3072, 3264),  # §3.2
+    ("square_on_square", "6x2x4", {}, 48, 72),  # §6.1 level 0
     ("square_on_square", "45x15x4", dict(sheet=40.0, pedestal=20.0), 2700, 2880),  # §3.5
-    ("square_on_square", "6x2x4", dict(sheet=40.0, pedestal=20.0), 48, 72),   # §6.2 level 0
-    ("square_on_square", "96x32x4", {}, 12288, 12672),                        # refinement of §3.2
-    ("disc_on_disc", "10x40", {}, 400, 440),                                  # §3.3
-    ("disc_on_disc", "20x80", {}, 1600, 1680),                                # §3.3
-    ("square_on_disc", "30x240", {}, 7200, 7440),                             # §3.4
-    ("square_on_disc", "4x32", {}, 128, 160),                                 # §6.3 level 0
-    ("square", "40x40", dict(size=20.0), 1600, 1681),                         # §4.1
-    ("square", "50x50", dict(size=100.0), 2500, 2601),                        # §4.1
-    ("square", "60x60", dict(size=30.0), 3600, 3721),                         # §4.2 sphere
-    ("square", "100x100", dict(size=30.0), 10000, 10201),                     # §4.3 sphere
-    ("square", "16x16", dict(size=30.0), 256, 289),                           # §6.4 level 0
+    ("square_on_square", "6x2x4", dict(sheet=40.0, pedestal=20.0), 48, 72),  # §6.2 level 0
+    ("square_on_square", "96x32x4", {}, 12288, 12672),  # refinement of §3.2
+    ("disc_on_disc", "10x40", {}, 400, 440),  # §3.3
+    ("disc_on_disc", "20x80", {}, 1600, 1680),  # §3.3
+    ("square_on_disc", "30x240", {}, 7200, 7440),  # §3.4
+    ("square_on_disc", "4x32", {}, 128, 160),  # §6.3 level 0
+    ("square", "40x40", dict(size=20.0), 1600, 1681),  # §4.1
+    ("square", "50x50", dict(size=100.0), 2500, 2601),  # §4.1
+    ("square", "60x60", dict(size=30.0), 3600, 3721),  # §4.2 sphere
+    ("square", "100x100", dict(size=30.0), 10000, 10201),  # §4.3 sphere
+    ("square", "16x16", dict(size=30.0), 256, 289),  # §6.4 level 0
 ]
 
 _cache: dict = {}
@@ -52,9 +52,11 @@ def test_paper_mesh_counts(recipe, density, geometry, n_quads, n_nodes):
 
 
 def _straight_area(recipe, g):
-    return {"strip": lambda: g.get("length", 5.0) * g.get("width", 1.0),
-            "square_on_square": lambda: g.get("sheet", 20.0) ** 2 - g.get("pedestal", 10.0) ** 2,
-            "square": lambda: g.get("size", 20.0) ** 2}[recipe]()
+    return {
+        "strip": lambda: g.get("length", 5.0) * g.get("width", 1.0),
+        "square_on_square": lambda: g.get("sheet", 20.0) ** 2 - g.get("pedestal", 10.0) ** 2,
+        "square": lambda: g.get("size", 20.0) ** 2,
+    }[recipe]()
 
 
 STRAIGHT = [p for p in PAPER_MESHES if p[0] in ("strip", "square_on_square", "square")]
@@ -74,7 +76,7 @@ def _rates(recipe, densities, exact):
 
 
 def test_disc_area_converges_at_second_order():
-    exact = math.pi * (12.7 ** 2 - 6.35 ** 2)
+    exact = math.pi * (12.7**2 - 6.35**2)
     rates = _rates("disc_on_disc", ["2x20", "4x40", "8x80", "16x160"], exact)
     # the polygonal area error is 1 - sin(x)/x = x^2/6 - x^4/120 + ..., x = 2*pi/C: the x^4 term
     # shifts the observed rate below 2 by ~0.002 at C = 20, so 2 +- 0.1 cannot fail by accident
@@ -83,7 +85,7 @@ def test_disc_area_converges_at_second_order():
 
 
 def test_square_on_disc_area_converges_at_second_order():
-    exact = 50.0 ** 2 - math.pi * 10.0 ** 2
+    exact = 50.0**2 - math.pi * 10.0**2
     rates = _rates("square_on_disc", ["2x16", "4x32", "8x64", "16x128"], exact)
     # same polygon error of the inscribed pedestal circle (x = 2*pi/C); see the disc test
     assert all(abs(r - 2.0) < 0.1 for r in rates), rates
@@ -95,12 +97,12 @@ def test_flat_counter_clockwise_directors_up_no_duplicates(recipe, density, geom
     assert np.all(m.nodes[:, 2] == 0.0)
     assert np.array_equal(m.directors, np.tile([0.0, 0.0, 1.0], (m.n_nodes, 1)))
     P = m.nodes[m.quads]
-    normals = np.cross(np.roll(P, -1, axis=1) - P, np.roll(P, 1, axis=1) - P)   # at each corner
+    normals = np.cross(np.roll(P, -1, axis=1) - P, np.roll(P, 1, axis=1) - P)  # at each corner
     assert np.all(normals[..., 2] > 0.0)
     # nodes closer than 1e-9 of the mesh size would be duplicates (the finest spacing is ~1e-3)
     q = np.round(m.nodes / (1e-9 * m.characteristic_length()))
     assert len(np.unique(q, axis=0)) == m.n_nodes
-    assert len(np.unique(m.quads)) == m.n_nodes          # every node belongs to an element
+    assert len(np.unique(m.quads)) == m.n_nodes  # every node belongs to an element
 
 
 # geometric tolerance for "on the edge": the nodes are placed by gmsh from exact endpoints, so
@@ -129,7 +131,7 @@ def test_square_on_square_sets(sheet, pedestal, density, a):
     assert np.array_equal(m.node_set("clamped"), np.flatnonzero(np.abs(linf - pedestal / 2) < TOL))
     assert np.array_equal(m.node_set("outer"), np.flatnonzero(np.abs(linf - sheet / 2) < TOL))
     assert len(m.node_set("clamped")) == len(m.node_set("outer")) == 4 * a
-    assert np.all(linf >= pedestal / 2 - TOL)                 # only the hanging part is meshed
+    assert np.all(linf >= pedestal / 2 - TOL)  # only the hanging part is meshed
     # the pedestal edge is the boundary: clamped edges are boundary edges of the mesh
     b = m.boundary_edges()
     assert np.isin(b, np.r_[m.node_set("clamped"), m.node_set("outer")]).all()
@@ -139,7 +141,7 @@ def test_square_on_square_panels_are_trapezoids_meeting_on_diagonals():
     m = build_mesh("square_on_square", "6x2x4")
     x, y = m.nodes[:, 0], m.nodes[:, 1]
     on_diag = np.abs(np.abs(x) - np.abs(y)) < TOL
-    assert on_diag.sum() == 4 * 3                           # B + 1 = 3 nodes on each diagonal
+    assert on_diag.sum() == 4 * 3  # B + 1 = 3 nodes on each diagonal
     # the warp (X) axis and weft (Y) axis cross the outer edge at nodes because A = 6 is even
     assert np.any((np.abs(y) < TOL) & (np.abs(x - 10.0) < TOL))
 
@@ -154,7 +156,10 @@ def test_square_on_square_grading(grading):
     assert (len(m.quads), m.n_nodes) == (len(u.quads), u.n_nodes)
     assert m.area() == pytest.approx(400.0 - 100.0, rel=1e-12)
     x = m.nodes
-    key = lambda p: np.round(p, 9).tolist()
+
+    def key(p):
+        return np.round(p, 9).tolist()
+
     assert sorted(map(key, x * [-1, 1, 1])) == sorted(map(key, x))
     diag = x[np.abs(x[:, 0] - x[:, 1]) < 1e-9]
     r = np.sort(diag[diag[:, 0] > 0, 0])
@@ -164,8 +169,9 @@ def test_square_on_square_grading(grading):
         build_mesh("square_on_square", "24x8x4", grading=0.5)
 
 
-@pytest.mark.parametrize("recipe,density,inner,outer_r", [("disc_on_disc", "10x40", 6.35, 12.7),
-                                                         ("square_on_disc", "30x240", 10.0, None)])
+@pytest.mark.parametrize(
+    "recipe,density,inner,outer_r", [("disc_on_disc", "10x40", 6.35, 12.7), ("square_on_disc", "30x240", 10.0, None)]
+)
 def test_circular_pedestal_sets(recipe, density, inner, outer_r):
     m = mesh_of(recipe, density, {})
     r = np.linalg.norm(m.nodes[:, :2], axis=1)
@@ -187,8 +193,8 @@ def test_circular_pedestal_sets(recipe, density, inner, outer_r):
 def test_square_on_disc_diagonals_and_axes_are_mesh_lines():
     m = build_mesh("square_on_disc", "4x32")
     x, y = m.nodes[:, 0], m.nodes[:, 1]
-    assert (np.abs(np.abs(x) - np.abs(y)) < TOL).sum() == 4 * 5      # R + 1 nodes per diagonal
-    assert ((np.abs(x) < TOL) | (np.abs(y) < TOL)).sum() == 4 * 5    # and per half-axis
+    assert (np.abs(np.abs(x) - np.abs(y)) < TOL).sum() == 4 * 5  # R + 1 nodes per diagonal
+    assert ((np.abs(x) < TOL) | (np.abs(y) < TOL)).sum() == 4 * 5  # and per half-axis
 
 
 SYMMETRIC = [p for p in PAPER_MESHES if p[0] != "strip"]
@@ -217,7 +223,7 @@ def test_square_sets():
     assert sorted(m.node_set("corners")) == sorted(int(m.node_set(f"corner_{k}")[0]) for k in corner)
     hung = m.node_set("hung")
     assert len(hung) == 2 and close(X[hung, 1], 10.0)
-    assert close(abs(X[hung[0], 0] - X[hung[1], 0]), 20.0)            # adjacent corners
+    assert close(abs(X[hung[0], 0] - X[hung[1], 0]), 20.0)  # adjacent corners
     on_edge = np.abs(np.abs(X[:, :2]).max(axis=1) - 10.0) < TOL
     assert np.array_equal(m.node_set("outer"), np.flatnonzero(on_edge)) and on_edge.sum() == 160
 
@@ -225,7 +231,7 @@ def test_square_sets():
 def test_rectangular_square_density_and_centring():
     m = build_mesh("square", "4x2", size=2.0)
     assert (m.n_quads, m.n_nodes) == (8, 15)
-    assert np.allclose(m.nodes.mean(0), 0.0, rtol=0.0, atol=1e-15)   # mirrored nodes cancel to rounding
+    assert np.allclose(m.nodes.mean(0), 0.0, rtol=0.0, atol=1e-15)  # mirrored nodes cancel to rounding
     assert close(np.unique(np.round(m.nodes[:, 0], 9)), np.linspace(-1, 1, 5))
 
 
@@ -237,14 +243,20 @@ def test_deterministic():
 
 def test_default_densities_are_the_papers():
     assert {k: r.density for k, r in RECIPES.items()} == {
-        "strip": "10x1", "square_on_square": "24x8x4", "disc_on_disc": "10x40",
-        "square_on_disc": "30x240", "square": "40x40", "from_file": None}
+        "strip": "10x1",
+        "square_on_square": "24x8x4",
+        "disc_on_disc": "10x40",
+        "square_on_disc": "30x240",
+        "square": "40x40",
+        "from_file": None,
+    }
     assert build_mesh("disc_on_disc").n_quads == 400
-    assert build_mesh("square-on-square", "6x2x4").n_quads == 48      # scene-style name
+    assert build_mesh("square-on-square", "6x2x4").n_quads == 48  # scene-style name
 
 
 def test_leaves_a_running_gmsh_session_alone():
     import gmsh
+
     gmsh.initialize(readConfigFiles=False, interruptible=False)
     try:
         gmsh.option.setNumber("General.Terminal", 0)
@@ -256,42 +268,63 @@ def test_leaves_a_running_gmsh_session_alone():
 
 
 # ------------------------------------------------------------------------- densities
-@pytest.mark.parametrize("text,n,expected", [("24x8x4", 3, (24, 8, 4)), ("24×8×4", 3, (24, 8, 4)),
-                                             ("24X8X4", 3, (24, 8, 4)), (" 10 x 1 ", 2, (10, 1))])
+@pytest.mark.parametrize(
+    "text,n,expected",
+    [("24x8x4", 3, (24, 8, 4)), ("24×8×4", 3, (24, 8, 4)), ("24X8X4", 3, (24, 8, 4)), (" 10 x 1 ", 2, (10, 1))],
+)
 def test_parse_density(text, n, expected):
     assert parse_density(text, n) == expected
 
 
-@pytest.mark.parametrize("text,n", [("24x8", 3), ("0x5", 2), ("-3x4", 2), ("abc", 2), ("2.5x4", 2),
-                                    ("", 2), ("24x8x", 3), ("1e2x4", 2), (None, 2), ("24x8x4x4", 3)])
+@pytest.mark.parametrize(
+    "text,n",
+    [
+        ("24x8", 3),
+        ("0x5", 2),
+        ("-3x4", 2),
+        ("abc", 2),
+        ("2.5x4", 2),
+        ("", 2),
+        ("24x8x", 3),
+        ("1e2x4", 2),
+        (None, 2),
+        ("24x8x4x4", 3),
+    ],
+)
 def test_parse_density_rejects(text, n):
     with pytest.raises(InputError, match="expected"):
         parse_density(text, n)
 
 
-@pytest.mark.parametrize("recipe,density,match", [
-    ("square_on_square", "24x8", "AxBx4"),
-    ("square_on_square", "24x8x3", "must be 4"),
-    ("square_on_square", "0x8x4", "zero"),
-    ("strip", "-3x4", "NxM"),
-    ("strip", "abc", "NxM"),
-    ("disc_on_disc", "10x42", "divisible by 4"),
-    ("square_on_disc", "30x244", "divisible by 8"),
-])
+@pytest.mark.parametrize(
+    "recipe,density,match",
+    [
+        ("square_on_square", "24x8", "AxBx4"),
+        ("square_on_square", "24x8x3", "must be 4"),
+        ("square_on_square", "0x8x4", "zero"),
+        ("strip", "-3x4", "NxM"),
+        ("strip", "abc", "NxM"),
+        ("disc_on_disc", "10x42", "divisible by 4"),
+        ("square_on_disc", "30x244", "divisible by 8"),
+    ],
+)
 def test_build_mesh_rejects_bad_densities(recipe, density, match):
     with pytest.raises(InputError, match=match):
         build_mesh(recipe, density)
 
 
-@pytest.mark.parametrize("call,match", [
-    (lambda: build_mesh("hexagon"), "unknown mesh recipe 'hexagon'"),
-    (lambda: build_mesh("square", "4x4", diameter=3.0), "no geometry keyword 'diameter'"),
-    (lambda: build_mesh("square_on_square", sheet=10.0, pedestal=10.0), "smaller"),
-    (lambda: build_mesh("disc_on_disc", diameter=-1.0), "positive"),
-    (lambda: build_mesh("strip", length="long"), "length"),
-    (lambda: build_mesh("from_file"), "path"),
-    (lambda: build_mesh("from_file", "4x4", path="x.msh"), "no density"),
-])
+@pytest.mark.parametrize(
+    "call,match",
+    [
+        (lambda: build_mesh("hexagon"), "unknown mesh recipe 'hexagon'"),
+        (lambda: build_mesh("square", "4x4", diameter=3.0), "no geometry keyword 'diameter'"),
+        (lambda: build_mesh("square_on_square", sheet=10.0, pedestal=10.0), "smaller"),
+        (lambda: build_mesh("disc_on_disc", diameter=-1.0), "positive"),
+        (lambda: build_mesh("strip", length="long"), "length"),
+        (lambda: build_mesh("from_file"), "path"),
+        (lambda: build_mesh("from_file", "4x4", path="x.msh"), "no density"),
+    ],
+)
 def test_build_mesh_rejects_bad_calls(call, match):
     with pytest.raises(InputError, match=match):
         call()
@@ -310,11 +343,11 @@ Physical Surface("cloth") = {1};
 
 def _check_geo_mesh(m: ShellMesh):
     assert (m.n_quads, m.n_tris, m.n_nodes) == (8, 0, 15)
-    assert m.area() == pytest.approx(8.0, rel=1e-12)          # exact rectangle, rounding only
-    assert np.all(m.directors[:, 2] == 1.0)                    # clockwise .geo loop turned up
+    assert m.area() == pytest.approx(8.0, rel=1e-12)  # exact rectangle, rounding only
+    assert np.all(m.directors[:, 2] == 1.0)  # clockwise .geo loop turned up
     assert close(m.nodes[m.node_set("clamped"), 0], 0.0) and len(m.node_set("clamped")) == 3
     assert close(m.nodes[m.node_set("corner")], [[4.0, 2.0, 0.0]])
-    assert close(m.nodes[m.node_set("curve_7"), 0], 4.0)       # unnamed group: named by tag
+    assert close(m.nodes[m.node_set("curve_7"), 0], 4.0)  # unnamed group: named by tag
 
 
 def test_from_file_geo(tmp_path):
@@ -325,6 +358,7 @@ def test_from_file_geo(tmp_path):
 
 def test_from_file_msh(tmp_path):
     import gmsh
+
     (tmp_path / "sheet.geo").write_text(GEO)
     gmsh.initialize(readConfigFiles=False, interruptible=False)
     try:
@@ -357,12 +391,13 @@ def test_from_file_keeps_stored_directors(tmp_path):
 
 def test_from_file_geo_inside_a_users_gmsh_session(tmp_path):
     import gmsh
+
     (tmp_path / "sheet.geo").write_text(GEO)
     gmsh.initialize(readConfigFiles=False, interruptible=False)
     try:
         gmsh.option.setNumber("General.Terminal", 0)
         _check_geo_mesh(from_file(tmp_path / "sheet.geo"))
-        assert gmsh.option.getNumber("Mesh.RecombineAll") == 0     # the user's option restored
+        assert gmsh.option.getNumber("Mesh.RecombineAll") == 0  # the user's option restored
     finally:
         gmsh.finalize()
 
@@ -371,29 +406,34 @@ def test_from_file_unstructured_geo_is_recombined(tmp_path):
     (tmp_path / "disc.geo").write_text(
         "Point(1)={0,0,0,1}; Point(2)={3,0,0,1}; Point(3)={-3,0,0,1};\n"
         "Circle(1)={2,1,3}; Circle(2)={3,1,2}; Curve Loop(1)={1,2}; Plane Surface(1)={1};\n"
-        "Physical Curve(\"rim\")={1,2};\n")
+        'Physical Curve("rim")={1,2};\n'
+    )
     m = from_file(tmp_path / "disc.geo")
     assert m.n_quads > 0 and m.n_quads > m.n_tris
     assert m.area() == pytest.approx(math.pi * 9.0, rel=0.05)  # polygonal disc with h = 1 cm
     assert close(np.linalg.norm(m.nodes[m.node_set("rim"), :2], axis=1), 3.0)
 
 
-@pytest.mark.parametrize("name,content,match", [
-    ("missing.msh", None, "does not exist"),
-    ("garbage.msh", b"\x00\x01 this is not a mesh", "cannot read"),
-    ("empty.msh", b"", "is empty"),
-    ("truncated.msh", b"$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 4", "cannot read"),
-    ("bad.geo", b"Point(1) = {0, 0, 0\nfoo bar;\n", "gmsh cannot mesh"),
-    ("nosurface.geo", b"Point(1) = {0,0,0}; Point(2) = {1,0,0}; Line(1) = {1,2};\n", "no surface"),
-    ("lines.vtu", None, "no quad or triangle"),
-    ("mesh.txt", b"1 2 3\n", "cannot read"),
-])
+@pytest.mark.parametrize(
+    "name,content,match",
+    [
+        ("missing.msh", None, "does not exist"),
+        ("garbage.msh", b"\x00\x01 this is not a mesh", "cannot read"),
+        ("empty.msh", b"", "is empty"),
+        ("truncated.msh", b"$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 4", "cannot read"),
+        ("bad.geo", b"Point(1) = {0, 0, 0\nfoo bar;\n", "gmsh cannot mesh"),
+        ("nosurface.geo", b"Point(1) = {0,0,0}; Point(2) = {1,0,0}; Line(1) = {1,2};\n", "no surface"),
+        ("lines.vtu", None, "no quad or triangle"),
+        ("mesh.txt", b"1 2 3\n", "cannot read"),
+    ],
+)
 def test_from_file_rejects(tmp_path, name, content, match):
     path = tmp_path / name
     if content is not None:
         path.write_bytes(content)
     elif name.endswith(".vtu"):
         import meshio
+
         meshio.Mesh(np.eye(3), [("line", np.array([[0, 1], [1, 2]]))]).write(path)
     with pytest.raises(InputError, match=match):
         from_file(path)

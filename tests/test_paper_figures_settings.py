@@ -42,8 +42,10 @@ def test_fig11_runs_rayleigh_alpha_50_and_10(monkeypatch, tmp_path):
     with pytest.raises(_Stop, match=r"stopped after 2 run\(s\)"):
         fig11.make(tmp_path, quick=False)
     got = [_effective(sc, kw) for sc, solver, kw in calls]
-    assert [(g.damping, g.alpha, g.mass_scaling, g.mass_scaling_mode) for g in got] == \
-        [("rayleigh", 50.0, 100.0, "director"), ("rayleigh", 10.0, 100.0, "director")]
+    assert [(g.damping, g.alpha, g.mass_scaling, g.mass_scaling_mode) for g in got] == [
+        ("rayleigh", 50.0, 100.0, "director"),
+        ("rayleigh", 10.0, 100.0, "director"),
+    ]
 
 
 @pytest.mark.parametrize("quick, damping", [(False, "rayleigh"), (True, "kinetic")])
@@ -51,8 +53,8 @@ def test_sphere_figures_name_their_damping(monkeypatch, quick, damping):
     calls = _record(monkeypatch, stop_after=1)
     with pytest.raises(_Stop, match=r"stopped after 1 run\(s\)"):
         _sphere.run_sphere("60x60", quick)
-    (sc, solver, kw), = calls
+    ((sc, solver, kw),) = calls
     s = _effective(sc, kw)
     assert solver == "relax" and s.damping == damping
-    if not quick:     # the paper's alpha 5 with all masses x100, as alpha 50 with the director masses x100
+    if not quick:  # the paper's alpha 5 with all masses x100, as alpha 50 with the director masses x100
         assert (s.alpha, s.mass_scaling, s.mass_scaling_mode) == (50.0, 100.0, "director")

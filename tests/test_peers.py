@@ -24,10 +24,16 @@ def test_missing_kratos_says_so_in_one_line_and_exits_3(tmp_path):
     # No interpreter has Kratos: the environment variable points nowhere, the repository root is
     # an empty folder (no .venv-kratos), and the test's Python lacks Kratos (checked first).
     assert subprocess.run([sys.executable, "-c", "import KratosMultiphysics"], capture_output=True).returncode != 0
-    code = (f"import sys; sys.path.insert(0, {str(ROOT / 'benchmarks' / 'peers')!r}); import kratos_launch as k; "
-            f"k.ROOT = {str(tmp_path)!r}; k.require_kratos()")
-    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                       env={"SOLIDSHELL_KRATOS_PYTHON": str(tmp_path / "none"), "PATH": "/usr/bin:/bin"})
+    code = (
+        f"import sys; sys.path.insert(0, {str(ROOT / 'benchmarks' / 'peers')!r}); import kratos_launch as k; "
+        f"k.ROOT = {str(tmp_path)!r}; k.require_kratos()"
+    )
+    r = subprocess.run(
+        [sys.executable, "-c", code],
+        capture_output=True,
+        text=True,
+        env={"SOLIDSHELL_KRATOS_PYTHON": str(tmp_path / "none"), "PATH": "/usr/bin:/bin"},
+    )
     assert r.returncode == 3
     lines = r.stderr.strip().splitlines()
     assert len(lines) == 1 and "KratosMultiphysics not found" in lines[0]
@@ -41,7 +47,7 @@ def test_nodal_rotation_vectors_recover_a_rigid_rotation(monkeypatch):
 
     from solidshell.meshing import build_mesh
 
-    monkeypatch.syspath_prepend(str(ROOT / "benchmarks" / "peers"))   # its kratos_launch, as when run as a script
+    monkeypatch.syspath_prepend(str(ROOT / "benchmarks" / "peers"))  # its kratos_launch, as when run as a script
     ped = _load(ROOT / "benchmarks" / "peers" / "pedestal_kratos.py", "peers_pedestal_kratos")
     mesh = build_mesh("square_on_square", "6x2x4")
     rv = np.array([0.4, -1.1, 0.7])

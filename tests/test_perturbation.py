@@ -8,8 +8,8 @@ from solidshell.errors import InputError
 from solidshell.meshing import build_mesh
 from solidshell.perturbation import initial_state
 from solidshell.run import run_scene
-from solidshell.scenes.build import support_mask
 from solidshell.scenes import load
+from solidshell.scenes.build import support_mask
 
 
 @pytest.fixture(scope="module")
@@ -19,8 +19,10 @@ def pedestal():
     return sc, mesh, support_mask(sc, mesh)
 
 
-@pytest.mark.parametrize("table", [{"shape": "random", "amplitude": 0.4, "seed": 7},
-                                   {"shape": "folds", "amplitude": 0.4, "folds": 6, "phase": 15.0}])
+@pytest.mark.parametrize(
+    "table",
+    [{"shape": "random", "amplitude": 0.4, "seed": 7}, {"shape": "folds", "amplitude": 0.4, "folds": 6, "phase": 15.0}],
+)
 def test_amplitude_clamp_and_directors(pedestal, table):
     sc, mesh, fixed = pedestal
     U = initial_state(table, mesh, fixed, centre=(0.0, 0.0, 0.0))
@@ -59,7 +61,7 @@ def test_seeded_and_zero(pedestal):
 def test_folds_shape_has_n_crests(pedestal):
     sc, mesh, fixed = pedestal
     U = initial_state({"shape": "folds", "amplitude": 0.5, "folds": 8}, mesh, fixed, centre=(0, 0, 0))
-    _, ring = projected_boundary(mesh, None, return_nodes=True)      # the outer rim, in order
+    _, ring = projected_boundary(mesh, None, return_nodes=True)  # the outer rim, in order
     th = np.arctan2(mesh.nodes[ring, 1], mesh.nodes[ring, 0])
     # on the outer rim w ~ cos(8 theta) times a positive taper: the sign pattern has 16 changes
     order = np.argsort(th)
@@ -68,13 +70,16 @@ def test_folds_shape_has_n_crests(pedestal):
     assert np.count_nonzero(s != np.roll(s, 1)) == 16
 
 
-@pytest.mark.parametrize("over, words", [
-    ({"perturbation.amplitude": -1.0}, "amplitude"),
-    ({"perturbation.shape": "folds", "perturbation.amplitude": 1.0}, "perturbation.folds"),
-    ({"perturbation.wobble": 1}, "wobble"),
-    ({"perturbation.shape": "spiral"}, "shape"),
-    ({"perturbation.seed": "x"}, "seed"),
-])
+@pytest.mark.parametrize(
+    "over, words",
+    [
+        ({"perturbation.amplitude": -1.0}, "amplitude"),
+        ({"perturbation.shape": "folds", "perturbation.amplitude": 1.0}, "perturbation.folds"),
+        ({"perturbation.wobble": 1}, "wobble"),
+        ({"perturbation.shape": "spiral"}, "shape"),
+        ({"perturbation.seed": "x"}, "seed"),
+    ],
+)
 def test_bad_settings_one_line(over, words):
     with pytest.raises(InputError, match=words) as e:
         load("square-pedestal").with_overrides(over)
@@ -83,8 +88,12 @@ def test_bad_settings_one_line(over, words):
 
 def test_folds_need_a_centre():
     with pytest.raises(InputError, match="pedestal or sphere"):
-        run_scene("strip-warp", mesh="10x1", progress=False,
-                  overrides={"perturbation.shape": "folds", "perturbation.folds": 4, "perturbation.amplitude": 0.1})
+        run_scene(
+            "strip-warp",
+            mesh="10x1",
+            progress=False,
+            overrides={"perturbation.shape": "folds", "perturbation.folds": 4, "perturbation.amplitude": 0.1},
+        )
 
 
 def test_start_not_imperfection():
@@ -93,11 +102,14 @@ def test_start_not_imperfection():
     stops at a 1e-8 relative residual, so the tip agrees to ~1e-7 of its deflection; 1e-6 allows
     for the two different iteration paths."""
     a = run_scene("strip-warp", mesh="10x1", progress=False, overrides={"solver.static.check_stability": False})
-    b = run_scene("strip-warp", mesh="10x1", progress=False,
-                  overrides={"solver.static.check_stability": False, "perturbation.amplitude": 0.3,
-                             "perturbation.seed": 4})
+    b = run_scene(
+        "strip-warp",
+        mesh="10x1",
+        progress=False,
+        overrides={"solver.static.check_stability": False, "perturbation.amplitude": 0.3, "perturbation.seed": 4},
+    )
     assert a.converged and b.converged
     assert b.summary["perturbation"]["amplitude"] == 0.3 and "perturbation" not in a.summary
-    assert b.summary["iterations"] != a.summary["iterations"]       # it did start elsewhere
+    assert b.summary["iterations"] != a.summary["iterations"]  # it did start elsewhere
     ta, tb = np.array(a.summary["tip_position"]), np.array(b.summary["tip_position"])
     assert np.abs(ta - tb).max() < 1e-6 * np.abs(ta - [5.0, 0.5, 0.0]).max()

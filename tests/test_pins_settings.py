@@ -38,11 +38,11 @@ def test_check_that_raises_exits_1_with_an_error_record(tmp_path, monkeypatch, c
     assert rc == 1
     assert "2 records from 2 checks: 1 passed, 1 failed, 0 skipped" in out
     recs = {r["name"]: r for r in json.loads((tmp_path / "verification.json").read_text())["records"]}
-    assert recs["good/x"]["status"] == "passed"                 # the run went on after the raise
+    assert recs["good/x"]["status"] == "passed"  # the run went on after the raise
     err = recs["broken/error"]
     assert err["status"] == "error" and err["passed"] is False and err["check"] == "broken"
-    assert err["note"] == "ZeroDivisionError: deliberate bug in the check"      # the exception, one line
-    assert err["why"].startswith("ZeroDivisionError raised at test_pins_settings.py:")    # where it raised
+    assert err["note"] == "ZeroDivisionError: deliberate bug in the check"  # the exception, one line
+    assert err["why"].startswith("ZeroDivisionError raised at test_pins_settings.py:")  # where it raised
     assert err["why"].endswith(" in broken")
     broken_line = next(ln for ln in out.splitlines() if ln.startswith("broken/error"))
     assert broken_line.split()[-1] != "pass" and "ERROR" in broken_line
@@ -55,12 +55,26 @@ def test_runner_counts_a_raise_an_empty_check_and_a_false_verdict_as_failed(monk
     def empty(ctx):
         return []
 
-    def inconsistent(ctx):          # passed=False under the default status "passed": still a failure
-        return [record.Record(name="inc/x", reference="r", source="s", quantity="x", value=2.0,
-                              reference_value=1.0, error=1.0, tolerance=0.1, passed=False, wall_time_s=0.0)]
+    def inconsistent(ctx):  # passed=False under the default status "passed": still a failure
+        return [
+            record.Record(
+                name="inc/x",
+                reference="r",
+                source="s",
+                quantity="x",
+                value=2.0,
+                reference_value=1.0,
+                error=1.0,
+                tolerance=0.1,
+                passed=False,
+                wall_time_s=0.0,
+            )
+        ]
 
-    checks = [record.Check(n, "pins", f, n, False, False)
-              for n, f in (("good", _good), ("raises", raises), ("empty", empty), ("inc", inconsistent))]
+    checks = [
+        record.Check(n, "pins", f, n, False, False)
+        for n, f in (("good", _good), ("raises", raises), ("empty", empty), ("inc", inconsistent))
+    ]
     run = run_checks(checks, log=lambda s: None)
     assert run["failed"] == 3
     assert [c["failed"] for c in run["checks"]] == [0, 1, 1, 1]
@@ -78,17 +92,30 @@ def test_verify_exits_1_on_an_empty_check(tmp_path, monkeypatch):
 def test_adapt_every_zero_is_refused():
     with pytest.raises(InputError, match=r"adapt: setting every = 0: .*greater than or equal to 1"):
         parse(AdaptSettings, {"every": 0}, "adapt")
-    assert parse(AdaptSettings, {"every": 1}, "adapt").every == 1          # the smallest legal value
+    assert parse(AdaptSettings, {"every": 1}, "adapt").every == 1  # the smallest legal value
 
 
 def test_adapt_every_zero_cli_one_line_exit_2(tmp_path, capsys):
     out = tmp_path / "o"
-    rc = cli.main(["run", "square-pedestal", "--solver", "relax", "--adaptive", "--set", "adapt.every=0",
-                   "--out", str(out), "--no-pictures", "--no-progress"])
+    rc = cli.main(
+        [
+            "run",
+            "square-pedestal",
+            "--solver",
+            "relax",
+            "--adaptive",
+            "--set",
+            "adapt.every=0",
+            "--out",
+            str(out),
+            "--no-pictures",
+            "--no-progress",
+        ]
+    )
     err = capsys.readouterr().err.strip().splitlines()
     assert rc == 2 and len(err) == 1
     assert "adapt" in err[0] and "every = 0" in err[0]
-    assert not out.exists()                       # refused before anything is written
+    assert not out.exists()  # refused before anything is written
 
 
 # --------------------------------------------------------------------------- load_steps + load_factors
@@ -103,9 +130,22 @@ def test_load_steps_with_load_factors_is_refused():
 
 def test_load_steps_with_load_factors_cli_one_line_exit_2(tmp_path, capsys):
     out = tmp_path / "o"
-    rc = cli.main(["run", "strip-warp", "--mesh", "4x1", "--set", "solver.static.load_steps=2",
-                   "--set", "solver.static.load_factors=[0.5, 1.0]", "--out", str(out), "--no-pictures",
-                   "--no-progress"])
+    rc = cli.main(
+        [
+            "run",
+            "strip-warp",
+            "--mesh",
+            "4x1",
+            "--set",
+            "solver.static.load_steps=2",
+            "--set",
+            "solver.static.load_factors=[0.5, 1.0]",
+            "--out",
+            str(out),
+            "--no-pictures",
+            "--no-progress",
+        ]
+    )
     err = capsys.readouterr().err.strip().splitlines()
     assert rc == 2 and len(err) == 1
     assert "load_steps" in err[0] and "load_factors" in err[0]

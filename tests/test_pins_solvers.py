@@ -56,9 +56,12 @@ def test_armijo_and_no_line_search_reach_the_trust_region_equilibrium(line_searc
     # test_static.py's newton / paper / arclength comparison); measured 3e-15 cm
     assert r.info["positive_definite"] is True
     assert np.abs(r.U - ref.U).max() < 1e-6
+
     # the potential at the two states: equal to second order in their difference, i.e. to the
     # round-off of its terms (U = 0.045, P.D = 0.186 gf cm; Pi = -0.141 gf cm); measured 3e-17 and 0
-    Pi = lambda U: float(model.energy(U)) - float(np.sum(P * U))
+    def Pi(U):
+        return float(model.energy(U)) - float(np.sum(P * U))
+
     assert Pi(r.U) == pytest.approx(Pi(ref.U), rel=1e-10)
 
     a = run_scene("square-pedestal", mesh="6x2x4", solver="static", progress=False)
@@ -80,9 +83,12 @@ def test_each_line_search_takes_its_own_first_step():
       Pi(U1) - Pi(0) <= 1e-4 g.U1 with g = -P the gradient at the flat sheet;
     - "none" takes the 2.5 cm step as it is, uphill: Pi(U1) > Pi(0) = 0, one evaluation of Pi."""
     mesh, model, fixed, P = _wool_strip()
-    Pi = lambda U: float(model.energy(U)) - float(np.sum(P * U))
+
+    def Pi(U):
+        return float(model.energy(U)) - float(np.sum(P * U))
+
     one = dict(max_iter=1, max_cutbacks=0, predictor=False, check_stability=False)
-    Lf = 5.0                  # the clamp to the free end: solve_static's default free length
+    Lf = 5.0  # the clamp to the free end: solve_static's default free length
     max_step = 0.5 * Lf
 
     def first(line_search):
@@ -91,19 +97,19 @@ def test_each_line_search_takes_its_own_first_step():
         return r, _step_norm(model, r.U), Pi(r.U)
 
     r, step, pi = first("trust")
-    assert step == pytest.approx(0.02 * Lf, rel=1e-9) and pi < 0.0         # measured 0.1 cm, -3.4e-3
-    assert r.info["energy_evaluations"] == 2                                # start + the one trial
+    assert step == pytest.approx(0.02 * Lf, rel=1e-9) and pi < 0.0  # measured 0.1 cm, -3.4e-3
+    assert r.info["energy_evaluations"] == 2  # start + the one trial
 
     r, step, pi = first("armijo")
-    g_dot_step = -float(np.sum(P * r.U))                 # g.(U1 - U0) at U0 = 0 (fixed dofs: U1 = 0)
-    assert g_dot_step < 0.0 and pi <= 1e-4 * g_dot_step                      # Armijo's sufficient decrease
-    assert 0.0 < step <= 0.5 * max_step                                      # backtracked (measured 0.087 cm)
-    assert abs(step - 0.02 * Lf) > 1e-3                                      # not the trust radius
-    assert r.info["energy_evaluations"] >= 3                                 # start + rejected + accepted (4)
+    g_dot_step = -float(np.sum(P * r.U))  # g.(U1 - U0) at U0 = 0 (fixed dofs: U1 = 0)
+    assert g_dot_step < 0.0 and pi <= 1e-4 * g_dot_step  # Armijo's sufficient decrease
+    assert 0.0 < step <= 0.5 * max_step  # backtracked (measured 0.087 cm)
+    assert abs(step - 0.02 * Lf) > 1e-3  # not the trust radius
+    assert r.info["energy_evaluations"] >= 3  # start + rejected + accepted (4)
 
     r, step, pi = first("none")
-    assert step == pytest.approx(max_step, rel=1e-9)                        # the capped full step, 2.5 cm
-    assert pi > 0.0                                                          # accepted uphill (measured +136)
+    assert step == pytest.approx(max_step, rel=1e-9)  # the capped full step, 2.5 cm
+    assert pi > 0.0  # accepted uphill (measured +136)
     assert r.info["energy_evaluations"] == 2
 
 
@@ -114,8 +120,14 @@ def test_each_line_search_takes_its_own_first_step():
 # a hold the pass at step 2950 merges a leaf split at step 2800 or later, with merge_hold = 4
 # (4 x 50 steps) that merge is held and the run's later passes differ (merges at 3450, 3700, 3800 and
 # 4000 instead of 3850, 3900).
-ADAPT = {"adapt.levels": 2, "adapt.const": 0.1, "adapt.eps": 0.05, "adapt.every": 50,
-         "output.pictures": [], "output.snapshots": []}
+ADAPT = {
+    "adapt.levels": 2,
+    "adapt.const": 0.1,
+    "adapt.eps": 0.05,
+    "adapt.every": 50,
+    "output.pictures": [],
+    "output.snapshots": [],
+}
 
 
 def _relax_driver(max_steps, restart=None, **adapt):
@@ -125,21 +137,28 @@ def _relax_driver(max_steps, restart=None, **adapt):
     sc = load("hang-20").with_overrides(over)
     level0 = run_scene(sc, mesh="4x4", solver="none", progress=False).mesh
     s = {**sc.solver_settings("relax"), "mass_scaling": 1.0, "max_steps": max_steps}
-    return AdaptiveRun(level0, lambda mesh: build_problem(sc, mesh), Integrator, parse_settings(s, True),
-                       parse_adapt(sc.adapt), relax=True, restart=restart)
+    return AdaptiveRun(
+        level0,
+        lambda mesh: build_problem(sc, mesh),
+        Integrator,
+        parse_settings(s, True),
+        parse_adapt(sc.adapt),
+        relax=True,
+        restart=restart,
+    )
 
 
 def _step_by_hand(run, until):
     """run()'s loop, by hand, to step ``until`` (a multiple of adapt.every): advance, then a pass."""
     while run.integ.state.step < until:
-        with threads_for(run.integ, run.settings.threads):      # as run() does (bitwise either way)
+        with threads_for(run.integ, run.settings.threads):  # as run() does (bitwise either way)
             assert run.integ.advance(run.adapt.every) == "running"
         run._adapt_pass()
 
 
 # ----------------------------------------------------------------------------- 2. merge_hold restart
-HOLD_STEPS = 4200      # past the held merge (2950) and four later merges (3450-4000)
-CHECKPOINT = 2900      # within the hold of the splits of steps 2750-2900 (200 steps each)
+HOLD_STEPS = 4200  # past the held merge (2950) and four later merges (3450-4000)
+CHECKPOINT = 2900  # within the hold of the splits of steps 2750-2900 (200 steps each)
 
 
 def test_a_restart_keeps_the_merge_hold_clocks_bit_for_bit(tmp_path):
@@ -156,7 +175,7 @@ def test_a_restart_keeps_the_merge_hold_clocks_bit_for_bit(tmp_path):
     unheld = {r["step"]: r["merges"] for r in free.remeshes if r["step"] > CHECKPOINT}
     nxt = CHECKPOINT + 50
     assert unheld.get(nxt) == 1 and held.get(nxt, 0) == 0, (held, unheld)
-    assert any(held.values())                            # and it merges later, once the hold is over
+    assert any(held.values())  # and it merges later, once the hold is over
 
     part = _relax_driver(HOLD_STEPS, merge_hold=4)
     part.start()
@@ -169,7 +188,7 @@ def test_a_restart_keeps_the_merge_hold_clocks_bit_for_bit(tmp_path):
     again = _relax_driver(HOLD_STEPS, restart=ck, merge_hold=4)
     res = again.run()
     assert again.remeshes == whole.remeshes and again.history == whole.history
-    assert all(np.array_equal(a, b) for a, b in zip(again.born, whole.born))       # the clocks themselves
+    assert all(np.array_equal(a, b) for a, b in zip(again.born, whole.born))  # the clocks themselves
     assert np.array_equal(res.active.nodes, ref.active.nodes)
     assert np.array_equal(res.mesh.quads, ref.mesh.quads) and np.array_equal(res.mesh.tris, ref.mesh.tris)
     assert np.array_equal(res.result.U, ref.result.U)
@@ -199,18 +218,18 @@ def test_inserted_nodes_take_the_interpolated_velocity_not_the_dk_transfer_of_th
     run._adapt_pass()
     assert len(run.remeshes) == 1 and run.remeshes[0]["nodes_in"] > 0
 
-    st = run.integ.state                                  # the new mesh's state (its own dt)
+    st = run.integ.state  # the new mesh's state (its own dt)
     new_nodes = run.active.nodes
     v = ((st.D - st.D_prev) / st.dt).reshape(-1, 6)[:, :3]
     bg = run.bg
-    vel = np.full((len(bg.Xo), 3), np.nan)                 # by background node
+    vel = np.full((len(bg.Xo), 3), np.nan)  # by background node
     vel[new_nodes] = v
     before = np.full((len(bg.Xo), 3), np.nan)
     before[old_nodes] = v_old
     fixed = np.zeros(len(bg.Xo), dtype=bool)
     fixed[new_nodes] = np.asarray(run._problem(run.active).fixed, dtype=bool)[:, :3].any(axis=1)
-    scale = float(np.abs(v_old).max())                     # the sheet's fastest node [cm/s]
-    assert scale > 1.0                                     # it is falling (measured 19 cm/s)
+    scale = float(np.abs(v_old).max())  # the sheet's fastest node [cm/s]
+    assert scale > 1.0  # it is falling (measured 19 cm/s)
     # round-off: states of ~1 cm exact to ~1e-16 of themselves, differenced and divided by dt = 7.6e-6 s,
     # ~1e-11 cm/s (measured 2.6e-12 cm/s); 1e-9 of the fastest node's speed is 2e-8 cm/s, eight
     # digits below the 4.5 cm/s of the DK rule
@@ -226,6 +245,6 @@ def test_inserted_nodes_take_the_interpolated_velocity_not_the_dk_transfer_of_th
     A, B = bg.mid_parent[mids, 0], bg.mid_parent[mids, 1]
     expect_mid = 0.5 * (before[A] + before[B])
     expect_cen = before[bg.centre_parent[cens, :4]].mean(axis=1)
-    assert np.all(np.isfinite(expect_mid)) and np.all(np.isfinite(expect_cen))   # parents were active
+    assert np.all(np.isfinite(expect_mid)) and np.all(np.isfinite(expect_cen))  # parents were active
     assert np.abs(vel[mids] - expect_mid).max() <= tol
     assert np.abs(vel[cens] - expect_cen).max() <= tol

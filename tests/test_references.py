@@ -58,14 +58,17 @@ def test_stored_plates_json_is_consistent():
 
 
 # ----------------------------------------------------------------------------- scikit-fem solves
-@pytest.mark.parametrize("support,exact,lo,hi", [
-    # Morley on the union-jack mesh h = 1/16 (1024 triangles): the stored convergence table shows a
-    # clean O(h^2) error from above, +1.65 % (SS) and +5.05 % (clamped); the bands are +-20 % around
-    # those values, so a wrong boundary condition (SS <-> clamped swaps alpha by 3x) or a wrong D
-    # (e.g. 1 - nu instead of 1 - nu^2) fails.
-    ("simply_supported", 0.0040623527, 0.013, 0.020),
-    ("clamped", 0.0012653191, 0.040, 0.061),
-])
+@pytest.mark.parametrize(
+    "support,exact,lo,hi",
+    [
+        # Morley on the union-jack mesh h = 1/16 (1024 triangles): the stored convergence table shows a
+        # clean O(h^2) error from above, +1.65 % (SS) and +5.05 % (clamped); the bands are +-20 % around
+        # those values, so a wrong boundary condition (SS <-> clamped swaps alpha by 3x) or a wrong D
+        # (e.g. 1 - nu instead of 1 - nu^2) fails.
+        ("simply_supported", 0.0040623527, 0.013, 0.020),
+        ("clamped", 0.0012653191, 0.040, 0.061),
+    ],
+)
 def test_morley_within_known_error(support, exact, lo, hi):
     row = kp.skfem_plate("morley", support, 4)
     err = (row["alpha"] - exact) / exact
@@ -88,7 +91,9 @@ def test_timoshenko_tip_deflection_terms():
     E, b, h, L, P = 2.0, 1.0, 0.1, 1.0, 3.0
     I = b * h**3 / 12
     G = E / 2
-    assert beams.timoshenko_tip_deflection(P, L, E, b, h) == pytest.approx(P * L**3 / (3 * E * I) + P * L / (5 / 6 * G * b * h), rel=1e-14)
+    assert beams.timoshenko_tip_deflection(P, L, E, b, h) == pytest.approx(
+        P * L**3 / (3 * E * I) + P * L / (5 / 6 * G * b * h), rel=1e-14
+    )
 
 
 def test_discrete_timoshenko_one_element_by_hand():
@@ -113,4 +118,4 @@ def test_end_moment_and_locking_factors():
     assert beams.thickness_locking_factor(0.3, "restrained") == pytest.approx(0.49 / 0.4)
     assert beams.thickness_locking_factor(0.0) == 1.0
     c = beams.end_moment_circle(2 * math.pi * EI / 3.0, 3.0, 5.0, 1.0, 0.2)
-    assert abs(c["tip_x"]) < 1e-12 and abs(c["tip_z"]) < 1e-12   # a closed circle
+    assert abs(c["tip_x"]) < 1e-12 and abs(c["tip_z"]) < 1e-12  # a closed circle

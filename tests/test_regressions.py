@@ -82,7 +82,7 @@ def test_square_pedestal_24x8x4_dc_from_element_shadows(drape):
     x = (m.nodes + U[:, :3])[m.quads][:, :, :2]
     shadows = 0.5 * np.sum(x[:, :, 0] * np.roll(x[:, :, 1], -1, 1) - np.roll(x[:, :, 0], -1, 1) * x[:, :, 1], 1)
     assert shadows.min() > 0.0
-    sheet, pedestal = 20.0 ** 2, 10.0 ** 2
+    sheet, pedestal = 20.0**2, 10.0**2
     dc = shadows.sum() / (sheet - pedestal)
     assert drape.summary["projected_area"] == pytest.approx(pedestal + shadows.sum(), rel=1e-12)
     assert drape.summary["drape_coefficient"] == pytest.approx(dc, rel=1e-12)

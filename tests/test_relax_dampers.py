@@ -8,16 +8,16 @@ import math
 import numpy as np
 import pytest
 import scipy.linalg
+from test_explicit import cantilever
+from test_explicit_integrator import relax_whole_and_restarted
 
 from solidshell import Fabric, InputError
 from solidshell.run import run_scene
-from solidshell.solvers import explicit, get
+from solidshell.solvers import get
 from solidshell.solvers.explicit import Integrator
 from solidshell.solvers.explicit.damping import fire
 from solidshell.solvers.explicit.kernels import central_step
 from solidshell.solvers.explicit.settings import RELAX_PRESETS, RelaxSettings, parse_settings
-from test_explicit import cantilever
-from test_explicit_integrator import relax_whole_and_restarted
 
 FAST = dict(mass_scaling=100, mass_scaling_mode="director")
 
@@ -72,8 +72,8 @@ def test_dampers_reach_the_same_steady_state():
         if d == "fire":
             assert r.info["steps"] < ref.info["steps"], (r.info["steps"], ref.info["steps"])
         else:
-            assert r.info["alpha"] > 0 and r.info["alpha"] != 5.0   # estimated, not the start value
-    assert ref.U[:, 2].min() < -1.5   # it really drooped
+            assert r.info["alpha"] > 0 and r.info["alpha"] != 5.0  # estimated, not the start value
+    assert ref.U[:, 2].min() < -1.5  # it really drooped
 
 
 def test_modal_alpha_is_twice_the_slowest_frequency():
@@ -83,8 +83,9 @@ def test_modal_alpha_is_twice_the_slowest_frequency():
     round-off, far below any physics)."""
     prob = wool_strip()
     zeta = 0.7
-    integ = Integrator(prob, {**FAST, "damping": "modal", "modal_zeta": zeta, "modal_every": 10**6,
-                              "max_steps": 2}, relax=True)
+    integ = Integrator(
+        prob, {**FAST, "damping": "modal", "modal_zeta": zeta, "modal_every": 10**6, "max_steps": 2}, relax=True
+    )
     integ.advance()
     m = prob.model
     K = m.tangent(np.zeros((m.n_nodes, 6))).toarray()
@@ -101,7 +102,7 @@ def test_fire_restart_bit_for_bit(tmp_path):
     prob = wool_strip()
     s = dict(FAST, damping="fire", tol_residual=1e-4, tol_kinetic=1e-8, sample_every=7)
     full, again = relax_whole_and_restarted(prob, s, str(tmp_path / "fire.npz"))
-    assert full.converged and full.info["kinetic_resets"] > 0   # FIRE froze at least once
+    assert full.converged and full.info["kinetic_resets"] > 0  # FIRE froze at least once
     assert 0 < again.info["restarted_from_step"] < full.info["steps"]
     assert np.array_equal(again.U, full.U) and again.message == full.message
     for k in ("steps", "dt", "t_final", "energy_balance_error", "kinetic_resets", "damping_dissipation"):
@@ -120,7 +121,7 @@ def test_presets():
         assert all(getattr(s, k) == v for k, v in keys.items())
     with pytest.raises(InputError, match="preset"):
         parse_settings({"preset": "quick"}, relax=True)
-    assert RelaxSettings().damping == "rayleigh"   # the bare defaults stay the paper's
+    assert RelaxSettings().damping == "rayleigh"  # the bare defaults stay the paper's
 
 
 @pytest.mark.parametrize("damping", ["kinetic", "fire"])
@@ -130,8 +131,9 @@ def test_pedestal_relaxation_reaches_the_static_drape(damping):
     4e-5), the same 4 folds, and the largest translation difference below 0.1 % of the largest
     displacement (measured 1.7e-4: the relaxation stops at residual 1e-3 of the weight)."""
     st = run_scene("square-pedestal", mesh="6x2x4", solver="static", out_dir=None, progress=False)
-    r = run_scene("square-pedestal", mesh="6x2x4", solver="relax", out_dir=None, progress=False,
-                  damping=damping, **FAST)
+    r = run_scene(
+        "square-pedestal", mesh="6x2x4", solver="relax", out_dir=None, progress=False, damping=damping, **FAST
+    )
     assert r.summary["converged"], r.summary["message"]
     dc, dc0 = r.summary["drape_coefficient"], st.summary["drape_coefficient"]
     assert abs(dc - dc0) < 5e-3 * dc0
@@ -152,7 +154,7 @@ def test_fire_with_the_residual_only_step_is_the_full_step_bitwise():
     b.damper_rewrites = False
     for it in (a, b):
         it.advance(300)
-    assert a.step_power is not None and b.step_power is None        # the two paths were taken
-    assert a.state.damp_sum > 0.0                                     # FIRE mixed
+    assert a.step_power is not None and b.step_power is None  # the two paths were taken
+    assert a.state.damp_sum > 0.0  # FIRE mixed
     assert np.array_equal(a.state.D, b.state.D) and np.array_equal(a.state.D_prev, b.state.D_prev)
     assert a.state.damp_sum == b.state.damp_sum and a.state.dt == b.state.dt

@@ -5,8 +5,7 @@ import numpy as np
 import pytest
 
 from solidshell.mesh import ShellMesh
-from solidshell.render import ViewStyle, axis_labels, draw_view, height_norm, renderer, scene_warp_deg
-from solidshell.render import vtk_backend
+from solidshell.render import ViewStyle, axis_labels, draw_view, height_norm, renderer, scene_warp_deg, vtk_backend
 
 
 def _sheet(n=8, size=10.0, z=0.0):
@@ -29,16 +28,23 @@ def _centre_pixel(backend, monkeypatch, tmp_path, view, body):
     import matplotlib
 
     matplotlib.use("Agg", force=True)
-    import matplotlib.pyplot as plt
     import matplotlib.image as mimg
+    import matplotlib.pyplot as plt
 
     monkeypatch.setenv("SOLIDSHELL_RENDERER", backend)
-    mesh = _sheet(7)                 # odd: the centre pixel is inside an element, not on a mesh line
+    mesh = _sheet(7)  # odd: the centre pixel is inside an element, not on a mesh line
     fig = plt.figure(figsize=(3, 3))
     ax = fig.add_axes([0, 0, 1, 1])
     # the sheet sits at the top of the colour scale: yellow in viridis, far from the body's grey
-    draw_view(ax, mesh, mesh.nodes, view, bodies=[body], norm=height_norm(mesh.nodes - [0, 0, 1], mesh.nodes),
-              style=ViewStyle(labels=False, height_px=200))
+    draw_view(
+        ax,
+        mesh,
+        mesh.nodes,
+        view,
+        bodies=[body],
+        norm=height_norm(mesh.nodes - [0, 0, 1], mesh.nodes),
+        style=ViewStyle(labels=False, height_px=200),
+    )
     ax.set_axis_off()
     p = tmp_path / f"{backend}-{view}.png"
     fig.savefig(p, dpi=80)
@@ -92,15 +98,15 @@ def test_run_picture_is_a_sane_png(tmp_path):
     mesh = _sheet(4, 20.0)
     p = render(tmp_path / "iso.png", mesh, None, view="iso", title="t", scene=load("square-pedestal"))
     img = mimg.imread(p)
-    assert 300 < img.shape[0] < 2000 and 300 < img.shape[1] < 2000    # ~7x6 in at 130 dpi
-    assert p.stat().st_size > 10_000                                  # not a blank image
+    assert 300 < img.shape[0] < 2000 and 300 < img.shape[1] < 2000  # ~7x6 in at 130 dpi
+    assert p.stat().st_size > 10_000  # not a blank image
     assert renderer() in ("vtk", "matplotlib")
 
 
 def test_figures_cli_refuses_an_unknown_figure(capsys):
     from solidshell.cli import main
 
-    assert main(["figures", "4", "3"]) == 2           # checked before any figure runs
+    assert main(["figures", "4", "3"]) == 2  # checked before any figure runs
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "unknown figure '3'" in err[0] and "4, 5, 6" in err[0] and "22" in err[0]
 
@@ -139,7 +145,7 @@ def test_a_started_probe_gives_available_its_answer(monkeypatch):
     # a working first window class needs no second launch; a failing one is followed by the next
     assert len(launched) == (1 if fresh[0] else len(vtk_backend._windows()))
     assert "pending" not in vtk_backend._STATE
-    vtk_backend.start_probe()            # the answer is known: nothing more is launched
+    vtk_backend.start_probe()  # the answer is known: nothing more is launched
     assert len(launched) == (1 if fresh[0] else len(vtk_backend._windows()))
 
 

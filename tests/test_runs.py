@@ -9,7 +9,6 @@ import errno
 import io as _stdio
 import json
 import logging
-import os
 import signal
 import subprocess
 import sys
@@ -19,22 +18,28 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from solidshell import InputError, io as sio
+from solidshell import InputError
+from solidshell import io as sio
 from solidshell.errors import IOFailure
 from solidshell.problem import SolveResult
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
-
 def cli(*args, timeout=300):
-    return subprocess.run([sys.executable, "-m", "solidshell", *map(str, args)], capture_output=True,
-                          text=True, cwd=ROOT, timeout=timeout)
+    return subprocess.run(
+        [sys.executable, "-m", "solidshell", *map(str, args)], capture_output=True, text=True, cwd=ROOT, timeout=timeout
+    )
 
 
 def popen(*args):
-    return subprocess.Popen([sys.executable, "-m", "solidshell", *map(str, args)], cwd=ROOT,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    return subprocess.Popen(
+        [sys.executable, "-m", "solidshell", *map(str, args)],
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
 
 
 def one_error_line(stderr, code, rc, *needles):
@@ -53,6 +58,7 @@ def names(d):
 # ----------------------------------------------------------------------------- stand-ins
 class FakeModel:
     """Stands in for solidshell.model.Model: the wiring, not the mechanics, is under test."""
+
     interpenetrated = 0
 
     def __init__(self, mesh, material, thickness_strain="green", mu=0.5, membrane="full", constants=None):
@@ -77,8 +83,14 @@ def fake_solver(status="done", converged=True, warnings=(), raise_=None, t_final
         U[problem.fixed] = 0.0
         progress(0.5, "half way")
         inf = {"status": status, "t_final": t_final, "warnings": list(warnings), **(info or {})}
-        return SolveResult(U=U, converged=converged, message=f"fake: {status}", info=inf,
-                           frames=[(0.0, 0 * U), (0.1, 0.25 * U), (t_final, U)])
+        return SolveResult(
+            U=U,
+            converged=converged,
+            message=f"fake: {status}",
+            info=inf,
+            frames=[(0.0, 0 * U), (0.1, 0.25 * U), (t_final, U)],
+        )
+
     return solve
 
 
@@ -111,9 +123,17 @@ def settings_double(monkeypatch):
 
 
 # ============================================================================= 1. checked before work
-@pytest.mark.parametrize("key, value, needle", [
-    ("tol", "abc", "tol"), ("tol", -1.0, "tol"), ("tol", 0.0, "tol"), ("max_iter", "abc", "max_iter"),
-    ("load_factors", ["a"], "load_factors"), ("nonsense", 1, "nonsense")])
+@pytest.mark.parametrize(
+    "key, value, needle",
+    [
+        ("tol", "abc", "tol"),
+        ("tol", -1.0, "tol"),
+        ("tol", 0.0, "tol"),
+        ("max_iter", "abc", "max_iter"),
+        ("load_factors", ["a"], "load_factors"),
+        ("nonsense", 1, "nonsense"),
+    ],
+)
 def test_bad_setting_refused_before_anything_is_written(tmp_path, settings_double, key, value, needle):
     from solidshell.run import run_scene
 
@@ -121,21 +141,24 @@ def test_bad_setting_refused_before_anything_is_written(tmp_path, settings_doubl
     with pytest.raises(InputError, match=needle) as e:
         run_scene("strip-warp", mesh="4x1", out_dir=out, progress=False, overrides={f"solver.static.{key}": value})
     assert "\n" not in str(e.value) and "solver.static" in str(e.value)
-    assert not out.exists()              # not even the folder
+    assert not out.exists()  # not even the folder
 
 
-@pytest.mark.parametrize("args, needle", [
-    (["strip-warp", "--set", "solver.static.tol=abc"], "tol"),
-    (["strip-warp", "--set", "solver.static.tol=-1"], "tol"),
-    (["strip-warp", "--set", "solver.static.tol=0"], "tol"),
-    (["strip-warp", "--set", "solver.static.max_iter=abc"], "max_iter"),
-    (["strip-warp", "--set", 'solver.static.load_factors=["a"]'], "load_factors"),
-    (["strip-warp", "--solver", "relax", "--set", "solver.relax.U0=abc"], "U0"),
-    (["strip-warp", "--solver", "relax", "--set", "solver.relax.checkpoint=5"], "checkpoint"),
-])
+@pytest.mark.parametrize(
+    "args, needle",
+    [
+        (["strip-warp", "--set", "solver.static.tol=abc"], "tol"),
+        (["strip-warp", "--set", "solver.static.tol=-1"], "tol"),
+        (["strip-warp", "--set", "solver.static.tol=0"], "tol"),
+        (["strip-warp", "--set", "solver.static.max_iter=abc"], "max_iter"),
+        (["strip-warp", "--set", 'solver.static.load_factors=["a"]'], "load_factors"),
+        (["strip-warp", "--solver", "relax", "--set", "solver.relax.U0=abc"], "U0"),
+        (["strip-warp", "--solver", "relax", "--set", "solver.relax.checkpoint=5"], "checkpoint"),
+    ],
+)
 def test_bad_setting_cli_exit_2_nothing_written(tmp_path, args, needle):
     out = tmp_path / "out"
-    r = cli("run", *args, "--mesh", "4x1", "--out", out, timeout=120)   # refused in ~2 s, never a solve
+    r = cli("run", *args, "--mesh", "4x1", "--out", out, timeout=120)  # refused in ~2 s, never a solve
     one_error_line(r.stderr, 2, r.returncode, needle)
     assert not out.exists()
 
@@ -152,15 +175,15 @@ def test_truncated_restart_file_exit_2_nothing_written(tmp_path):
 def test_size_guard_estimate():
     from solidshell import sizing
 
-    assert sizing.elements_of_density("1000000x1000000x4") == 4 * 10 ** 12
+    assert sizing.elements_of_density("1000000x1000000x4") == 4 * 10**12
     assert sizing.elements_of_density("48x16x4") == 3072 and sizing.elements_of_density("20x1") == 20
     # the estimate is the documented base plus a per-element cost, static costing the most
     assert sizing.estimate_bytes(1000, "static") == sizing.BASE_BYTES + 1000 * 64 * 1024
     assert sizing.estimate_bytes(1000, "explicit") < sizing.estimate_bytes(1000, "static")
     with pytest.raises(InputError, match=r"1e\+04 elements need about .* more than the 512 MiB available"):
-        sizing.check(10_000, "static", "--mesh 100x25x4", available=512 * 2 ** 20)
+        sizing.check(10_000, "static", "--mesh 100x25x4", available=512 * 2**20)
     assert sizing.check(10_000, "static", "x", allow_large=True, available=1) > 0
-    assert sizing.check(100, "explicit", "x", available=2 ** 40) > 0
+    assert sizing.check(100, "explicit", "x", available=2**40) > 0
     have = sizing.available_memory()
     assert have is None or have > 0
 
@@ -180,7 +203,7 @@ def test_size_guard_refuses_before_meshing(tmp_path, monkeypatch):
     assert not (tmp_path / "o").exists()
     # a modest mesh against a machine with 300 MiB free: refused, unless allow_large
     monkeypatch.undo()
-    monkeypatch.setattr(sizing, "available_memory", lambda: 300 * 2 ** 20)
+    monkeypatch.setattr(sizing, "available_memory", lambda: 300 * 2**20)
     with pytest.raises(InputError, match="mesh.density 48x16x4: 3072 elements"):
         run_scene("square-pedestal", solver="static", progress=False)
     out = run_scene("strip-warp", mesh="4x1", solver="none", progress=False, allow_large=True)
@@ -194,7 +217,7 @@ def test_huge_mesh_cli_refused_fast(tmp_path):
     wall = time.perf_counter() - t
     one_error_line(r.stderr, 2, r.returncode, "4e+12 elements", "available", "--allow-large")
     assert not out.exists()
-    assert wall < 30.0, wall     # an interpreter start-up (~1-2 s; generous for a loaded machine)
+    assert wall < 30.0, wall  # an interpreter start-up (~1-2 s; generous for a loaded machine)
 
 
 def test_initial_penetration_counts_and_depth():
@@ -221,7 +244,7 @@ def test_sheet_starting_inside_sphere_exit_2(tmp_path, capsys):
     out = tmp_path / "o"
     rc = main(["run", "sphere", "--mesh", "10x10", "--set", "contact.0.centre=[0.0, 0.0, -4.0]", "--out", str(out)])
     line = one_error_line(capsys.readouterr().err, 2, rc, "contact[0] (sphere", "node(s) of the sheet start inside")
-    assert "deepest 1.03 cm" in line           # 1 cm above the centre + the 0.02965 cm offset
+    assert "deepest 1.03 cm" in line  # 1 cm above the centre + the 0.02965 cm offset
     assert not out.exists()
 
 
@@ -232,14 +255,15 @@ def test_stale_files_replaced_and_run_id_everywhere(tmp_path):
     out = tmp_path / "o"
     a = run_scene("strip-warp", mesh="4x1", solver="none", out_dir=out, progress=False)
     assert set(a.summary["files"]) == {"mesh.xdmf", "mesh.vtu", "top.png", "iso.png", "side.png", "summary.json"}
-    b = run_scene("strip-warp", mesh="2x1", solver="none", out_dir=out, progress=False,
-                  overrides={"output.pictures": ["top"]})
+    b = run_scene(
+        "strip-warp", mesh="2x1", solver="none", out_dir=out, progress=False, overrides={"output.pictures": ["top"]}
+    )
     assert names(out) == sorted(b.summary["files"]) == ["mesh.vtu", "mesh.xdmf", "summary.json", "top.png"]
     assert b.run_id != a.run_id and len(b.run_id) == 32
     assert {sio.read_run_id(out / n) for n in names(out)} == {b.run_id}
-    assert b.summary["replaced_files"][0] == "summary.json"      # the old summary goes first
+    assert b.summary["replaced_files"][0] == "summary.json"  # the old summary goes first
     assert b.summary["warnings"] == []
-    _, U = sio.read_state(out / "mesh.vtu")     # the stamp leaves the files readable
+    _, U = sio.read_state(out / "mesh.vtu")  # the stamp leaves the files readable
     assert U.shape == (6, 6)
 
 
@@ -273,13 +297,24 @@ def test_checkpoint_temporary_of_a_killed_run_is_cleared(tmp_path, capsys):
     tmp = out / ".state.ckpt.k1ll3d_.npz"
     assert sio.is_temporary_of(tmp.name, ck.name) and not sio.is_temporary_of("state.ckpt.npz.x.npz", ck.name)
     tmp.write_bytes(b"half a zip")
-    common = ["run", "strip-warp", "--mesh", "2x1", "--solver", "relax", "--set", "output.pictures=[]",
-              "--no-progress", "--out", str(out)]
+    common = [
+        "run",
+        "strip-warp",
+        "--mesh",
+        "2x1",
+        "--solver",
+        "relax",
+        "--set",
+        "output.pictures=[]",
+        "--no-progress",
+        "--out",
+        str(out),
+    ]
     rc = main(common)
     one_error_line(capsys.readouterr().err, 2, rc, tmp.name, "--force")
     rc = main(common + ["--checkpoint", str(ck), "--set", "solver.relax.checkpoint_every=50"])
     capsys.readouterr()
-    assert rc == 0 and not tmp.exists() and ck.exists()     # and written atomically itself
+    assert rc == 0 and not tmp.exists() and ck.exists()  # and written atomically itself
     assert not any(n.startswith(".") for n in names(out))
 
 
@@ -295,7 +330,7 @@ def test_unwritable_output_exit_3_with_path(tmp_path, capsys):
     from solidshell.cli import main
 
     (tmp_path / "file").write_text("x")
-    out = tmp_path / "file" / "sub"                 # cannot be created: its parent is a file
+    out = tmp_path / "file" / "sub"  # cannot be created: its parent is a file
     rc = main(["mesh", "strip-warp", "--mesh", "2x1", "--out", str(out)])
     one_error_line(capsys.readouterr().err, 3, rc, "I/O error", str(out))
 
@@ -322,6 +357,7 @@ def test_full_disk_exit_3_names_file_and_leaves_no_summary(tmp_path, capsys, mon
     assert "summary.json" not in names(out) and "RUNNING" in names(out)
     with pytest.raises(IOFailure, match="mesh.vtu: No space left on device") as e:
         from solidshell.run import run_scene
+
         run_scene("strip-warp", mesh="4x1", solver="none", out_dir=out, progress=False)
     assert e.value.path == str(out / "mesh.vtu") and isinstance(e.value, OSError)
 
@@ -329,23 +365,47 @@ def test_full_disk_exit_3_names_file_and_leaves_no_summary(tmp_path, capsys, mon
 # ============================================================================= 3. exit statuses
 def test_not_converged_exit_1_state_written(tmp_path):
     out = tmp_path / "o"
-    r = cli("run", "strip-warp", "--mesh", "2x1", "--solver", "relax", "--set", "solver.relax.max_steps=300",
-            "--set", "output.pictures=[]", "--out", out, "--no-progress")
+    r = cli(
+        "run",
+        "strip-warp",
+        "--mesh",
+        "2x1",
+        "--solver",
+        "relax",
+        "--set",
+        "solver.relax.max_steps=300",
+        "--set",
+        "output.pictures=[]",
+        "--out",
+        out,
+        "--no-progress",
+    )
     assert r.returncode == 1, r.stderr
     s = json.loads((out / "summary.json").read_text())
     assert s["converged"] is False and s["interrupted"] is False and s["steps"] == 300
     assert "NOT converged" in r.stdout and "RUNNING" not in names(out)
     assert sio.read_run_id(out / "result.vtu") == s["run_id"]
     _, U = sio.read_state(out / "result.vtu")
-    assert np.all(np.isfinite(U)) and np.abs(U).max() > 0     # the last state, not zeros
+    assert np.all(np.isfinite(U)) and np.abs(U).max() > 0  # the last state, not zeros
 
 
 @pytest.mark.slow
 def test_static_max_iter_1_exit_1(tmp_path):
     """Static Newton with one iteration per step cannot converge on the drooping strip (70 s today)."""
     out = tmp_path / "o"
-    r = cli("run", "strip-warp", "--mesh", "10x1", "--set", "solver.static.max_iter=1", "--set",
-            "output.pictures=[]", "--out", out, "--no-progress")
+    r = cli(
+        "run",
+        "strip-warp",
+        "--mesh",
+        "10x1",
+        "--set",
+        "solver.static.max_iter=1",
+        "--set",
+        "output.pictures=[]",
+        "--out",
+        out,
+        "--no-progress",
+    )
     assert r.returncode == 1, r.stderr
     s = json.loads((out / "summary.json").read_text())
     assert s["converged"] is False and (out / "result.vtu").exists()
@@ -362,7 +422,7 @@ def test_interrupted_state_written_exit_130(tmp_path, capsys, fake):
     s = json.loads((out / "summary.json").read_text())
     assert s["interrupted"] is True and s["converged"] is False and s["status"] == "interrupted"
     _, U = sio.read_state(out / "result.vtu")
-    assert U[:, 2].min() < 0                                   # the solver's last state
+    assert U[:, 2].min() < 0  # the solver's last state
     assert sio.read_run_id(out / "result.vtu") == s["run_id"] and "RUNNING" not in names(out)
 
 
@@ -375,20 +435,35 @@ def test_ctrl_c_without_state_keeps_earlier_run(tmp_path, capsys, fake):
     fake["solver"] = fake_solver(raise_=KeyboardInterrupt())
     rc = main(["run", "strip-warp", "--mesh", "4x1", "--out", str(out), "--set", "output.pictures=[]"])
     assert rc == 130 and "interrupted" in capsys.readouterr().err
-    assert {n: (out / n).read_bytes() for n in names(out)} == before       # untouched, no marker left
+    assert {n: (out / n).read_bytes() for n in names(out)} == before  # untouched, no marker left
     fake["solver"] = fake_solver(raise_=InputError("restart file x.npz does not match this run"))
     new = tmp_path / "new"
     rc = main(["run", "strip-warp", "--mesh", "4x1", "--out", str(new)])
     one_error_line(capsys.readouterr().err, 2, rc, "x.npz")
-    assert not new.exists()                          # a bad input found by the solver: nothing left
+    assert not new.exists()  # a bad input found by the solver: nothing left
 
 
 def test_sigint_relax_subprocess_exit_130(tmp_path):
     """Ctrl-C on a real relaxation: the solver returns its last state, the runner writes it."""
     out = tmp_path / "o"
     ck = tmp_path / "ck.npz"
-    p = popen("run", "strip-warp", "--mesh", "4x1", "--solver", "relax", "--set", "output.pictures=[]",
-              "--set", "solver.relax.checkpoint_every=50", "--checkpoint", ck, "--out", out, "--no-progress")
+    p = popen(
+        "run",
+        "strip-warp",
+        "--mesh",
+        "4x1",
+        "--solver",
+        "relax",
+        "--set",
+        "output.pictures=[]",
+        "--set",
+        "solver.relax.checkpoint_every=50",
+        "--checkpoint",
+        ck,
+        "--out",
+        out,
+        "--no-progress",
+    )
     t0 = time.time()
     # the first checkpoint says the time stepping has begun (a fixed delay is not enough on a loaded
     # machine: a Ctrl-C before the solver runs writes nothing, by design)
@@ -407,9 +482,11 @@ def test_warnings_listed_and_logged(tmp_path, capsys, fake, monkeypatch):
     from solidshell.cli import main
 
     monkeypatch.setattr(FakeModel, "interpenetrated", 2)
-    fake["solver"] = fake_solver(warnings=["the solver says so"], t_final=0.4,
-                                 info={"max_interpenetrated_nodes": 5, "positive_definite": False,
-                                       "min_tangent_eigenvalue": -2.5e-5})
+    fake["solver"] = fake_solver(
+        warnings=["the solver says so"],
+        t_final=0.4,
+        info={"max_interpenetrated_nodes": 5, "positive_definite": False, "min_tangent_eigenvalue": -2.5e-5},
+    )
     out = tmp_path / "o"
     rc = main(["run", "hang-20", "--mesh", "4x4", "--out", str(out), "--set", 'output.pictures=["top"]'])
     err = capsys.readouterr().err.strip().splitlines()
@@ -424,8 +501,9 @@ def test_warnings_listed_and_logged(tmp_path, capsys, fake, monkeypatch):
     assert {"iso_t0.000.png", "iso_t0.100.png", "iso_t0.400.png"} <= set(s["files"])
     assert not any("2.100" in f for f in s["files"])
     # a snapshot the solver already reported as dropped is not reported twice
-    fake["solver"] = fake_solver(warnings=["snapshot time(s) 2.1 s after t_end = 0.4 s dropped"],
-                                 info={"snapshots_after_t_end_dropped": [2.1]})
+    fake["solver"] = fake_solver(
+        warnings=["snapshot time(s) 2.1 s after t_end = 0.4 s dropped"], info={"snapshots_after_t_end_dropped": [2.1]}
+    )
     monkeypatch.setattr(FakeModel, "interpenetrated", 0)
     assert main(["run", "hang-20", "--mesh", "4x4", "--out", str(out), "--set", "output.pictures=[]"]) == 0
     s = json.loads((out / "summary.json").read_text())
@@ -454,7 +532,7 @@ def test_progress_bar_appears_within_a_second_and_moves(monkeypatch):
     err = _Tty()
     monkeypatch.setattr(sys, "stderr", err)
     bar = _Bar("strip")
-    time.sleep(0.9)                       # no progress call at all (a solver busy compiling)
+    time.sleep(0.9)  # no progress call at all (a solver busy compiling)
     first = err.getvalue()
     bar(0.5, "load factor 0.5")
     time.sleep(0.6)
@@ -462,7 +540,7 @@ def test_progress_bar_appears_within_a_second_and_moves(monkeypatch):
     bar.close()
     assert "strip:   0%" in first
     assert "strip:  50%" in second and "load factor 0.5" in second
-    monkeypatch.setattr(sys, "stderr", _stdio.StringIO())       # not a terminal: nothing drawn
+    monkeypatch.setattr(sys, "stderr", _stdio.StringIO())  # not a terminal: nothing drawn
     quiet = _Bar("strip")
     quiet(0.5, "x")
     time.sleep(0.6)
@@ -473,8 +551,8 @@ def test_progress_bar_appears_within_a_second_and_moves(monkeypatch):
 # ============================================================================= 6. build_problem
 def test_build_problem_public():
     import solidshell
-    from solidshell.scenes.build import build_scene_mesh, support_mask
     from solidshell.scenes import load
+    from solidshell.scenes.build import build_scene_mesh, support_mask
 
     sc = load("sphere")
     mesh, _ = build_scene_mesh(sc, "4x4")
@@ -489,8 +567,17 @@ def test_build_problem_public():
 def _kill_and_restart(tmp_path, kind, sets):
     """Uninterrupted run A; run B with a checkpoint, SIGKILLed mid-run in A's folder; run C restarted
     from B's checkpoint in the same folder.  C's final state must equal A's bit for bit."""
-    common = ["run", "strip-warp", "--mesh", "2x1", "--solver", kind, "--set", "output.pictures=[]",
-              "--no-progress"] + [x for k in sets for x in ("--set", f"solver.{kind}.{k}")]
+    common = [
+        "run",
+        "strip-warp",
+        "--mesh",
+        "2x1",
+        "--solver",
+        kind,
+        "--set",
+        "output.pictures=[]",
+        "--no-progress",
+    ] + [x for k in sets for x in ("--set", f"solver.{kind}.{k}")]
     out = tmp_path / "o"
     a = cli(*common, "--out", out)
     assert a.returncode == 0, a.stderr
@@ -498,7 +585,7 @@ def _kill_and_restart(tmp_path, kind, sets):
     _, UA = sio.read_state(out / "result.vtu")
     files_a = {n: (out / n).read_bytes() for n in names(out)}
 
-    ck = out / "state.ckpt.npz"                    # in the output folder: this run's, not foreign
+    ck = out / "state.ckpt.npz"  # in the output folder: this run's, not foreign
     b = popen(*common, "--out", out, "--checkpoint", ck, "--set", f"solver.{kind}.checkpoint_every=500")
     t0 = time.time()
     while not ck.exists() and b.poll() is None and time.time() - t0 < 120:
@@ -534,8 +621,13 @@ def test_run_output_problem_is_the_one_solved():
     the bound 1e-6 leaves room for the round-off of re-evaluating the force in another call."""
     from solidshell.run import run_scene
 
-    out = run_scene("strip-warp", mesh="4x1", out_dir=None, progress=False,
-                    overrides={"output.pictures": [], "output.snapshots": []})
+    out = run_scene(
+        "strip-warp",
+        mesh="4x1",
+        out_dir=None,
+        progress=False,
+        overrides={"output.pictures": [], "output.snapshots": []},
+    )
     pb = out.problem
     assert pb.model.n_nodes == out.mesh.n_nodes
     free = ~np.asarray(pb.fixed, bool).reshape(-1)

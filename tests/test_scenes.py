@@ -8,8 +8,17 @@ import pytest
 
 from solidshell import InputError, meshing, scenes
 
-PAPER_SCENES = ["circle-pedestal", "hang-100", "hang-20", "large-square-pedestal", "sphere",
-                "square-on-disc", "square-pedestal", "strip-warp", "strip-weft"]
+PAPER_SCENES = [
+    "circle-pedestal",
+    "hang-100",
+    "hang-20",
+    "large-square-pedestal",
+    "sphere",
+    "square-on-disc",
+    "square-pedestal",
+    "strip-warp",
+    "strip-weft",
+]
 
 
 def expected_counts(recipe, density):
@@ -17,9 +26,9 @@ def expected_counts(recipe, density):
     n = [int(x) for x in density.split("x")]
     if recipe in ("strip", "square"):
         return (n[0] + 1) * (n[1] + 1), n[0] * n[1]
-    if recipe == "square_on_square":          # A along the pedestal edge x B outward x 4 panels
+    if recipe == "square_on_square":  # A along the pedestal edge x B outward x 4 panels
         return 4 * n[0] * (n[1] + 1), 4 * n[0] * n[1]
-    return (n[0] + 1) * n[1], n[0] * n[1]     # R radial/outward x C around (closed ring)
+    return (n[0] + 1) * n[1], n[0] * n[1]  # R radial/outward x C around (closed ring)
 
 
 def test_available_is_the_paper_set():
@@ -39,7 +48,7 @@ def test_scene_contents():
     assert sp.recipe == "square_on_square" and sp.geometry["sheet"] == 20.0 and sp.geometry["pedestal"] == 10.0
     assert sp.density == "48x16x4"
     assert sp.mesh["paper_meshes"] == ["24x8x4", "48x16x4", "6x2x4"]
-    assert sp.mesh["adaptive_level0"] == "6x2x4"          # 48 quads, Sec. 6.1
+    assert sp.mesh["adaptive_level0"] == "6x2x4"  # 48 quads, Sec. 6.1
     assert sp.supports == {"clamped": ("clamped",)} and sp.solver["kind"] == "static"
     assert sp.solver["relax"] == {"preset": "fast"}
     assert scenes.load("strip-weft").material_object().warp_angle == 90.0
@@ -63,7 +72,7 @@ def test_scene_contents():
     assert sph.mesh["adaptive_level0"] == "16x16" and "100x100" in sph.mesh["paper_meshes"]
     (ball,) = sph.contact
     assert ball["type"] == "sphere" and ball["radius"] == 5.0
-    assert ball["centre"][2] + ball["radius"] == pytest.approx(-0.0593 / 2)   # top touches the lower face
+    assert ball["centre"][2] + ball["radius"] == pytest.approx(-0.0593 / 2)  # top touches the lower face
     assert sph.supports == {}
 
 
@@ -86,7 +95,9 @@ def test_meshes_build_with_paper_counts(name):
     if s.recipe == "square":
         assert m.area() == pytest.approx(s.geometry["size"] ** 2, rel=1e-12)
         assert sorted(map(tuple, m.nodes[m.node_set("hung"), :2])) == [
-            (-s.geometry["size"] / 2, s.geometry["size"] / 2), (s.geometry["size"] / 2, s.geometry["size"] / 2)]
+            (-s.geometry["size"] / 2, s.geometry["size"] / 2),
+            (s.geometry["size"] / 2, s.geometry["size"] / 2),
+        ]
     if s.recipe == "strip":
         assert m.area() == pytest.approx(5.0, rel=1e-12)
         assert np.all(m.nodes[m.node_set("clamped"), 0] == 0.0)
@@ -116,19 +127,22 @@ def test_user_scene_minimal(tmp_path):
     assert s.loads["gravity"] is True and s.material == {"fabric": "wool"}
 
 
-@pytest.mark.parametrize("extra, key", [
-    ("colour = 'red'\n", "colour"),
-    ("[meshh]\ndensity='4x4'\n", "meshh"),
-    ("[material]\nfabric='wool'\nbending_wrap=0.1\n", "material.bending_wrap"),
-    ("[supports]\nclampd='outer'\n", "supports.clampd"),
-    ("[loads]\ngravityy=true\n", "loads.gravityy"),
-    ("[[contact]]\ntype='sphere'\ncentre=[0,0,-5]\nradius=5\nradiuss=3\n", "contact[0].radiuss"),
-    ("[solver]\nkind='static'\nstaticc={}\n", "solver.staticc"),
-    ("[output]\npictures=['top']\nmovie=true\n", "output.movie"),
-    ("[model]\nthickness='green'\n", "model.thickness"),
-])
+@pytest.mark.parametrize(
+    "extra, key",
+    [
+        ("colour = 'red'\n", "colour"),
+        ("[meshh]\ndensity='4x4'\n", "meshh"),
+        ("[material]\nfabric='wool'\nbending_wrap=0.1\n", "material.bending_wrap"),
+        ("[supports]\nclampd='outer'\n", "supports.clampd"),
+        ("[loads]\ngravityy=true\n", "loads.gravityy"),
+        ("[[contact]]\ntype='sphere'\ncentre=[0,0,-5]\nradius=5\nradiuss=3\n", "contact[0].radiuss"),
+        ("[solver]\nkind='static'\nstaticc={}\n", "solver.staticc"),
+        ("[output]\npictures=['top']\nmovie=true\n", "output.movie"),
+        ("[model]\nthickness='green'\n", "model.thickness"),
+    ],
+)
 def test_unknown_key_names_key_and_file(tmp_path, extra, key):
-    text = BASE.replace('[geometry]', extra + '[geometry]') if not extra.startswith("[") else BASE + extra
+    text = BASE.replace("[geometry]", extra + "[geometry]") if not extra.startswith("[") else BASE + extra
     p = write(tmp_path, text)
     with pytest.raises(InputError, match=re.escape(f"{p}: {key}: unknown key (allowed here: ")) as e:
         scenes.load(p)
@@ -142,29 +156,34 @@ def test_unknown_geometry_key(tmp_path):
         scenes.load(p)
 
 
-@pytest.mark.parametrize("old, new, key", [
-    ("size = 10.0", 'size = "ten"', "geometry.size"),
-    ("size = 10.0", "size = -1.0", "geometry.size"),
-    ('density = "4x4"', "density = 44", "mesh.density"),
-    ('title = "my sheet"', "title = 3", "title"),
-    ('[mesh]', '[loads]\ngravity = "yes"\n[mesh]', "loads.gravity"),
-    ('[mesh]', '[material]\nfabric = "wool"\nthickness = "thin"\n[mesh]', "material.thickness"),
-    ('[mesh]', '[supports]\nclamped = 3\n[mesh]', "supports.clamped"),
-    ('[mesh]', '[solver]\nkind = "implicit"\n[mesh]', "solver.kind"),
-    ('[mesh]', '[output]\nsnapshots = [0.4, 0.1]\n[mesh]', "output.snapshots"),
-    ('[mesh]', '[[contact]]\ntype = "sphere"\ncentre = [0, 0]\nradius = 5\n[mesh]', "contact[0].centre"),
-    ('[mesh]', '[[contact]]\ntype = "cube"\n[mesh]', "contact[0].type"),
-    ('recipe = "square"', 'recipe = "hexagon"', "geometry.recipe"),
-])
+@pytest.mark.parametrize(
+    "old, new, key",
+    [
+        ("size = 10.0", 'size = "ten"', "geometry.size"),
+        ("size = 10.0", "size = -1.0", "geometry.size"),
+        ('density = "4x4"', "density = 44", "mesh.density"),
+        ('title = "my sheet"', "title = 3", "title"),
+        ("[mesh]", '[loads]\ngravity = "yes"\n[mesh]', "loads.gravity"),
+        ("[mesh]", '[material]\nfabric = "wool"\nthickness = "thin"\n[mesh]', "material.thickness"),
+        ("[mesh]", "[supports]\nclamped = 3\n[mesh]", "supports.clamped"),
+        ("[mesh]", '[solver]\nkind = "implicit"\n[mesh]', "solver.kind"),
+        ("[mesh]", "[output]\nsnapshots = [0.4, 0.1]\n[mesh]", "output.snapshots"),
+        ("[mesh]", '[[contact]]\ntype = "sphere"\ncentre = [0, 0]\nradius = 5\n[mesh]', "contact[0].centre"),
+        ("[mesh]", '[[contact]]\ntype = "cube"\n[mesh]', "contact[0].type"),
+        ('recipe = "square"', 'recipe = "hexagon"', "geometry.recipe"),
+    ],
+)
 def test_wrong_types(tmp_path, old, new, key):
     p = write(tmp_path, BASE.replace(old, new))
-    with pytest.raises(InputError, match=re.escape(f"{p}: {key}: ")) as e:     # file: key: what is wrong
+    with pytest.raises(InputError, match=re.escape(f"{p}: {key}: ")) as e:  # file: key: what is wrong
         scenes.load(p)
     assert key in str(e.value) and str(p) in str(e.value)
 
 
-@pytest.mark.parametrize("field, value", [("bending_warp", 0.0), ("tensile_weft", -5.0), ("thickness", 0.0),
-                                          ("weight", -0.019), ("shear", 0)])
+@pytest.mark.parametrize(
+    "field, value",
+    [("bending_warp", 0.0), ("tensile_weft", -5.0), ("thickness", 0.0), ("weight", -0.019), ("shear", 0)],
+)
 def test_nonpositive_material(tmp_path, field, value):
     p = write(tmp_path, BASE + f"[material]\nfabric = 'wool'\n{field} = {value}\n")
     with pytest.raises(InputError, match=field):
@@ -187,10 +206,12 @@ def test_malformed_density(tmp_path, density):
 
 def test_check_density():
     assert scenes.check_density("48X16×4", "square_on_square") == "48x16x4"
-    for bad, words in (("24x8", "'24x8': recipe 'square_on_square' takes 3 counts"),
-                       ("0x5x4", "'0x5x4': every count must be positive"),
-                       ("-3x4x4", "'-3x4x4': expected positive integers joined by 'x'"),
-                       ("", "'': expected positive integers joined by 'x'")):
+    for bad, words in (
+        ("24x8", "'24x8': recipe 'square_on_square' takes 3 counts"),
+        ("0x5x4", "'0x5x4': every count must be positive"),
+        ("-3x4x4", "'-3x4x4': expected positive integers joined by 'x'"),
+        ("", "'': expected positive integers joined by 'x'"),
+    ):
         with pytest.raises(InputError, match=re.escape(f"malformed mesh density {words}")):
             scenes.check_density(bad, "square_on_square")
 
@@ -203,7 +224,7 @@ def test_missing_and_broken_files(tmp_path):
     with pytest.raises(InputError, match="not valid TOML"):
         scenes.load(write(tmp_path, 'name = "x"\ntitle = ['))
     binary = tmp_path / "binary.toml"
-    binary.write_bytes(b"name = \"\xff\xfe\"\n")
+    binary.write_bytes(b'name = "\xff\xfe"\n')
     with pytest.raises(InputError, match="UTF-8"):
         scenes.load(binary)
     with pytest.raises(InputError, match="is a directory|not found"):
@@ -219,8 +240,11 @@ def test_file_geometry_relative_to_scene(tmp_path):
     sub = tmp_path / "meshes"
     sub.mkdir()
     m.to_meshio().write(sub / "sheet.vtu")
-    p = write(tmp_path, 'name = "f"\ntitle = "from file"\n[geometry]\nfile = "meshes/sheet.vtu"\n'
-                        '[supports]\nfixed_translations = "hung"\n')
+    p = write(
+        tmp_path,
+        'name = "f"\ntitle = "from file"\n[geometry]\nfile = "meshes/sheet.vtu"\n'
+        '[supports]\nfixed_translations = "hung"\n',
+    )
     s = scenes.load(p)
     assert s.geometry["file"] == sub / "sheet.vtu"
     mesh, name = build_scene_mesh(s)
@@ -232,35 +256,58 @@ def test_file_geometry_relative_to_scene(tmp_path):
 # ----------------------------------------------------------------------------- overrides
 def test_with_overrides():
     s = scenes.load("square-pedestal")
-    t = s.with_overrides({"mesh.density": "24x8x4", "solver.static.c": 2e-3, "material.warp_angle": 90,
-                          "solver.kind": "relax", "solver.relax.alpha": 1.0})
-    assert t.density == "24x8x4" and t.solver["static"] == {"sequence": "auto", "c": 2e-3} and t.solver["kind"] == "relax"
+    t = s.with_overrides(
+        {
+            "mesh.density": "24x8x4",
+            "solver.static.c": 2e-3,
+            "material.warp_angle": 90,
+            "solver.kind": "relax",
+            "solver.relax.alpha": 1.0,
+        }
+    )
+    assert (
+        t.density == "24x8x4" and t.solver["static"] == {"sequence": "auto", "c": 2e-3} and t.solver["kind"] == "relax"
+    )
     assert t.material_object().warp_angle == 90.0
     assert t.solver_settings() == {"preset": "fast", "alpha": 1.0}
-    assert s.density == "48x16x4" and s.solver["static"] == {"sequence": "auto"}          # the original is unchanged
+    assert s.density == "48x16x4" and s.solver["static"] == {"sequence": "auto"}  # the original is unchanged
     c = scenes.load("sphere").with_overrides({"contact.0.radius": 6.0})
     assert c.contact[0]["radius"] == 6.0
     assert s.with_overrides({}) is s
 
 
-@pytest.mark.parametrize("over, match", [
-    ({"mesh.densty": "24x8x4"}, "mesh.densty"),
-    ({"mesh.density": "24x8"}, "density"),
-    ({"material.thickness": 0.0}, "thickness"),
-    ({"geometry.sheet": "big"}, "geometry.sheet"),
-    ({"nonsense": 1}, "nonsense"),
-    ({"contact.3.radius": 1.0}, "contact"),
-    ({"a..b": 1}, "dotted key"),
-])
+@pytest.mark.parametrize(
+    "over, match",
+    [
+        ({"mesh.densty": "24x8x4"}, "mesh.densty"),
+        ({"mesh.density": "24x8"}, "density"),
+        ({"material.thickness": 0.0}, "thickness"),
+        ({"geometry.sheet": "big"}, "geometry.sheet"),
+        ({"nonsense": 1}, "nonsense"),
+        ({"contact.3.radius": 1.0}, "contact"),
+        ({"a..b": 1}, "dotted key"),
+    ],
+)
 def test_bad_overrides(over, match):
     with pytest.raises(InputError, match=match):
         scenes.load("square-pedestal").with_overrides(over)
 
 
 def test_parse_overrides():
-    assert scenes.parse_overrides(["solver.static.c=2e-3", "mesh.density=24x8x4", "loads.gravity=false",
-                                   "output.snapshots=[0, 0.5]", 'name="x y"']) == {
-        "solver.static.c": 2e-3, "mesh.density": "24x8x4", "loads.gravity": False,
-        "output.snapshots": [0, 0.5], "name": "x y"}
+    assert scenes.parse_overrides(
+        [
+            "solver.static.c=2e-3",
+            "mesh.density=24x8x4",
+            "loads.gravity=false",
+            "output.snapshots=[0, 0.5]",
+            'name="x y"',
+        ]
+    ) == {
+        "solver.static.c": 2e-3,
+        "mesh.density": "24x8x4",
+        "loads.gravity": False,
+        "output.snapshots": [0, 0.5],
+        "name": "x y",
+    }
     with pytest.raises(InputError, match="key=value"):
         scenes.parse_overrides(["solver.static.c"])

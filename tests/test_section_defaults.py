@@ -3,7 +3,6 @@ Poisson coupling of the fabric unstated (DESIGN.md).  material.Fabric chooses C_
 E_z = T_mean, nu = 0; these tests show that the drape of the wool strip (Section 3.1) does not
 depend on the first two over two decades, and measure the dependence on the coupling."""
 
-import numpy as np
 import pytest
 
 from solidshell import Fabric, Model, solve_static
@@ -47,4 +46,4 @@ def test_poisson_coupling_is_a_small_physical_effect(strip):
     d3 = tip_z(strip, Fabric.wool(poisson=0.3)) / z0 - 1.0
     assert 0.0 < d1 < 2e-3
     assert 3e-3 < d3 < 2e-2
-    assert d3 / d1 == pytest.approx(9.0, rel=0.25)      # quadratic in nu
+    assert d3 / d1 == pytest.approx(9.0, rel=0.25)  # quadratic in nu

@@ -11,7 +11,7 @@ from solidshell.solvers import sequence
 
 
 def test_plan_halves_the_letter_fields_of_the_recipe_form():
-    sp = load("square-pedestal")          # form AxBx4: the 4 panels stay
+    sp = load("square-pedestal")  # form AxBx4: the 4 panels stay
     assert sequence.plan(sp, "48x16x4", 3072, "auto") == ["12x4x4", "24x8x4"]
     assert sequence.plan(sp, "48x16x4", 3072, 1) == ["24x8x4"]
     assert sequence.plan(sp, "48x16x4", 3072, 0) == []
@@ -34,8 +34,9 @@ def test_prolong_reproduces_linear_fields_exactly():
 
     def field(X):
         x, y = X[:, 0], X[:, 1]
-        return np.column_stack([0.1 * x - 0.3 * y + 1.0, 0.2 * y, -0.05 * x, 0.01 * x * 0 + 0.3,
-                                0.02 * y, 0.5 - 0.01 * x])
+        return np.column_stack(
+            [0.1 * x - 0.3 * y + 1.0, 0.2 * y, -0.05 * x, 0.01 * x * 0 + 0.3, 0.02 * y, 0.5 - 0.01 * x]
+        )
 
     U = sequence.prolong(coarse, field(coarse.nodes), fine)
     assert np.abs(U - field(fine.nodes))[:, :3].max() <= 1e-12 * np.abs(field(fine.nodes)).max()
@@ -77,7 +78,7 @@ def test_static_settings_sequence_and_start_state_are_checked():
     from solidshell.settings import parse
     from solidshell.solvers.static import StaticSettings, solve_static
 
-    assert parse(StaticSettings, {}, "s").sequence == 0        # off unless a scene asks
+    assert parse(StaticSettings, {}, "s").sequence == 0  # off unless a scene asks
     assert load("square-pedestal").solver_settings("static")["sequence"] == "auto"
     assert parse(StaticSettings, {"sequence": 2}, "s").sequence == 2
     # a run's setting (the mesh sequence is built from the scene): one solve refuses it by name
@@ -96,10 +97,8 @@ def test_sequenced_solve_reaches_the_direct_equilibrium(monkeypatch):
     from solidshell.run import run_scene
 
     monkeypatch.setattr(sequence, "MIN_ELEMENTS", 40)
-    direct = run_scene("square-pedestal", mesh="12x4x4", solver="static", out_dir=None,
-                       progress=False, sequence=0)
-    seq = run_scene("square-pedestal", mesh="12x4x4", solver="static", out_dir=None,
-                    progress=False, sequence=1)
+    direct = run_scene("square-pedestal", mesh="12x4x4", solver="static", out_dir=None, progress=False, sequence=0)
+    seq = run_scene("square-pedestal", mesh="12x4x4", solver="static", out_dir=None, progress=False, sequence=1)
     rec = seq.summary["sequence"]
     assert [r["mesh"] for r in rec] == ["6x2x4", "12x4x4"] and rec[-1]["from_coarse"]
     assert "sequence" not in direct.summary
@@ -122,10 +121,10 @@ def test_the_sequenced_fine_mesh_takes_cg_steps_to_the_same_equilibrium(monkeypa
 
     monkeypatch.setattr(sequence, "MIN_ELEMENTS", 40)
     monkeypatch.setattr(newton, "PCG_MIN_DOFS", 0)
-    cg = run_scene("square-pedestal", mesh="12x4x4", solver="static", out_dir=None, progress=False,
-                   sequence=1)
-    exact = run_scene("square-pedestal", mesh="12x4x4", solver="static", out_dir=None,
-                      progress=False, sequence=1, pcg_iterations=0)
+    cg = run_scene("square-pedestal", mesh="12x4x4", solver="static", out_dir=None, progress=False, sequence=1)
+    exact = run_scene(
+        "square-pedestal", mesh="12x4x4", solver="static", out_dir=None, progress=False, sequence=1, pcg_iterations=0
+    )
     assert cg.converged and exact.converged and cg.summary["positive_definite"]
     assert cg.summary["cg_steps"] > 0 and exact.summary["cg_steps"] == 0
     assert cg.summary["cg_iterations"] >= cg.summary["cg_steps"]
@@ -157,8 +156,7 @@ def test_run_without_pictures_writes_no_png(tmp_path):
     from solidshell.cli import main
 
     out = tmp_path / "strip"
-    assert main(["run", "strip-warp", "--mesh", "10x1", "--out", str(out), "--no-progress",
-                 "--no-pictures"]) == 0
+    assert main(["run", "strip-warp", "--mesh", "10x1", "--out", str(out), "--no-progress", "--no-pictures"]) == 0
     names = {p.name for p in out.iterdir()}
     assert "summary.json" in names and "result.vtu" in names
     assert not [n for n in names if n.endswith(".png")]
@@ -172,10 +170,22 @@ def test_an_interpenetrated_coarse_state_is_not_a_start():
     from solidshell.run import run_scene
 
     over = {"model.membrane": "ans", "geometry.grading": 8.0}
-    seq = run_scene("square-pedestal", mesh="24x8x4", solver="static", out_dir=None, progress=False,
-                    overrides={**over, "solver.static.sequence": 1})
-    direct = run_scene("square-pedestal", mesh="24x8x4", solver="static", out_dir=None, progress=False,
-                       overrides={**over, "solver.static.sequence": 0})
+    seq = run_scene(
+        "square-pedestal",
+        mesh="24x8x4",
+        solver="static",
+        out_dir=None,
+        progress=False,
+        overrides={**over, "solver.static.sequence": 1},
+    )
+    direct = run_scene(
+        "square-pedestal",
+        mesh="24x8x4",
+        solver="static",
+        out_dir=None,
+        progress=False,
+        overrides={**over, "solver.static.sequence": 0},
+    )
     rec = seq.summary["sequence"]
     assert [r["mesh"] for r in rec] == ["12x4x4", "24x8x4"]
     assert rec[0]["interpenetrated"] and not rec[-1]["from_coarse"]

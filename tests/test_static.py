@@ -32,15 +32,18 @@ def tip_z(mesh, U):
 
 # ----------------------------------------------------------------------------- heavy strip
 @pytest.mark.parametrize("cut", ["warp", "weft"])
-@pytest.mark.parametrize("n, tol", [
-    # 20x1: measured 0.12 % (warp and weft); the error falls as h^2 (verification/strip.py) to a
-    # floor of ~1e-4 set by the shell's own extensibility / thickness stretch, which the
-    # inextensible elastica lacks.  0.5 % leaves a 4x margin and still catches a wrong rigidity
-    # (warp vs weft differ by 2.5 % in tip deflection) or a wrong load (1 % weight -> ~0.3 %).
-    (20, 5e-3),
-    # 10x1: measured 0.45 %; the paper shows 10x1 close to but visibly off the reference (Fig. 4b).
-    (10, 2e-2),
-])
+@pytest.mark.parametrize(
+    "n, tol",
+    [
+        # 20x1: measured 0.12 % (warp and weft); the error falls as h^2 (verification/strip.py) to a
+        # floor of ~1e-4 set by the shell's own extensibility / thickness stretch, which the
+        # inextensible elastica lacks.  0.5 % leaves a 4x margin and still catches a wrong rigidity
+        # (warp vs weft differ by 2.5 % in tip deflection) or a wrong load (1 % weight -> ~0.3 %).
+        (20, 5e-3),
+        # 10x1: measured 0.45 %; the paper shows 10x1 close to but visibly off the reference (Fig. 4b).
+        (10, 2e-2),
+    ],
+)
 def test_strip_tip_against_heavy_elastica(cut, n, tol):
     mesh, model, fixed, P = wool_strip(n, cut)
     r = solve_static(model, fixed, P)
@@ -79,12 +82,13 @@ def test_end_moment_rolls_strip_into_circle():
     fixed = clamp(mesh, "clamped")
     fixed[tip, 3:] = True
 
-    def prescribed(lam):   # end directors turned by 2 pi lam about -y
+    def prescribed(lam):  # end directors turned by 2 pi lam about -y
         return director_rotation(mesh, tip, (0.0, -1.0, 0.0), 2.0 * np.pi * lam)
 
-    steps = 32      # 11.25 degrees of end rotation per step
-    r = solve_static(model, fixed, np.zeros((mesh.n_nodes, 6)),
-                     load_factors=np.arange(1, steps + 1) / steps, prescribed=prescribed)
+    steps = 32  # 11.25 degrees of end rotation per step
+    r = solve_static(
+        model, fixed, np.zeros((mesh.n_nodes, 6)), load_factors=np.arange(1, steps + 1) / steps, prescribed=prescribed
+    )
     assert r.converged, r.message
     assert len(r.path) >= steps
     for lam, U in r.path[3::8]:
@@ -133,7 +137,7 @@ def _column(n=8):
     mesh = build_mesh("strip", f"{n}x1", length=L, width=1.0)
     mat = IsotropicShell(E=1.2e6, nu=0.0, h=0.1)
     model = Model(mesh, mat)
-    Pcr = np.pi**2 * mat.C_b[0, 0] / (4 * L**2)   # Euler load of a cantilever (width 1)
+    Pcr = np.pi**2 * mat.C_b[0, 0] / (4 * L**2)  # Euler load of a cantilever (width 1)
     return mesh, model, Pcr
 
 
@@ -142,12 +146,12 @@ def test_unstable_equilibrium_is_reported_and_imperfection_buckles():
     tip = mesh.node_set("tip")
     fixed = clamp(mesh, "clamped")
     P = np.zeros((mesh.n_nodes, 6))
-    P[tip, 0] = -1.5 * Pcr / len(tip)          # axial compression 1.5 x Euler, perfectly straight
+    P[tip, 0] = -1.5 * Pcr / len(tip)  # axial compression 1.5 x Euler, perfectly straight
     # without saddle escapes (issue 11 part 2 made them the default) Newton stops on the straight
     # state, and the stability report says it is a saddle
     r = solve_static(model, fixed, P, max_saddle_escapes=0)
     assert r.converged, r.message
-    assert np.abs(r.U[:, 2]).max() < 1e-8       # stays straight: an equilibrium ...
+    assert np.abs(r.U[:, 2]).max() < 1e-8  # stays straight: an equilibrium ...
     assert r.info["positive_definite"] is False  # ... but an unstable one
     assert r.info["min_tangent_eigenvalue"] < 0
     # by default the solver leaves that saddle along its buckling mode and ends on the elastica
@@ -161,7 +165,7 @@ def test_unstable_equilibrium_is_reported_and_imperfection_buckles():
     r = solve_static(model, fixed, P)
     assert r.converged, r.message
     assert r.info["positive_definite"] is True
-    assert -r.U[tip, 2].mean() > 0.3 * 10.0     # elastica at 1.5 P_cr: tip deflection ~0.7 L
+    assert -r.U[tip, 2].mean() > 0.3 * 10.0  # elastica at 1.5 P_cr: tip deflection ~0.7 L
 
 
 # ----------------------------------------------------------------------------- contract
@@ -170,8 +174,16 @@ def test_never_raises_on_failure_and_reports():
     r = solve_static(model, fixed, P, max_iter=3, max_cutbacks=0)
     assert not r.converged and r.message and "\n" not in r.message
     assert np.all(np.isfinite(r.U))
-    for k in ("solver", "method", "converged", "iterations", "linear_solves",
-              "final_relative_residual", "wall_time_s", "positive_definite"):
+    for k in (
+        "solver",
+        "method",
+        "converged",
+        "iterations",
+        "linear_solves",
+        "final_relative_residual",
+        "wall_time_s",
+        "positive_definite",
+    ):
         assert k in r.info
     json.dumps(r.info)
     # no support at all: the paper's scheme meets a singular tangent and says so
@@ -185,8 +197,7 @@ def test_registry_run_entry():
     prob = Problem(model, fixed, P, name="strip")
     run = get_solver("static")
     calls = []
-    res = run(prob, {"method": "newton", "tol": 1e-9, "load_steps": 2, "t_end": 1.0},
-              lambda f, t: calls.append(f))
+    res = run(prob, {"method": "newton", "tol": 1e-9, "load_steps": 2, "t_end": 1.0}, lambda f, t: calls.append(f))
     assert isinstance(res, SolveResult) and res.converged, res.message
     assert res.info["solver"] == "static" and res.info["method"] == "newton"
     assert res.info["final_relative_residual"] <= 1e-9
@@ -198,8 +209,11 @@ def test_registry_run_entry():
 
 def test_bad_input():
     mesh, model, fixed, P = wool_strip(10, "warp")
-    with pytest.raises(ValueError, match=r"solve_static: setting method = 'dynamic': Input should be "
-                                         r"'newton', 'paper' or 'arclength'"):
+    with pytest.raises(
+        ValueError,
+        match=r"solve_static: setting method = 'dynamic': Input should be "
+        r"'newton', 'paper' or 'arclength'",
+    ):
         solve_static(model, fixed, P, method="dynamic")
     with pytest.raises(ValueError, match="every dof is fixed: nothing to solve"):
         solve_static(model, np.ones_like(fixed), P)
@@ -227,21 +241,21 @@ def test_arclength_passes_limit_point_of_shallow_arch():
     point, follows the unstable branch with *decreasing* load while the deflection keeps growing,
     and reaches the target load on the inverted (stable) branch; load-controlled Newton at the
     same load lands on the same inverted state."""
-    from test_static_robust import _arch      # pinned support, plane problem, symmetry at mid-span
+    from test_static_robust import _arch  # pinned support, plane problem, symmetry at mid-span
 
     mesh, model, fixed, mid = _arch()
     rise = 0.15
     P = np.zeros((mesh.n_nodes, 6))
-    P[mid, 2] = -5.0 / len(mid)                 # half of a central load of 10 (limit load ~4)
+    P[mid, 2] = -5.0 / len(mid)  # half of a central load of 10 (limit load ~4)
     r = solve_static(model, fixed, P, method="arclength")
     assert r.converged, r.message
     lam = np.array([l for l, _ in r.path])
     w = np.array([-U[mid, 2].mean() for _, U in r.path])
-    k = int(np.flatnonzero(np.diff(lam) < 0)[0])   # first limit point
-    assert 0.1 < lam[k] < 0.9                   # a limit point below the target load ...
-    assert lam[k + 1:].min() < lam[k] - 0.1     # ... passed with decreasing load ...
-    assert np.all(np.diff(w) > 0)               # ... while the deflection grows monotonically
-    assert w[-1] > 2 * rise                     # snapped through: inverted
+    k = int(np.flatnonzero(np.diff(lam) < 0)[0])  # first limit point
+    assert 0.1 < lam[k] < 0.9  # a limit point below the target load ...
+    assert lam[k + 1 :].min() < lam[k] - 0.1  # ... passed with decreasing load ...
+    assert np.all(np.diff(w) > 0)  # ... while the deflection grows monotonically
+    assert w[-1] > 2 * rise  # snapped through: inverted
     assert r.info["positive_definite"] is True
     n = solve_static(model, fixed, P)
     assert n.converged, n.message

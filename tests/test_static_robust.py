@@ -26,7 +26,7 @@ def wool_like_strip(units, load, n=10):
     """A 5 x 1 cm cantilever strip with the wool-weight isotropic section of issue 11 (E h = 1118
     gf/cm, D = 0.083 gf cm, weight 0.019 gf/cm^2), clamped at x = 0, under ``load`` times its own
     weight, expressed in ``units``.  Returns (mesh, model, fixed, P, length unit in cm)."""
-    fu, lu = UNITS[units]               # 1 force unit = fu gf, 1 length unit = lu cm
+    fu, lu = UNITS[units]  # 1 force unit = fu gf, 1 length unit = lu cm
     mesh = build_mesh("strip", f"{n}x1", length=5.0 / lu, width=1.0 / lu)
     mat = IsotropicShell(E=37457.0 / fu * lu**2, nu=0.0, h=0.02985 / lu)
     model = Model(mesh, mat)
@@ -46,7 +46,7 @@ def unit_load_table():
             mesh, model, fixed, P, lu = wool_like_strip(units, load)
             r = solve_static(model, fixed, P)
             U = r.U.copy()
-            U[:, :3] *= lu                  # positions in cm; the director dofs are unit-free
+            U[:, :3] *= lu  # positions in cm; the director dofs are unit-free
             out[units, load] = (r.info["iterations"], U, r)
     return out
 
@@ -100,7 +100,7 @@ def test_clamped_plate_linear_regime(units, h):
     assert r.converged, r.message
     assert r.info["iterations"] <= 3
     D = 1e6 * h**3 / (12 * (1 - nu**2))
-    w = np.abs(r.U[:, 2]).max() * lu      # cm
+    w = np.abs(r.U[:, 2]).max() * lu  # cm
     assert w == pytest.approx(0.00126 * 1e-6 / D, rel=3e-2)
 
 
@@ -109,7 +109,7 @@ def _column(n=8):
     L = 10.0
     mesh = build_mesh("strip", f"{n}x1", length=L, width=1.0)
     mat = IsotropicShell(E=1.2e6, nu=0.0, h=0.1)
-    Pcr = np.pi**2 * mat.C_b[0, 0] / (4 * L**2)   # Euler load of a cantilever (width 1)
+    Pcr = np.pi**2 * mat.C_b[0, 0] / (4 * L**2)  # Euler load of a cantilever (width 1)
     return mesh, Model(mesh, mat), Pcr
 
 
@@ -125,7 +125,7 @@ def test_starts_exactly_at_a_symmetric_saddle_and_ends_at_a_minimum():
     P = np.zeros((mesh.n_nodes, 6))
     P[tip, 0] = -1.5 * Pcr / len(tip)
     held = fixed.copy()
-    held[:, 2] = held[:, 5] = True                     # no lateral motion: the straight branch
+    held[:, 2] = held[:, 5] = True  # no lateral motion: the straight branch
     straight = solve_static(model, held, P, check_stability=False)
     assert straight.converged, straight.message
     r = solve_static(model, fixed, P, U0=straight.U)
@@ -134,7 +134,10 @@ def test_starts_exactly_at_a_symmetric_saddle_and_ends_at_a_minimum():
     assert r.info["saddle_eigenvalues"][0] < 0
     assert len(r.info["warnings"]) == 1 and "saddle" in r.info["warnings"][0]
     assert r.info["positive_definite"] is True and r.info["min_tangent_eigenvalue"] > 0
-    pot = lambda U: model.energy(U) - float(np.sum(P * U))
+
+    def pot(U):
+        return model.energy(U) - float(np.sum(P * U))
+
     assert pot(r.U) < pot(straight.U) - 1e-3 * abs(pot(straight.U))
     # the elastica of a cantilever at 1.5 P_cr deflects its tip by ~0.7 L sideways
     assert np.abs(r.U[tip, 2]).mean() > 0.3 * 10.0
@@ -178,7 +181,7 @@ def test_ctrl_c_returns_the_last_iterate():
 
     r = solve_static(model, fixed, P, progress=progress)
     assert not r.converged and r.info["status"] == "interrupted"
-    assert np.all(np.isfinite(r.U)) and np.any(r.U)        # a real iterate, not the start
+    assert np.all(np.isfinite(r.U)) and np.any(r.U)  # a real iterate, not the start
     assert r.info["warnings"]
 
 
@@ -187,7 +190,7 @@ def test_progress_starts_at_once_and_moves_monotonically():
     seen = []
     r = solve_static(model, fixed, P, progress=lambda f, t: seen.append((f, t)))
     assert r.converged
-    assert seen[0][0] == 0.0                               # before any assembly
+    assert seen[0][0] == 0.0  # before any assembly
     fr = [f for f, _ in seen]
     assert all(b >= a for a, b in zip(fr, fr[1:])) and fr[-1] == 1.0
     # one call per iteration at least, and intermediate values in between
@@ -195,9 +198,20 @@ def test_progress_starts_at_once_and_moves_monotonically():
     assert len({round(f, 3) for f in fr if 0.0 < f < 1.0}) >= 5
 
 
-@pytest.mark.parametrize("bad", [{"tol": "abc"}, {"max_iter": "abc"}, {"load_factors": ["a"]},
-                                 {"tol": -1}, {"tol": 0}, {"max_iter": 0}, {"load_factors": []},
-                                 {"method": "dynamic"}, {"cc": 0.01}])
+@pytest.mark.parametrize(
+    "bad",
+    [
+        {"tol": "abc"},
+        {"max_iter": "abc"},
+        {"load_factors": ["a"]},
+        {"tol": -1},
+        {"tol": 0},
+        {"max_iter": 0},
+        {"load_factors": []},
+        {"method": "dynamic"},
+        {"cc": 0.01},
+    ],
+)
 def test_bad_settings_are_one_line_input_errors(bad):
     mesh, model, fixed, P, _ = wool_like_strip("gf-cm", 1.0)
     # "setting tol = ...", "setting load_factors.0 = ...", "unknown setting 'cc' ..."
@@ -209,8 +223,9 @@ def test_bad_settings_are_one_line_input_errors(bad):
         validate("static", bad)
 
 
-@pytest.mark.parametrize("bad", [{"tol": -1}, {"max_iter": 0}, {"load_factors": []}, {"cc": 0.01},
-                                 {"line_search": "wolfe"}])
+@pytest.mark.parametrize(
+    "bad", [{"tol": -1}, {"max_iter": 0}, {"load_factors": []}, {"cc": 0.01}, {"line_search": "wolfe"}]
+)
 def test_solve_static_options_are_the_settings(bad):
     """solve_static's keyword options are StaticSettings' fields, checked by that one model: a bad
     value or an unknown key is one InputError line naming it, before any work."""
@@ -239,6 +254,7 @@ def test_settings_and_options_give_the_same_solve():
 # ----------------------------------------------------------------------------- arc-length
 def _arch():
     from solidshell import ShellMesh
+
     S, rise, nx = 10.0, 0.15, 10
     x = np.linspace(0.0, S / 2, nx + 1)
     z = rise * (1 - (2 * x / S - 1) ** 2)
@@ -271,19 +287,18 @@ def test_fine_arclength_path_matches_displacement_control():
     assert len(r.path) >= 2 * len(coarse.path) and len(r.path) >= 40
     lam = np.array([l for l, _ in r.path])
     w = np.array([-U[mid, 2].mean() for _, U in r.path])
-    k_lim = int(np.flatnonzero(np.diff(lam) < 0)[0])     # the first limit point
+    k_lim = int(np.flatnonzero(np.diff(lam) < 0)[0])  # the first limit point
     peak = 5.0 * lam[k_lim]
     pick = sorted(set(np.linspace(1, len(r.path) - 2, 9).astype(int)) | {k_lim + 2})
-    assert any(i > k_lim for i in pick)                  # at least one past the limit point
+    assert any(i > k_lim for i in pick)  # at least one past the limit point
     dfix = fixed.copy()
     dfix[mid, 2] = True
     for i in pick:
         presc = np.zeros((mesh.n_nodes, 6))
         presc[mid, 2] = -w[i]
-        d = solve_static(model, dfix, np.zeros_like(P), prescribed=presc, U0=r.path[i][1],
-                         check_stability=False)
+        d = solve_static(model, dfix, np.zeros_like(P), prescribed=presc, U0=r.path[i][1], check_stability=False)
         assert d.converged, d.message
-        reaction = -float(model.internal_force(d.U)[mid, 2].sum())    # load carried at mid-span
+        reaction = -float(model.internal_force(d.U)[mid, 2].sum())  # load carried at mid-span
         assert reaction == pytest.approx(5.0 * lam[i], abs=1e-5 * peak), (i, w[i])
 
 

@@ -9,6 +9,7 @@ from solidshell.solvers import static
 
 class _P:
     """A stand-in Problem: run() must refuse unknown settings before touching the model."""
+
     model = None
     fixed = np.zeros((1, 6), bool)
     loads = np.zeros((1, 6))

@@ -36,8 +36,12 @@ def test_local_cluster_sweep_and_resume(tmp_path, capsys):
     assert [r["material.bending_warp"] for r in rows] == [0.06, 0.083]
     assert all(r["status"] == "done" and r["converged"] and r["worker"].startswith("tcp://127.0.0.1") for r in rows)
     # the worker's run is the in-process run: same single-threaded arithmetic, bit for bit
-    ref = run_scene("strip-warp", mesh="10x1", progress=False,
-                    overrides={"solver.static.check_stability": False, "material.bending_warp": 0.083})
+    ref = run_scene(
+        "strip-warp",
+        mesh="10x1",
+        progress=False,
+        overrides={"solver.static.check_stability": False, "material.bending_warp": 0.083},
+    )
     s1 = json.loads((out / "runs" / rows[1]["key"] / "summary.json").read_text())
     assert s1["tip_position"] == ref.summary["tip_position"]
     assert rows[1]["residual"] == ref.summary["final_relative_residual"]

@@ -38,7 +38,7 @@ def test_failed_run_is_counted_named_and_exits_1(tmp_path, capsys):
     bad = spec.runs[2].key
     assert rc == 1
     assert "2 run(s) recorded now, 0 before, 1 failed now, 0 before, 3 in all" in cap.out
-    err = [ln for ln in cap.err.splitlines() if ln.startswith("solidshell:")]   # not the start line
+    err = [ln for ln in cap.err.splitlines() if ln.startswith("solidshell:")]  # not the start line
     assert len(err) == 1 and "run 2 (supports.clamped=no-such-set" in err[0] and bad in err[0]
     assert "InputError" in err[0] and "no node set 'no-such-set'" in err[0]
 
@@ -58,7 +58,7 @@ def test_failed_run_is_counted_named_and_exits_1(tmp_path, capsys):
     dc = rows[0]["drape_coefficient"]
     assert (st["state"], st["fold_count"], st["runs"], st["frequency"]) == ("1", "4", "2", f"{2 / 3:.4f}")
     assert st["dc_min"] == st["dc_mean"] == st["dc_max"] == f"{dc:.4f}"
-    assert st["stable_runs"] == "1"              # only run 1 checked its tangent (positive definite)
+    assert st["stable_runs"] == "1"  # only run 1 checked its tangent (positive definite)
     assert st["representative_key"] == spec.runs[0].key
     assert st["picture"].endswith(f"{spec.runs[0].key}/top.png")
 

@@ -9,24 +9,27 @@ from solidshell.units import CM_IN_M, G0, GF_IN_N, from_si, mass_per_area, to_si
 
 
 def test_constants():
-    assert G0 == 980.665                       # cm/s^2, exact (9.80665 m/s^2)
+    assert G0 == 980.665  # cm/s^2, exact (9.80665 m/s^2)
     assert GF_IN_N == pytest.approx(9.80665e-3, rel=1e-15)
     assert CM_IN_M == 1e-2
     # one gram-force is one gram under standard gravity: 1e-3 kg * 9.80665 m/s^2
     assert GF_IN_N == pytest.approx(1e-3 * G0 * CM_IN_M, rel=1e-15)
 
 
-@pytest.mark.parametrize("kind, value, si", [
-    ("force", 1.0, 9.80665e-3),                       # 1 gf = 9.80665 mN
-    ("length", 1.0, 0.01),                            # 1 cm = 0.01 m
-    ("area", 1.0, 1e-4),
-    ("force_per_length", 1118.2, 1118.2 * 9.80665e-3 / 1e-2),   # tensile rigidity -> N/m
-    ("pressure", 1.0, 98.0665),                       # 1 gf/cm^2 = 98.0665 Pa
-    ("bending_rigidity", 0.083, 0.083 * 9.80665e-3 * 1e-2),     # gf cm^2/cm -> N m
-    ("moment", 1.0, 9.80665e-5),
-    ("acceleration", G0, 9.80665),
-    ("energy", 1.0, 9.80665e-5),                      # gf cm -> J
-])
+@pytest.mark.parametrize(
+    "kind, value, si",
+    [
+        ("force", 1.0, 9.80665e-3),  # 1 gf = 9.80665 mN
+        ("length", 1.0, 0.01),  # 1 cm = 0.01 m
+        ("area", 1.0, 1e-4),
+        ("force_per_length", 1118.2, 1118.2 * 9.80665e-3 / 1e-2),  # tensile rigidity -> N/m
+        ("pressure", 1.0, 98.0665),  # 1 gf/cm^2 = 98.0665 Pa
+        ("bending_rigidity", 0.083, 0.083 * 9.80665e-3 * 1e-2),  # gf cm^2/cm -> N m
+        ("moment", 1.0, 9.80665e-5),
+        ("acceleration", G0, 9.80665),
+        ("energy", 1.0, 9.80665e-5),  # gf cm -> J
+    ],
+)
 def test_to_si(kind, value, si):
     assert to_si(value, kind) == pytest.approx(si, rel=1e-12)
 
@@ -43,7 +46,7 @@ def test_round_trip(kind):
 
 
 def test_mass_per_area_of_wool():
-    mu = mass_per_area(0.019)                  # gf s^2/cm^3
+    mu = mass_per_area(0.019)  # gf s^2/cm^3
     assert mu == pytest.approx(0.019 / 980.665, rel=1e-15)
     # 0.019 gf/cm^2 is 0.019 g/cm^2 = 0.19 kg/m^2
     assert to_si(mu, "mass_per_area") == pytest.approx(0.19, rel=1e-12)

@@ -11,6 +11,7 @@ from verification.checks import cantilevers as locking
 from verification.checks import elements as patch
 from verification.checks import plates
 
+
 # ----------------------------------------------------------------------------- shear locking
 @pytest.mark.parametrize("ratio", [10.0, 1000.0, 10000.0])
 def test_cantilever_quads_no_shear_locking(ratio):
@@ -50,9 +51,11 @@ def test_pure_bending_plane_stress_nu03(kind, support):
 
 
 # ----------------------------------------------------------------------------- patch tests
-@pytest.mark.parametrize("kind,membrane", [
-    (k, "full") for k in ("quads", "tris", "mixed", "quads-rot", "tris-rot", "mixed-rot")] + [
-    (k, "ans") for k in ("quads", "mixed", "quads-rot", "mixed-rot")])   # ans: a quad's option
+@pytest.mark.parametrize(
+    "kind,membrane",
+    [(k, "full") for k in ("quads", "tris", "mixed", "quads-rot", "tris-rot", "mixed-rot")]
+    + [(k, "ans") for k in ("quads", "mixed", "quads-rot", "mixed-rot")],
+)  # ans: a quad's option
 @pytest.mark.parametrize("case", ["membrane", "bending"])
 def test_patch(kind, case, membrane):
     row = patch.run_one(kind, case, membrane=membrane)
@@ -68,17 +71,20 @@ def test_patch(kind, case, membrane):
 
 
 # ----------------------------------------------------------------------------- plates
-@pytest.mark.parametrize("support,lo,hi", [
-    # 16x16 quads, a/h = 1000 (Kirchhoff regime: the Mindlin shear correction is 5e-6), vs the series
-    # (reference/plates.json).  Measured -0.288 % (clamped) and -0.126 % (hard SS), the O(h^2)
-    # discretisation error of a sequence with observed rate 2.00-2.03 from N = 8 to 32; bands of about
-    # +-40 % around them: a wrong boundary condition (clamped <-> SS is a factor 3), a stiffness error
-    # of a few tenths of a percent, or a shear-tying error (tying the quad's director at the corners
-    # instead of the edge mid-points gives -99.9 %) leaves the band.  (Soft and hard SS differ by only
-    # 1e-5 here, at a/h = 1000, so this test does not distinguish them.)
-    ("clamped", -0.0040, -0.0017),
-    ("ss_hard", -0.0018, -0.0007),
-])
+@pytest.mark.parametrize(
+    "support,lo,hi",
+    [
+        # 16x16 quads, a/h = 1000 (Kirchhoff regime: the Mindlin shear correction is 5e-6), vs the series
+        # (reference/plates.json).  Measured -0.288 % (clamped) and -0.126 % (hard SS), the O(h^2)
+        # discretisation error of a sequence with observed rate 2.00-2.03 from N = 8 to 32; bands of about
+        # +-40 % around them: a wrong boundary condition (clamped <-> SS is a factor 3), a stiffness error
+        # of a few tenths of a percent, or a shear-tying error (tying the quad's director at the corners
+        # instead of the edge mid-points gives -99.9 %) leaves the band.  (Soft and hard SS differ by only
+        # 1e-5 here, at a/h = 1000, so this test does not distinguish them.)
+        ("clamped", -0.0040, -0.0017),
+        ("ss_hard", -0.0018, -0.0007),
+    ],
+)
 def test_plate_16x16_quads(support, lo, hi):
     ref = plates.plate_reference()["alpha"]
     exact = ref["clamped"] if support == "clamped" else ref["simply_supported"]
@@ -115,10 +121,13 @@ def test_macneal_harder_beam_out_of_plane(shape):
     assert 0.95 < row["normalised"] < 1.0
 
 
-@pytest.mark.xfail(strict=True, reason="known limitation: the membrane of Eq. (6) is a plain bilinear "
-                   "(Q4) membrane and shear-locks in in-plane bending (measured 0.093 of the reference "
-                   "for 6 rectangular elements of aspect 5, 0.026 trapezoidal); strict, so that an "
-                   "enhanced membrane makes this test pass and be noticed")
+@pytest.mark.xfail(
+    strict=True,
+    reason="known limitation: the membrane of Eq. (6) is a plain bilinear "
+    "(Q4) membrane and shear-locks in in-plane bending (measured 0.093 of the reference "
+    "for 6 rectangular elements of aspect 5, 0.026 trapezoidal); strict, so that an "
+    "enhanced membrane makes this test pass and be noticed",
+)
 def test_macneal_harder_beam_in_plane():
     row = locking.macneal_harder_beam("rectangular", "in-plane")
     assert 0.9 < row["normalised"] < 1.05

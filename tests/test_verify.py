@@ -13,8 +13,20 @@ from verification.checks import CHECKS, references
 from verification.checks.pedestal import check_pedestal_kratos
 from verification.checks.record import Context
 
-FIELDS = {"name", "reference", "source", "quantity", "value", "reference_value", "error", "tolerance", "passed",
-          "wall_time_s", "why", "status"}
+FIELDS = {
+    "name",
+    "reference",
+    "source",
+    "quantity",
+    "value",
+    "reference_value",
+    "error",
+    "tolerance",
+    "passed",
+    "wall_time_s",
+    "why",
+    "status",
+}
 
 
 def test_quick_verification_passes(tmp_path, capsys):
@@ -40,7 +52,7 @@ def test_unknown_check_is_one_line_exit_2(tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert rc == 2 and len(err.splitlines()) == 1
     assert "no-such-check" in err and all(name in err for name in CHECKS)
-    assert not (tmp_path / "o").exists()           # nothing ran, nothing written
+    assert not (tmp_path / "o").exists()  # nothing ran, nothing written
 
 
 def test_unwritable_output_is_exit_3(tmp_path, capsys):
@@ -59,13 +71,14 @@ def test_list_names_every_check(capsys):
 def test_fenicsx_without_dolfinx_is_one_line_exit_2(capsys, monkeypatch, tmp_path):
     # DOLFINx lives under the system python (verification/fenicsx/jobs.py): point that at nothing
     import verification.fenicsx.jobs as jobs
+
     monkeypatch.setattr(jobs, "SYSTEM_PYTHON", str(tmp_path / "no-python"))
     monkeypatch.setattr(jobs.check_dolfinx, "__defaults__", (jobs.SYSTEM_PYTHON,))
     out = tmp_path / "never-written"
     rc = cli.main(["verify", "--fenicsx", "--out", str(out)])
     err = capsys.readouterr().err.strip()
     assert rc == 2 and len(err.splitlines()) == 1 and "dolfinx" in err.lower()
-    assert not out.exists()                      # bad input: nothing written
+    assert not out.exists()  # bad input: nothing written
 
 
 def test_failed_record_gives_exit_1(tmp_path, monkeypatch):
@@ -91,8 +104,8 @@ def test_missing_kratos_reference_is_skipped_not_passed():
 def test_compare_json_finds_a_changed_value():
     old = {"a": [1.0, 2.0], "t": {"x": 1.0, "seconds": 3.0}, "rows": [{"v": 1.0}, {"v": 2.0}]}
     new = copy.deepcopy(old)
-    new["t"]["seconds"] = 99.0                       # bookkeeping: ignored
-    new["rows"] = new["rows"][:1]                    # a quick regeneration has fewer rows: compared
+    new["t"]["seconds"] = 99.0  # bookkeeping: ignored
+    new["rows"] = new["rows"][:1]  # a quick regeneration has fewer rows: compared
     assert references.compare_json(old, new, 1e-9, 0.0) == []
     new["a"][1] = 2.0 + 1e-6
     (d,) = references.compare_json(old, new, 1e-9, 0.0)

@@ -33,8 +33,7 @@ def rot(deg):
 
 
 def rotated_mesh(mesh, R):
-    return ShellMesh(mesh.nodes @ R.T, mesh.quads, mesh.tris, directors=mesh.directors @ R.T,
-                     node_sets=mesh.node_sets)
+    return ShellMesh(mesh.nodes @ R.T, mesh.quads, mesh.tris, directors=mesh.directors @ R.T, node_sets=mesh.node_sets)
 
 
 def rotated_state(U, R):
@@ -52,9 +51,9 @@ def large_deformation(mesh):
     """A generic finite deformation: membrane, bending, shear and thickness strains all non-zero."""
     x, y = mesh.nodes[:, 0], mesh.nodes[:, 1]
     U = np.zeros((mesh.n_nodes, 6))
-    U[:, 0] = 0.05 * x * y + 0.02 * y ** 2
-    U[:, 1] = 0.03 * x ** 2 - 0.04 * x * y
-    U[:, 2] = -0.3 * x ** 2 + 0.2 * x * y
+    U[:, 0] = 0.05 * x * y + 0.02 * y**2
+    U[:, 1] = 0.03 * x**2 - 0.04 * x * y
+    U[:, 2] = -0.3 * x**2 + 0.2 * x * y
     U[:, 3] = 0.1 * y - 0.05 * x
     U[:, 4] = 0.07 * x
     U[:, 5] = 0.01 * x * y
@@ -66,21 +65,24 @@ def bending_deformation(mesh):
     following the normal): bending energy dominates, membrane strain is second order."""
     x, y = mesh.nodes[:, 0], mesh.nodes[:, 1]
     U = np.zeros((mesh.n_nodes, 6))
-    U[:, 2] = 1e-3 * (x ** 2 + 0.7 * x * y - 0.4 * y ** 2)
+    U[:, 2] = 1e-3 * (x**2 + 0.7 * x * y - 0.4 * y**2)
     U[:, 3] = -1e-3 * (2.0 * x + 0.7 * y)
     U[:, 4] = -1e-3 * (0.7 * x - 0.8 * y)
     return U
 
 
-@pytest.mark.parametrize("deformation, e_rtol, f_rtol", [
-    # energy of order 1e4 gf cm with strains O(1): round-off only (measured 1.2e-16; forces 1.3e-15
-    # of max |F|)
-    (large_deformation, 1e-12, 1e-12),
-    # energy 4e-6 gf cm, forces 2e-2 gf, from strains formed as x.x - X.X with |X| ~ 5 cm and
-    # |U| ~ 1e-2: the membrane round-off (C_m eps |X|^2 ~ 1e-12 gf) is a larger share here
-    # (measured 2.2e-12 of E, 2.5e-11 of max |F|); 1e-9 is far below the 21-27 % of a wrong sign
-    (bending_deformation, 1e-9, 1e-9),
-])
+@pytest.mark.parametrize(
+    "deformation, e_rtol, f_rtol",
+    [
+        # energy of order 1e4 gf cm with strains O(1): round-off only (measured 1.2e-16; forces 1.3e-15
+        # of max |F|)
+        (large_deformation, 1e-12, 1e-12),
+        # energy 4e-6 gf cm, forces 2e-2 gf, from strains formed as x.x - X.X with |X| ~ 5 cm and
+        # |U| ~ 1e-2: the membrane round-off (C_m eps |X|^2 ~ 1e-12 gf) is a larger share here
+        # (measured 2.2e-12 of E, 2.5e-11 of max |F|); 1e-9 is far below the 21-27 % of a wrong sign
+        (bending_deformation, 1e-9, 1e-9),
+    ],
+)
 def test_warp_turns_with_the_sheet(strip, deformation, e_rtol, f_rtol):
     U0 = deformation(strip)
     base = Model(strip, Fabric.wool(warp_angle=0.0))
@@ -129,6 +131,7 @@ def mirror_y_permutation(mesh):
 def hanging(strip):
     """Static self-weight drape of the strip clamped at x = 0 (gravity -Z is unchanged by turns
     about Z): warp 0, warp +30 on the sheet turned by +30 (result turned back), warp +30 and -30."""
+
     def solve(mesh, angle):
         model = Model(mesh, Fabric.wool(warp_angle=angle))
         r = solve_static(model, clamp(mesh, "clamped"), gravity_loads(model))
@@ -136,9 +139,12 @@ def hanging(strip):
         return r.U
 
     R = rot(ANGLE)
-    return {"0": solve(strip, 0.0),
-            "turned": rotated_state(solve(rotated_mesh(strip, R), ANGLE), R.T),
-            "+": solve(strip, ANGLE), "-": solve(strip, -ANGLE)}
+    return {
+        "0": solve(strip, 0.0),
+        "turned": rotated_state(solve(rotated_mesh(strip, R), ANGLE), R.T),
+        "+": solve(strip, ANGLE),
+        "-": solve(strip, -ANGLE),
+    }
 
 
 def test_static_drape_turns_with_the_warp(hanging):

@@ -26,8 +26,14 @@ from pathlib import Path
 
 OUT = Path(__file__).resolve().parent / "out"
 
-_LAZY = {"buckling_factors": "common", "linear_solve": "common", "rate": "common", "rect_grid": "common",
-         "split_quads": "common", "plate_reference": "plates"}
+_LAZY = {
+    "buckling_factors": "common",
+    "linear_solve": "common",
+    "rate": "common",
+    "rect_grid": "common",
+    "split_quads": "common",
+    "plate_reference": "plates",
+}
 
 
 def write_json(name: str, data) -> Path:
@@ -45,5 +51,6 @@ def __getattr__(name):
         return getattr(importlib.import_module(f"{__name__}.checks.{_LAZY[name]}"), name)
     if name == "REFERENCE":
         from .checks.references import reference_dir
+
         return reference_dir()
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -40,7 +40,7 @@ def _probe(records):
     orig = _integrator.Integrator.advance
 
     def advance(self, n=None):
-        if n is None or n > CHUNK:              # the uniform run's driver asks for the whole run
+        if n is None or n > CHUNK:  # the uniform run's driver asks for the whole run
             while True:
                 status = advance(self, CHUNK)
                 if status != "running":
@@ -50,8 +50,16 @@ def _probe(records):
         _, a_dir, a_tr = _oscillation(self, orig)
         orig(self, n - 2)
         status, b_dir, b_tr = _oscillation(self, orig)
-        records.append(dict(step=int(self.state.step), t=float(self.state.t), nodes=int(self.N),
-                            director_start=a_dir, director_end=b_dir, translation_end=b_tr))
+        records.append(
+            dict(
+                step=int(self.state.step),
+                t=float(self.state.t),
+                nodes=int(self.N),
+                director_start=a_dir,
+                director_end=b_dir,
+                translation_end=b_tr,
+            )
+        )
         return status
 
     return orig, advance
@@ -63,25 +71,44 @@ def one(label, t_end, **kw):
     _integrator.Integrator.advance = probe
     try:
         t0 = time.perf_counter()
-        out = run_scene("square-pedestal", solver="relax", out_dir=None, progress=False,
-                        overrides={"solver.relax.t_max": t_end, **kw.pop("overrides", {})}, **kw)
+        out = run_scene(
+            "square-pedestal",
+            solver="relax",
+            out_dir=None,
+            progress=False,
+            overrides={"solver.relax.t_max": t_end, **kw.pop("overrides", {})},
+            **kw,
+        )
         wall = time.perf_counter() - t0
     finally:
         _integrator.Integrator.advance = orig
     s = out.summary
-    return dict(label=label, message=s.get("message"), finite=bool(s.get("finite", True)), steps=s.get("steps"),
-                t_final=s.get("t_final"), remeshes=s.get("remesh_count", 0), wall_s=wall, samples=records)
+    return dict(
+        label=label,
+        message=s.get("message"),
+        finite=bool(s.get("finite", True)),
+        steps=s.get("steps"),
+        t_final=s.get("t_final"),
+        remeshes=s.get("remesh_count", 0),
+        wall_s=wall,
+        samples=records,
+    )
 
 
 def report(results) -> str:
-    lines = ["| run | steps, t [s] | director oscillation at the end of the run's chunks: median / max | "
-             "max translational | outcome |", "|---|---|---|---|---|"]
+    lines = [
+        "| run | steps, t [s] | director oscillation at the end of the run's chunks: median / max | "
+        "max translational | outcome |",
+        "|---|---|---|---|---|",
+    ]
     for r in results:
         late = [x for x in r["samples"] if x["t"] > 0.6]
         d = np.array([x["director_end"] for x in late]) if late else np.array([np.nan])
         tr = max((x["translation_end"] for x in late), default=float("nan"))
-        lines.append(f"| {r['label']} | {r['steps']}, {r['t_final']:.3f} | {np.median(d):.1e} / {np.max(d):.1e} | "
-                     f"{tr:.1e} | {r['message']} |")
+        lines.append(
+            f"| {r['label']} | {r['steps']}, {r['t_final']:.3f} | {np.median(d):.1e} / {np.max(d):.1e} | "
+            f"{tr:.1e} | {r['message']} |"
+        )
     return "\n".join(lines) + "\n"
 
 
@@ -91,15 +118,19 @@ def main(argv=None):
     ap.add_argument("--out", default="verification/out")
     ap.add_argument("--skip-uniform", action="store_true")
     args = ap.parse_args(argv)
-    cases = [("adaptive, bare DK directors", dict(adaptive=True, overrides={"adapt.settle_directors": False})),
-             ("adaptive, settled directors (default)", dict(adaptive=True))]
+    cases = [
+        ("adaptive, bare DK directors", dict(adaptive=True, overrides={"adapt.settle_directors": False})),
+        ("adaptive, settled directors (default)", dict(adaptive=True)),
+    ]
     if not args.skip_uniform:
         cases.append(("uniform 48x16x4", dict(mesh="48x16x4")))
     load0 = os.getloadavg()
     results = [one(label, args.t_end, **kw) for label, kw in cases]
-    text = (f"# Director oscillation after remeshing (square-pedestal, paper path, t <= {args.t_end} s)\n\n"
-            f"Samples after t = 0.6 s (the first remesh is near t = 0.59 s).  Load average "
-            f"{load0[0]:.1f} -> {os.getloadavg()[0]:.1f}.\n\n" + report(results))
+    text = (
+        f"# Director oscillation after remeshing (square-pedestal, paper path, t <= {args.t_end} s)\n\n"
+        f"Samples after t = 0.6 s (the first remesh is near t = 0.59 s).  Load average "
+        f"{load0[0]:.1f} -> {os.getloadavg()[0]:.1f}.\n\n" + report(results)
+    )
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "adapt_director_noise.json").write_text(json.dumps(results, indent=1))

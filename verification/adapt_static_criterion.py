@@ -33,8 +33,8 @@ from solidshell.adapt.criteria import DEFAULT_EPS, leaf_bending_strain, level_si
 from solidshell.adapt.forest import AdaptiveMesh
 from solidshell.adapt.transfer import to_new_mesh
 from solidshell.run.summary import pedestal_area
-from solidshell.scenes.build import build_problem, build_scene_mesh
 from solidshell.scenes import load
+from solidshell.scenes.build import build_problem, build_scene_mesh
 from solidshell.solvers.static import solve_static
 
 OUT = Path(__file__).resolve().parent / "out"
@@ -70,12 +70,24 @@ def refine_to_equilibrium(sc, level0, levels, const, choice, max_rounds=8):
         eb = pb.model.bending_strain(r.U)
         leaves, eb_leaf = leaf_bending_strain(eb, act.elem_leaf)
         marks = mark(eb_leaf, leaves, L, const, min(DEFAULT_EPS, 0.5 * const), max_level=levels)
-        rows.append(dict(round=k, nodes=int(act.mesh.n_nodes), elements=int(act.mesh.n_elements),
-                         converged=bool(r.converged), dc=float(d["drape_coefficient"]), folds=d.get("fold_count"),
-                         splits=int(marks.split.sum()), iterations=r.info.get("iterations"),
-                         seconds=time.perf_counter() - t))
-        print(f"  const {const} {choice} round {k}: {act.mesh.n_nodes} nodes, DC {d['drape_coefficient']:.4f}, "
-              f"{d.get('fold_count')} folds, {int(marks.split.sum())} splits asked", flush=True)
+        rows.append(
+            dict(
+                round=k,
+                nodes=int(act.mesh.n_nodes),
+                elements=int(act.mesh.n_elements),
+                converged=bool(r.converged),
+                dc=float(d["drape_coefficient"]),
+                folds=d.get("fold_count"),
+                splits=int(marks.split.sum()),
+                iterations=r.info.get("iterations"),
+                seconds=time.perf_counter() - t,
+            )
+        )
+        print(
+            f"  const {const} {choice} round {k}: {act.mesh.n_nodes} nodes, DC {d['drape_coefficient']:.4f}, "
+            f"{d.get('fold_count')} folds, {int(marks.split.sum())} splits asked",
+            flush=True,
+        )
         if not marks.split.any():
             break
         old = act
@@ -92,8 +104,12 @@ def main(argv=None):
     ap.add_argument("--uniform", default="48x16x4")
     ap.add_argument("--levels", type=int, default=3)
     ap.add_argument("--const", type=float, nargs="*", default=[0.5, 0.3, 0.2])
-    ap.add_argument("--membrane", nargs="*", default=["scene", "coarse-ans"],
-                    help="scene | coarse-ans | ans-below-K (quads of levels < K get ans membranes)")
+    ap.add_argument(
+        "--membrane",
+        nargs="*",
+        default=["scene", "coarse-ans"],
+        help="scene | coarse-ans | ans-below-K (quads of levels < K get ans membranes)",
+    )
     ap.add_argument("--out", default=str(OUT))
     a = ap.parse_args(argv)
     sc = load(a.scene)
@@ -101,8 +117,13 @@ def main(argv=None):
     uni, _ = build_scene_mesh(sc, a.uniform)
     t = time.perf_counter()
     _, ru, du = solve(sc, uni, None)
-    uniform = dict(mesh=a.uniform, nodes=int(uni.n_nodes), dc=float(du["drape_coefficient"]),
-                   folds=du.get("fold_count"), seconds=time.perf_counter() - t)
+    uniform = dict(
+        mesh=a.uniform,
+        nodes=int(uni.n_nodes),
+        dc=float(du["drape_coefficient"]),
+        folds=du.get("fold_count"),
+        seconds=time.perf_counter() - t,
+    )
     print(f"uniform {a.uniform}: {uni.n_nodes} nodes, DC {uniform['dc']:.4f}, {uniform['folds']} folds", flush=True)
     cases = []
     for choice in a.membrane:
@@ -111,20 +132,25 @@ def main(argv=None):
             cases.append(dict(const=c, membrane=choice, rounds=rows))
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
-    doc = dict(scene=a.scene, level0=a.level0, levels=a.levels, uniform=uniform, cases=cases,
-               load=os.getloadavg())
+    doc = dict(scene=a.scene, level0=a.level0, levels=a.levels, uniform=uniform, cases=cases, load=os.getloadavg())
     (out / "adapt_static_criterion.json").write_text(json.dumps(doc, indent=1))
-    lines = [f"# Eq. (25) at the static equilibrium: {a.scene}, level 0 {a.level0}, {a.levels} levels",
-             "", f"`PYTHONPATH=. python verification/adapt_static_criterion.py` (load {os.getloadavg()[0]:.1f}). "
-             f"Uniform {a.uniform} (scene membrane, static): {uniform['nodes']} nodes, DC {uniform['dc']:.4f}, "
-             f"{uniform['folds']} folds.", "",
-             "| const | quad membranes | rounds | end nodes (share) | DC (vs uniform) | folds |",
-             "|---|---|---|---|---|---|"]
+    lines = [
+        f"# Eq. (25) at the static equilibrium: {a.scene}, level 0 {a.level0}, {a.levels} levels",
+        "",
+        f"`PYTHONPATH=. python verification/adapt_static_criterion.py` (load {os.getloadavg()[0]:.1f}). "
+        f"Uniform {a.uniform} (scene membrane, static): {uniform['nodes']} nodes, DC {uniform['dc']:.4f}, "
+        f"{uniform['folds']} folds.",
+        "",
+        "| const | quad membranes | rounds | end nodes (share) | DC (vs uniform) | folds |",
+        "|---|---|---|---|---|---|",
+    ]
     for case in cases:
         end = case["rounds"][-1]
-        lines.append(f"| {case['const']} | {MEMBRANE_LABEL.get(case['membrane'], case['membrane'])} | "
-                     f"{len(case['rounds'])} | {end['nodes']} ({end['nodes'] / uniform['nodes']:.2f}) | "
-                     f"{end['dc']:.4f} ({(end['dc'] - uniform['dc']) / uniform['dc']:+.1%}) | {end['folds']} |")
+        lines.append(
+            f"| {case['const']} | {MEMBRANE_LABEL.get(case['membrane'], case['membrane'])} | "
+            f"{len(case['rounds'])} | {end['nodes']} ({end['nodes'] / uniform['nodes']:.2f}) | "
+            f"{end['dc']:.4f} ({(end['dc'] - uniform['dc']) / uniform['dc']:+.1%}) | {end['folds']} |"
+        )
     (out / "adapt_static_criterion.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
 

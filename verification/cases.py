@@ -117,8 +117,14 @@ def main(argv, doc: str, cases: dict, run_case, report, listing, echo_keys=None)
     cache; also what no option does), ``--list`` (one line per case, ``listing(name, case)``).
     ``echo_keys``: the row's keys printed as one JSON line after each case."""
     ap = parser(doc)
-    ap.add_argument("--case", action="append", default=[], choices=list(cases), metavar="NAME",
-                    help="run this case and cache its row (repeatable; --list shows the names)")
+    ap.add_argument(
+        "--case",
+        action="append",
+        default=[],
+        choices=list(cases),
+        metavar="NAME",
+        help="run this case and cache its row (repeatable; --list shows the names)",
+    )
     ap.add_argument("--report", action="store_true", help="write the report from the cache")
     ap.add_argument("--list", action="store_true", help="list the cases")
     a = ap.parse_args(argv)

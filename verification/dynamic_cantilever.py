@@ -27,8 +27,7 @@ from __future__ import annotations
 
 from solidshell import Fabric, IsotropicShell
 from solidshell.solvers import explicit
-from verification.checks.dynamics import (  # noqa: F401  (the computations live in the package)
-    BETA1, cantilever_problem, crossings, free_fall, frequency_case)
+from verification.checks.dynamics import BETA1, cantilever_problem, crossings, free_fall, frequency_case  # noqa: F401  (the computations live in the package)
 
 from . import write_json
 
@@ -36,8 +35,17 @@ strip_problem = cantilever_problem
 
 
 def stable(prob, dtc, f, settings, steps=3000):
-    r = explicit.run(prob, {"t_end": steps * f * dtc * (1 - 1e-12), "dt": f * dtc, "critical_time_step": dtc,
-                            "allow_unstable": True, "sample_every": 10, **settings})
+    r = explicit.run(
+        prob,
+        {
+            "t_end": steps * f * dtc * (1 - 1e-12),
+            "dt": f * dtc,
+            "critical_time_step": dtc,
+            "allow_unstable": True,
+            "sample_every": 10,
+            **settings,
+        },
+    )
     return r.info["status"] == "done"
 
 
@@ -55,23 +63,33 @@ def stability_case(name, prob, settings):
         else:
             hi = mid
     print(f"{name:<40} dt_crit (Lanczos) {dtc:.4e} s   observed limit {lo:.5f} .. {hi:.5f} x dt_crit")
-    return dict(case=name, critical_time_step=dtc, observed_stable=lo, observed_unstable=hi,
-                force_evals_for_estimate=pre.info["time_step_force_evals"])
+    return dict(
+        case=name,
+        critical_time_step=dtc,
+        observed_stable=lo,
+        observed_unstable=hi,
+        force_evals_for_estimate=pre.info["time_step_force_evals"],
+    )
 
 
 def _freq(*args):
     row = frequency_case(*args)
-    print(f"{row['case']:<26}{row['elements']:>4}  omega {row['omega_explicit']:10.5f}  vs discrete "
-          f"{row['error_vs_discrete']:+.2e}  vs closed form {row['error_vs_closed_form']:+.2e}  ({row['steps']} steps, "
-          f"energy err {row['energy_balance_error']:.1e})", flush=True)
+    print(
+        f"{row['case']:<26}{row['elements']:>4}  omega {row['omega_explicit']:10.5f}  vs discrete "
+        f"{row['error_vs_discrete']:+.2e}  vs closed form {row['error_vs_closed_form']:+.2e}  ({row['steps']} steps, "
+        f"energy err {row['energy_balance_error']:.1e})",
+        flush=True,
+    )
     return row
 
 
 def _fall(alpha):
     rows = free_fall(alpha)
     for r in rows:
-        print(f"free fall alpha={alpha:<4g} masses x{r['mass_scaling']:<4g} dt {r['dt']:.3e}: z(0.05 s) = {r['z']:.10f}  "
-              f"closed form {r['z_closed_form']:.10f}  rel. error {r['rel_error']:+.2e}  ({r['status']})")
+        print(
+            f"free fall alpha={alpha:<4g} masses x{r['mass_scaling']:<4g} dt {r['dt']:.3e}: z(0.05 s) = {r['z']:.10f}  "
+            f"closed form {r['z_closed_form']:.10f}  rel. error {r['rel_error']:+.2e}  ({r['status']})"
+        )
     return rows
 
 
@@ -83,18 +101,37 @@ def main():
     rows = [_freq("isotropic L/h=50", iso, nx, 10.0, 1.0, B_iso, iso.density * iso.h, {}) for nx in (10, 20, 40)]
     wool = Fabric.wool()
     rows += [_freq("wool warp 5x1 cm", wool, 10, 5.0, 1.0, wool.bending_warp, wool.mass_per_area, {})]
-    rows += [_freq("wool warp, director x100", wool, nx, 5.0, 1.0, wool.bending_warp, wool.mass_per_area,
-                            {"mass_scaling": 100, "mass_scaling_mode": "director"}) for nx in (10, 20)]
+    rows += [
+        _freq(
+            "wool warp, director x100",
+            wool,
+            nx,
+            5.0,
+            1.0,
+            wool.bending_warp,
+            wool.mass_per_area,
+            {"mass_scaling": 100, "mass_scaling_mode": "director"},
+        )
+        for nx in (10, 20)
+    ]
     out["frequency"] = rows
     print("2. free fall")
     out["free_fall"] = _fall(0.0) + _fall(5.0)
     print("3. stability limit")
     out["stability"] = [
-        stability_case("isotropic strip 8x2, 1% weight", strip_problem(IsotropicShell(E=1e5, nu=0.3, h=0.1, density=1.0),
-                                                                      8, 2.0, 0.5, gravity=0.01, ny=2), {"alpha": 0.0}),
-        stability_case("wool strip 10x1, weight, alpha=5", strip_problem(wool, 10, 5.0, 1.0, gravity=1.0), {"alpha": 5.0}),
-        stability_case("wool strip 10x1, weight, director x100", strip_problem(wool, 10, 5.0, 1.0, gravity=1.0),
-                       {"alpha": 5.0, "mass_scaling": 100, "mass_scaling_mode": "director"}),
+        stability_case(
+            "isotropic strip 8x2, 1% weight",
+            strip_problem(IsotropicShell(E=1e5, nu=0.3, h=0.1, density=1.0), 8, 2.0, 0.5, gravity=0.01, ny=2),
+            {"alpha": 0.0},
+        ),
+        stability_case(
+            "wool strip 10x1, weight, alpha=5", strip_problem(wool, 10, 5.0, 1.0, gravity=1.0), {"alpha": 5.0}
+        ),
+        stability_case(
+            "wool strip 10x1, weight, director x100",
+            strip_problem(wool, 10, 5.0, 1.0, gravity=1.0),
+            {"alpha": 5.0, "mass_scaling": 100, "mass_scaling_mode": "director"},
+        ),
     ]
     p = write_json("dynamic_cantilever", out)
     print(f"wrote {p}")

@@ -50,11 +50,16 @@ def main(argv=None):
     runs = {}
     for s in [1.0] + a.scales:
         t0 = time.perf_counter()
-        r = explicit.run(prob, {"t_end": a.t_end, "alpha": 5.0, "mass_scaling": s, "mass_scaling_mode": "director",
-                                "snapshots": snaps})
+        r = explicit.run(
+            prob,
+            {"t_end": a.t_end, "alpha": 5.0, "mass_scaling": s, "mass_scaling_mode": "director", "snapshots": snaps},
+        )
         runs[s] = (r, time.perf_counter() - t0)
-        print(f"director x{s:<6g} dt {r.info['dt']:.3e} s  {r.info['steps']:>7} steps  wall {runs[s][1]:6.1f} s  "
-              f"energy err {r.info['energy_balance_error']:.1e}  {r.info['status']}", flush=True)
+        print(
+            f"director x{s:<6g} dt {r.info['dt']:.3e} s  {r.info['steps']:>7} steps  wall {runs[s][1]:6.1f} s  "
+            f"energy err {r.info['energy_balance_error']:.1e}  {r.info['status']}",
+            flush=True,
+        )
     ref, ref_wall = runs[1.0]
     X = prob.model.mesh.nodes
     ref_t = np.array([t for t, _ in ref.frames])
@@ -72,13 +77,32 @@ def main(argv=None):
             scale = np.max(np.linalg.norm(Ur[:, :3], axis=1))
             d = np.max(np.linalg.norm((X + U[:, :3]) - (X + Ur[:, :3]), axis=1))
             diffs.append(dict(t=t, max_position_difference=d, relative=d / scale))
-        rows.append(dict(director_scaling=s, dt=r.info["dt"], steps=r.info["steps"], wall_s=wall,
-                         wall_ratio_to_unscaled=wall / ref_wall, snapshots=diffs,
-                         energy_balance_error=r.info["energy_balance_error"]))
-        print(f"x{s:<6g} wall/unscaled {wall / ref_wall:.3f}  position difference / max displacement at "
-              + ", ".join(f"t={d['t']:.3g}: {d['relative']:.2e}" for d in diffs))
-    p = write_json("dynamic_mass_scaling", dict(mesh=f"{a.n}x{a.n}", t_end=a.t_end, unscaled_dt=ref.info["dt"],
-                                                unscaled_steps=ref.info["steps"], unscaled_wall_s=ref_wall, rows=rows))
+        rows.append(
+            dict(
+                director_scaling=s,
+                dt=r.info["dt"],
+                steps=r.info["steps"],
+                wall_s=wall,
+                wall_ratio_to_unscaled=wall / ref_wall,
+                snapshots=diffs,
+                energy_balance_error=r.info["energy_balance_error"],
+            )
+        )
+        print(
+            f"x{s:<6g} wall/unscaled {wall / ref_wall:.3f}  position difference / max displacement at "
+            + ", ".join(f"t={d['t']:.3g}: {d['relative']:.2e}" for d in diffs)
+        )
+    p = write_json(
+        "dynamic_mass_scaling",
+        dict(
+            mesh=f"{a.n}x{a.n}",
+            t_end=a.t_end,
+            unscaled_dt=ref.info["dt"],
+            unscaled_steps=ref.info["steps"],
+            unscaled_wall_s=ref_wall,
+            rows=rows,
+        ),
+    )
     print(f"wrote {p}")
 
 

@@ -46,6 +46,7 @@ def _log_progress(every_s: float = 60.0):
         if now - last[0] >= every_s:
             last[0] = now
             print(f"{time.strftime('%H:%M:%S')} {100 * fraction:5.1f} % {text}", flush=True)
+
     return cb
 
 
@@ -67,52 +68,133 @@ CASES = {
     "sp48-paper": ("square-pedestal", "48x16x4", "relax", dict(PAPER, max_wall_time=1500.0), {}, "paper"),
     "sp24-kin-dir": ("square-pedestal", "24x8x4", "relax", dict(KIN_DIR), {}, "kin-dir"),
     "sp24-kin-uni": ("square-pedestal", "24x8x4", "relax", dict(KIN_UNI), {}, "kin-uni"),
-    "sphere60-green": ("sphere", "60x60", "relax", dict(KIN_DIR, t_max=3.0, max_wall_time=480.0), dict(MU0), "kin-dir, t_max 3 s"),
-    "sphere60-quasi": ("sphere", "60x60", "relax", dict(KIN_DIR, t_max=3.0, max_wall_time=480.0), {"model.thickness_strain": "quasi", **MU0},
-                       "kin-dir, t_max 3 s"),
-    "sphere60-quasi-dir100": ("sphere", "60x60", "relax",
-                              dict(KIN_DIR, mass_scaling=100, t_max=3.0, max_wall_time=480.0),
-                              {"model.thickness_strain": "quasi", **MU0}, "kinetic, director masses x100, t_max 3 s"),
-    "sphere60-quasi-noecheck": ("sphere", "60x60", "relax",
-                                dict(KIN_DIR, t_max=3.0, max_wall_time=480.0, max_energy_error=1e6),
-                                {"model.thickness_strain": "quasi", **MU0}, "kin-dir, t_max 3 s, energy check off"),
+    "sphere60-green": (
+        "sphere",
+        "60x60",
+        "relax",
+        dict(KIN_DIR, t_max=3.0, max_wall_time=480.0),
+        dict(MU0),
+        "kin-dir, t_max 3 s",
+    ),
+    "sphere60-quasi": (
+        "sphere",
+        "60x60",
+        "relax",
+        dict(KIN_DIR, t_max=3.0, max_wall_time=480.0),
+        {"model.thickness_strain": "quasi", **MU0},
+        "kin-dir, t_max 3 s",
+    ),
+    "sphere60-quasi-dir100": (
+        "sphere",
+        "60x60",
+        "relax",
+        dict(KIN_DIR, mass_scaling=100, t_max=3.0, max_wall_time=480.0),
+        {"model.thickness_strain": "quasi", **MU0},
+        "kinetic, director masses x100, t_max 3 s",
+    ),
+    "sphere60-quasi-noecheck": (
+        "sphere",
+        "60x60",
+        "relax",
+        dict(KIN_DIR, t_max=3.0, max_wall_time=480.0, max_energy_error=1e6),
+        {"model.thickness_strain": "quasi", **MU0},
+        "kin-dir, t_max 3 s, energy check off",
+    ),
     "sphere100-green": ("sphere", "100x100", "relax", dict(KIN_DIR, max_wall_time=300.0), dict(MU0), "kin-dir"),
     "sphere30-green": ("sphere", "30x30", "relax", dict(KIN_DIR, max_wall_time=600.0), dict(MU0), "kin-dir"),
-    "sphere30-quasi": ("sphere", "30x30", "relax", dict(KIN_DIR, max_wall_time=600.0), {"model.thickness_strain": "quasi", **MU0},
-                       "kin-dir"),
+    "sphere30-quasi": (
+        "sphere",
+        "30x30",
+        "relax",
+        dict(KIN_DIR, max_wall_time=600.0),
+        {"model.thickness_strain": "quasi", **MU0},
+        "kin-dir",
+    ),
     "hang-20": ("hang-20", "40x40", "explicit", dict(max_wall_time=600.0), {}, "paper (alpha 5, no mass scaling)"),
-    "hang-20-dir": ("hang-20", "40x40", "explicit", dict(mass_scaling=10, mass_scaling_mode="director"), {},
-                    "alpha 5, director masses x10"),
+    "hang-20-dir": (
+        "hang-20",
+        "40x40",
+        "explicit",
+        dict(mass_scaling=10, mass_scaling_mode="director"),
+        {},
+        "alpha 5, director masses x10",
+    ),
     "hang-100": ("hang-100", "50x50", "explicit", dict(max_wall_time=720.0), {}, "paper (alpha 5, no mass scaling)"),
-    "hang-100-dir": ("hang-100", "50x50", "explicit", dict(mass_scaling=10, mass_scaling_mode="director"), {},
-                     "alpha 5, director masses x10"),
+    "hang-100-dir": (
+        "hang-100",
+        "50x50",
+        "explicit",
+        dict(mass_scaling=10, mass_scaling_mode="director"),
+        {},
+        "alpha 5, director masses x10",
+    ),
     "lsp-kin-dir": ("large-square-pedestal", None, "relax", dict(KIN_DIR, max_wall_time=900.0), {}, "kin-dir"),
     "disc-a5-kin-dir": ("square-on-disc", None, "relax", dict(KIN_DIR, max_wall_time=240.0), {}, "kin-dir"),
     "disc-a5-paper": ("square-on-disc", None, "relax", dict(PAPER, max_wall_time=900.0), {}, "paper"),
-    "disc-a1-paper": ("square-on-disc", None, "relax", dict(PAPER, alpha=1.0, max_wall_time=900.0), {},
-                      "alpha 1, masses x100"),
+    "disc-a1-paper": (
+        "square-on-disc",
+        None,
+        "relax",
+        dict(PAPER, alpha=1.0, max_wall_time=900.0),
+        {},
+        "alpha 1, masses x100",
+    ),
     # Rayleigh damping as in the paper, but only the director masses x100 (the translational
     # masses real, so the sheet falls at g, not g/100): run by the CLI in this session, see NOTES
-    "disc-a5-dir100": ("square-on-disc", None, "relax",
-                       dict(PAPER, mass_scaling_mode="director", threads=1, max_wall_time=1800.0), {},
-                       "alpha 5, director masses x100"),
-    "disc-a1-dir100": ("square-on-disc", None, "relax",
-                       dict(PAPER, alpha=1.0, mass_scaling_mode="director", threads=1, max_wall_time=1800.0),
-                       {}, "alpha 1, director masses x100"),
+    "disc-a5-dir100": (
+        "square-on-disc",
+        None,
+        "relax",
+        dict(PAPER, mass_scaling_mode="director", threads=1, max_wall_time=1800.0),
+        {},
+        "alpha 5, director masses x100",
+    ),
+    "disc-a1-dir100": (
+        "square-on-disc",
+        None,
+        "relax",
+        dict(PAPER, alpha=1.0, mass_scaling_mode="director", threads=1, max_wall_time=1800.0),
+        {},
+        "alpha 1, director masses x100",
+    ),
     # The paper's trajectory at a fraction of its steps.  All masses xs with Rayleigh alpha is, for
     # Eq. (23), exactly the unscaled system with alpha sqrt(s) run in time stretched by sqrt(s)
     # (tests/test_explicit.py::test_uniform_mass_scaling_is_a_time_stretch), so the paper's alpha = 5
     # and 1 with masses x100 follow the unscaled alpha = 50 and 10.  Scaling the director masses
     # instead (x100) keeps that translational damping but lets the thickness mode stop limiting the
     # step.  Checkpointed every 20k steps (a stopped run resumes with --set restart=...).
-    "disc-a50-dir100": ("square-on-disc", None, "relax",
-                        dict(PAPER, alpha=50.0, mass_scaling_mode="director", threads=1, max_wall_time=3300.0,
-                             checkpoint=str(RUNS / "disc-a50-dir100.ckpt.npz"), checkpoint_every=20000), {},
-                        "alpha 50, director masses x100 (= paper alpha 5, masses x100)"),
-    "disc-a10-dir100": ("square-on-disc", None, "relax",
-                        dict(PAPER, alpha=10.0, mass_scaling_mode="director", threads=1, max_wall_time=3300.0,
-                             checkpoint=str(RUNS / "disc-a10-dir100.ckpt.npz"), checkpoint_every=20000), {},
-                        "alpha 10, director masses x100 (= paper alpha 1, masses x100)"),
+    "disc-a50-dir100": (
+        "square-on-disc",
+        None,
+        "relax",
+        dict(
+            PAPER,
+            alpha=50.0,
+            mass_scaling_mode="director",
+            threads=1,
+            max_wall_time=3300.0,
+            checkpoint=str(RUNS / "disc-a50-dir100.ckpt.npz"),
+            checkpoint_every=20000,
+        ),
+        {},
+        "alpha 50, director masses x100 (= paper alpha 5, masses x100)",
+    ),
+    "disc-a10-dir100": (
+        "square-on-disc",
+        None,
+        "relax",
+        dict(
+            PAPER,
+            alpha=10.0,
+            mass_scaling_mode="director",
+            threads=1,
+            max_wall_time=3300.0,
+            checkpoint=str(RUNS / "disc-a10-dir100.ckpt.npz"),
+            checkpoint_every=20000,
+        ),
+        {},
+        "alpha 10, director masses x100 (= paper alpha 1, masses x100)",
+    ),
 }
 
 # Observations that are not in any cached case (runs stopped by hand, etc.), printed with the report.
@@ -214,14 +296,47 @@ NOTES = [
     "(+0.01 %), 4 folds (static: 4), energy error 6.0e-6, max 12 interpenetrated nodes.",
 ]
 
-SUMMARY_KEYS = ("converged", "message", "steps", "dt", "critical_time_step", "t_final", "wall_time_s",
-                "energy_balance_error", "drape_coefficient", "fold_count", "max_interpenetrated_nodes",
-                "max_active_nodes", "max_penetration", "resets", "mass_scaling", "mass_scaling_mode",
-                "element_steps_per_second", "threads", "frames", "min_z", "max_displacement", "files",
-                "series_parameter", "final_relative_residual", "final_kinetic_energy", "critical_time_step_min",
-                "time_step_reductions", "time_step_rechecks", "kinetic_resets", "status", "steady_state_reached",
-                "max_contact_penetration", "max_contact_nodes", "damping", "alpha", "external_work",
-                "damping_dissipation", "kinetic_energy", "strain_energy")
+SUMMARY_KEYS = (
+    "converged",
+    "message",
+    "steps",
+    "dt",
+    "critical_time_step",
+    "t_final",
+    "wall_time_s",
+    "energy_balance_error",
+    "drape_coefficient",
+    "fold_count",
+    "max_interpenetrated_nodes",
+    "max_active_nodes",
+    "max_penetration",
+    "resets",
+    "mass_scaling",
+    "mass_scaling_mode",
+    "element_steps_per_second",
+    "threads",
+    "frames",
+    "min_z",
+    "max_displacement",
+    "files",
+    "series_parameter",
+    "final_relative_residual",
+    "final_kinetic_energy",
+    "critical_time_step_min",
+    "time_step_reductions",
+    "time_step_rechecks",
+    "kinetic_resets",
+    "status",
+    "steady_state_reached",
+    "max_contact_penetration",
+    "max_contact_nodes",
+    "damping",
+    "alpha",
+    "external_work",
+    "damping_dissipation",
+    "kinetic_energy",
+    "strain_energy",
+)
 
 
 def run_case(name: str) -> dict:
@@ -229,10 +344,31 @@ def run_case(name: str) -> dict:
 
     scene, mesh, solver, settings, overrides, label = CASES[name]
     out_dir = RUNS / name
-    row = dict(case=name, scene=scene, mesh=mesh or "(scene default)", solver=solver, settings_label=label,
-               settings={k: v for k, v in settings.items()}, overrides=overrides, run_dir=str(out_dir))
-    s = cases.run_recorded(lambda: run_scene(scene, mesh=mesh, solver=solver, out_dir=out_dir, progress=PROGRESS,
-                                             overrides=overrides or None, **settings), row) or {}
+    row = dict(
+        case=name,
+        scene=scene,
+        mesh=mesh or "(scene default)",
+        solver=solver,
+        settings_label=label,
+        settings={k: v for k, v in settings.items()},
+        overrides=overrides,
+        run_dir=str(out_dir),
+    )
+    s = (
+        cases.run_recorded(
+            lambda: run_scene(
+                scene,
+                mesh=mesh,
+                solver=solver,
+                out_dir=out_dir,
+                progress=PROGRESS,
+                overrides=overrides or None,
+                **settings,
+            ),
+            row,
+        )
+        or {}
+    )
     for k in SUMMARY_KEYS:
         if k in s:
             row[k] = s[k]
@@ -252,8 +388,11 @@ def _static_reference() -> dict:
         try:
             for r in json.load(open(p)):
                 if r.get("converged") and r.get("solver") == "newton":
-                    ref[(r["scene"], r["mesh"])] = (r.get("drape_coefficient"), r.get("fold_count"),
-                                                    r.get("wall_time_s"))
+                    ref[(r["scene"], r["mesh"])] = (
+                        r.get("drape_coefficient"),
+                        r.get("fold_count"),
+                        r.get("wall_time_s"),
+                    )
         except (OSError, ValueError, KeyError, TypeError):
             pass
     return ref
@@ -262,29 +401,54 @@ def _static_reference() -> dict:
 def report() -> list:
     rows, missing = cases.cached(CACHE, CASES)
     ref = _static_reference()
-    lines = ["# Dynamic scenes (Section 4)", "",
-             "Generated by `python -m verification.dynamic_scenes --report` from the per-case cache "
-             "`verification/out/dynamic_scenes/`.  Wall times are on a shared 2-core machine; the "
-             "1/5/15-min load averages at start and end of each run are given.  Settings: `paper` = "
-             "Rayleigh alpha 5 1/s, all masses x100; `kin-uni` = kinetic damping, all masses x100; "
-             "`kin-dir` = kinetic damping, director masses x1e4.", ""]
-    lines += ["| case | scene | mesh | settings | steady / done | steps | dt [s] | t_sim [s] | wall [s] | DC | "
-              "static DC | DC diff | folds (static) | max interp. nodes | energy err | load start → end | note |",
-              "|" + "---|" * 17]
+    lines = [
+        "# Dynamic scenes (Section 4)",
+        "",
+        "Generated by `python -m verification.dynamic_scenes --report` from the per-case cache "
+        "`verification/out/dynamic_scenes/`.  Wall times are on a shared 2-core machine; the "
+        "1/5/15-min load averages at start and end of each run are given.  Settings: `paper` = "
+        "Rayleigh alpha 5 1/s, all masses x100; `kin-uni` = kinetic damping, all masses x100; "
+        "`kin-dir` = kinetic damping, director masses x1e4.",
+        "",
+    ]
+    lines += [
+        "| case | scene | mesh | settings | steady / done | steps | dt [s] | t_sim [s] | wall [s] | DC | "
+        "static DC | DC diff | folds (static) | max interp. nodes | energy err | load start → end | note |",
+        "|" + "---|" * 17,
+    ]
     for r in rows:
         st = ref.get((r["scene"], r["mesh"]))
         dc = r.get("drape_coefficient")
-        diff = (f"{100 * (dc - st[0]) / st[0]:+.2f} %" if (st and isinstance(dc, (int, float)) and st[0]) else "–")
+        diff = f"{100 * (dc - st[0]) / st[0]:+.2f} %" if (st and isinstance(dc, (int, float)) and st[0]) else "–"
         r["static_drape_coefficient"] = st[0] if st else None
         r["static_fold_count"] = st[1] if st else None
         folds = cell(r.get("fold_count")) + (f" ({st[1]})" if st else "")
         note = r.get("error") or ("" if r.get("converged") else (r.get("message") or ""))
-        lines.append("| " + " | ".join([
-            r["case"], r["scene"], str(r["mesh"]), r["settings_label"], cell(r.get("converged"), no="no"), cell(r.get("steps")),
-            cell(r.get("dt"), ".3e"), cell(r.get("t_final"), ".3f"), cell(r.get("wall_time_s", r.get("total_wall_s")), ".1f"),
-            cell(dc, ".4g"), cell(st[0] if st else None, ".4g"), diff, folds, cell(r.get("max_interpenetrated_nodes")),
-            cell(r.get("energy_balance_error"), ".2e"), f"{r['load_start'].split()[0]} → {r['load_end'].split()[0]}",
-            str(note).replace("|", "/")[:160]]) + " |")
+        lines.append(
+            "| "
+            + " | ".join(
+                [
+                    r["case"],
+                    r["scene"],
+                    str(r["mesh"]),
+                    r["settings_label"],
+                    cell(r.get("converged"), no="no"),
+                    cell(r.get("steps")),
+                    cell(r.get("dt"), ".3e"),
+                    cell(r.get("t_final"), ".3f"),
+                    cell(r.get("wall_time_s", r.get("total_wall_s")), ".1f"),
+                    cell(dc, ".4g"),
+                    cell(st[0] if st else None, ".4g"),
+                    diff,
+                    folds,
+                    cell(r.get("max_interpenetrated_nodes")),
+                    cell(r.get("energy_balance_error"), ".2e"),
+                    f"{r['load_start'].split()[0]} → {r['load_end'].split()[0]}",
+                    str(note).replace("|", "/")[:160],
+                ]
+            )
+            + " |"
+        )
     if NOTES:
         lines += ["", "Notes:", ""] + [f"* {n}" for n in NOTES]
     if missing:

@@ -39,7 +39,7 @@ DIR = dict(damping="rayleigh", alpha=5.0, mass_scaling=100, mass_scaling_mode="d
 KIN = dict(damping="kinetic", mass_scaling=1e4, mass_scaling_mode="director", threads=1)
 PAPER_EQ = dict(DIR, alpha=50.0)
 QUASI = {"model.thickness_strain": "quasi"}
-CT_INPLANE = 5.0 / 6.0 * 41.8      # [gf/cm] the kappa x G h a solid-shell code would take from Table 1's shear rigidity
+CT_INPLANE = 5.0 / 6.0 * 41.8  # [gf/cm] the kappa x G h a solid-shell code would take from Table 1's shear rigidity
 # a seeded random start (solidshell.perturbation) of at most 0.08 cm; the sphere is lowered by 0.1 cm
 # so that no node of the perturbed sheet starts inside it (the cloth then drops 0.1 cm first)
 SEEDED = {"perturbation.shape": "random", "perturbation.amplitude": 0.08, "contact.0.centre": [0.0, 0.0, -5.12965]}
@@ -48,13 +48,21 @@ SEEDED = {"perturbation.shape": "random", "perturbation.amplitude": 0.08, "conta
 CASES = {
     "s30-green-uni": ("30x30", dict(UNI, max_wall_time=420.0), {}, "Green, uni100, mu 0.3"),
     "s30-green-dir": ("30x30", dict(DIR, max_wall_time=300.0), {}, "Green, dir100, mu 0.3"),
-    "s30-green-dir-mu0": ("30x30", dict(DIR, max_wall_time=300.0), {"contact.0.friction": 0.0},
-                          "Green, dir100, frictionless"),
+    "s30-green-dir-mu0": (
+        "30x30",
+        dict(DIR, max_wall_time=300.0),
+        {"contact.0.friction": 0.0},
+        "Green, dir100, frictionless",
+    ),
     "s60-green-dir": ("60x60", dict(DIR, max_wall_time=600.0), {}, "Green, dir100, mu 0.3"),
     "s60-quasi-dir": ("60x60", dict(DIR, max_wall_time=600.0), dict(QUASI), "Eq. (24), dir100, mu 0.3"),
     # Eq. (24) with director masses x100 went non-finite at t = 0.25 s (see NOTES): director x1e4
-    "s60-quasi-dir1e4": ("60x60", dict(DIR, mass_scaling=1e4, max_wall_time=600.0), dict(QUASI),
-                         "Eq. (24), dir1e4, mu 0.3"),
+    "s60-quasi-dir1e4": (
+        "60x60",
+        dict(DIR, mass_scaling=1e4, max_wall_time=600.0),
+        dict(QUASI),
+        "Eq. (24), dir1e4, mu 0.3",
+    ),
     "s60-green-dir1e4": ("60x60", dict(DIR, mass_scaling=1e4, max_wall_time=600.0), {}, "Green, dir1e4, mu 0.3"),
     # ... and with Rayleigh damping it went non-finite at t = 2.39 s after 41 corner flips; kinetic
     # (Cundall) damping removes the injected energy at every kinetic-energy peak
@@ -68,47 +76,126 @@ CASES = {
     # director masses x100 instead of all lengthen the step.  (The default penalty follows the
     # translational mass, so the contact is softer than under uniform scaling: see NOTES.)
     "s60-green-a50": ("60x60", dict(PAPER_EQ, max_wall_time=1500.0), {}, "Green, alpha 50, dir100 (= paper), mu 0.3"),
-    "s60-quasi-a50": ("60x60", dict(PAPER_EQ, max_wall_time=1500.0), dict(QUASI),
-                      "Eq. (24), alpha 50, dir100 (= paper), mu 0.3"),
+    "s60-quasi-a50": (
+        "60x60",
+        dict(PAPER_EQ, max_wall_time=1500.0),
+        dict(QUASI),
+        "Eq. (24), alpha 50, dir100 (= paper), mu 0.3",
+    ),
     "s60-green-uni": ("60x60", dict(UNI, max_wall_time=1800.0), {}, "Green, uni100 (paper), mu 0.3"),
     "s60-quasi-uni": ("60x60", dict(UNI, max_wall_time=1800.0), dict(QUASI), "Eq. (24), uni100 (paper), mu 0.3"),
-    "s100-green-a50": ("100x100", dict(PAPER_EQ, max_wall_time=2400.0), {}, "Green, alpha 50, dir100 (= paper), mu 0.3"),
+    "s100-green-a50": (
+        "100x100",
+        dict(PAPER_EQ, max_wall_time=2400.0),
+        {},
+        "Green, alpha 50, dir100 (= paper), mu 0.3",
+    ),
     # issue 12 item 5: the paper's 60x60 sharp folds (Fig. 12c) pursued on the paper's path with the
     # settings the paper does not state: friction, C_t, E_z, the penalty, and seeded starts
-    "s60-pursuit-repeat": ("60x60", dict(PAPER_EQ, max_wall_time=900.0), {},
-                           "pursuit: s60-green-a50 again on today's code (1 thread)"),
+    "s60-pursuit-repeat": (
+        "60x60",
+        dict(PAPER_EQ, max_wall_time=900.0),
+        {},
+        "pursuit: s60-green-a50 again on today's code (1 thread)",
+    ),
     # what `solidshell figures 12` ran before 2eacc4d: the scene's relax preset "fast" filled damping = FIRE
     # (alpha ignored); the thread count is not a variable (tests/test_dynamic_scenes.py: bitwise on 1 and 2)
-    "s60-pursuit-fire": ("60x60", dict(damping="fire", mass_scaling=100, mass_scaling_mode="director", threads=1,
-                                       max_wall_time=900.0), {},
-                         "pursuit: FIRE, director x100 (the scene's preset; figures 12 before 2eacc4d)"),
-    "s60-pursuit-mu0": ("60x60", dict(PAPER_EQ, max_wall_time=900.0), {"contact.0.friction": 0.0},
-                        "pursuit: paper path, frictionless"),
-    "s60-pursuit-ct35": ("60x60", dict(PAPER_EQ, max_wall_time=900.0), {"material.transverse_shear": CT_INPLANE},
-                         "pursuit: paper path, C_t = 5/6 x in-plane shear rigidity (34.8 gf/cm)"),
-    "s60-pursuit-ct3": ("60x60", dict(PAPER_EQ, max_wall_time=900.0), {"material.transverse_shear": 3.48},
-                        "pursuit: paper path, C_t = 3.48 gf/cm (x0.01 of the default)"),
-    "s60-pursuit-ct35-mu0": ("60x60", dict(PAPER_EQ, max_wall_time=900.0),
-                             {"material.transverse_shear": CT_INPLANE, "contact.0.friction": 0.0},
-                             "pursuit: paper path, C_t 34.8 gf/cm, frictionless"),
-    "s60-pursuit-ez01": ("60x60", dict(PAPER_EQ, max_wall_time=900.0), {"material.thickness_modulus": 93.885},
-                         "pursuit: paper path, E_z = 0.1 T_mean (93.9 gf/cm)"),
-    "s60-pursuit-pen001": ("60x60", dict(PAPER_EQ, max_wall_time=900.0, contact_penalty_factor=0.01), {},
-                           "pursuit: paper path, penalty factor 0.01 (x0.1)"),
-    "s60-pursuit-seed1": ("60x60", dict(PAPER_EQ, max_wall_time=900.0), dict(SEEDED, **{"perturbation.seed": 1}),
-                          "pursuit: paper path, random start 0.08 cm seed 1 (sphere 0.1 cm lower)"),
-    "s60-pursuit-seed2": ("60x60", dict(PAPER_EQ, max_wall_time=900.0), dict(SEEDED, **{"perturbation.seed": 2}),
-                          "pursuit: paper path, random start 0.08 cm seed 2 (sphere 0.1 cm lower)"),
+    "s60-pursuit-fire": (
+        "60x60",
+        dict(damping="fire", mass_scaling=100, mass_scaling_mode="director", threads=1, max_wall_time=900.0),
+        {},
+        "pursuit: FIRE, director x100 (the scene's preset; figures 12 before 2eacc4d)",
+    ),
+    "s60-pursuit-mu0": (
+        "60x60",
+        dict(PAPER_EQ, max_wall_time=900.0),
+        {"contact.0.friction": 0.0},
+        "pursuit: paper path, frictionless",
+    ),
+    "s60-pursuit-ct35": (
+        "60x60",
+        dict(PAPER_EQ, max_wall_time=900.0),
+        {"material.transverse_shear": CT_INPLANE},
+        "pursuit: paper path, C_t = 5/6 x in-plane shear rigidity (34.8 gf/cm)",
+    ),
+    "s60-pursuit-ct3": (
+        "60x60",
+        dict(PAPER_EQ, max_wall_time=900.0),
+        {"material.transverse_shear": 3.48},
+        "pursuit: paper path, C_t = 3.48 gf/cm (x0.01 of the default)",
+    ),
+    "s60-pursuit-ct35-mu0": (
+        "60x60",
+        dict(PAPER_EQ, max_wall_time=900.0),
+        {"material.transverse_shear": CT_INPLANE, "contact.0.friction": 0.0},
+        "pursuit: paper path, C_t 34.8 gf/cm, frictionless",
+    ),
+    "s60-pursuit-ez01": (
+        "60x60",
+        dict(PAPER_EQ, max_wall_time=900.0),
+        {"material.thickness_modulus": 93.885},
+        "pursuit: paper path, E_z = 0.1 T_mean (93.9 gf/cm)",
+    ),
+    "s60-pursuit-pen001": (
+        "60x60",
+        dict(PAPER_EQ, max_wall_time=900.0, contact_penalty_factor=0.01),
+        {},
+        "pursuit: paper path, penalty factor 0.01 (x0.1)",
+    ),
+    "s60-pursuit-seed1": (
+        "60x60",
+        dict(PAPER_EQ, max_wall_time=900.0),
+        dict(SEEDED, **{"perturbation.seed": 1}),
+        "pursuit: paper path, random start 0.08 cm seed 1 (sphere 0.1 cm lower)",
+    ),
+    "s60-pursuit-seed2": (
+        "60x60",
+        dict(PAPER_EQ, max_wall_time=900.0),
+        dict(SEEDED, **{"perturbation.seed": 2}),
+        "pursuit: paper path, random start 0.08 cm seed 2 (sphere 0.1 cm lower)",
+    ),
 }
 
-KEYS = ("converged", "steady_state_reached", "status", "message", "steps", "dt", "critical_time_step",
-        "critical_time_step_min", "t_final", "wall_time_s", "element_steps_per_second", "fold_count",
-        "drape_coefficient", "max_interpenetrated_nodes", "max_interpenetration_time",
-        "interpenetrated_nodes", "energy_balance_error", "external_work", "kinetic_energy", "strain_energy",
-        "damping_dissipation", "contact_energy", "friction_work", "friction_dissipation",
-        "friction_stick_energy", "max_slipping_nodes", "max_contact_nodes", "max_contact_penetration",
-        "thickness_strain_energy_jump", "thickness_strain_switch_samples", "thickness_strain_corner_switches",
-        "final_relative_residual", "min_z", "threads", "mass_scaling", "mass_scaling_mode", "alpha", "friction")
+KEYS = (
+    "converged",
+    "steady_state_reached",
+    "status",
+    "message",
+    "steps",
+    "dt",
+    "critical_time_step",
+    "critical_time_step_min",
+    "t_final",
+    "wall_time_s",
+    "element_steps_per_second",
+    "fold_count",
+    "drape_coefficient",
+    "max_interpenetrated_nodes",
+    "max_interpenetration_time",
+    "interpenetrated_nodes",
+    "energy_balance_error",
+    "external_work",
+    "kinetic_energy",
+    "strain_energy",
+    "damping_dissipation",
+    "contact_energy",
+    "friction_work",
+    "friction_dissipation",
+    "friction_stick_energy",
+    "max_slipping_nodes",
+    "max_contact_nodes",
+    "max_contact_penetration",
+    "thickness_strain_energy_jump",
+    "thickness_strain_switch_samples",
+    "thickness_strain_corner_switches",
+    "final_relative_residual",
+    "min_z",
+    "threads",
+    "mass_scaling",
+    "mass_scaling_mode",
+    "alpha",
+    "friction",
+)
 
 # observations (read off the cached cases and their run directories; not regenerated)
 NOTES: list[str] = [
@@ -207,35 +294,57 @@ def run_case(name: str) -> dict:
 
     mesh, settings, overrides, label = CASES[name]
     out = RUNS / name
-    row = dict(case=name, mesh=mesh, label=label, settings=settings, overrides=overrides,
-               thickness_strain=overrides.get("model.thickness_strain", "green"), run_dir=str(out))
-    return cases.run_and_store(CACHE, name, row, lambda: run_scene(
-        "sphere", mesh=mesh, solver="relax", out_dir=out, progress=False, overrides=overrides, **settings), KEYS)
+    row = dict(
+        case=name,
+        mesh=mesh,
+        label=label,
+        settings=settings,
+        overrides=overrides,
+        thickness_strain=overrides.get("model.thickness_strain", "green"),
+        run_dir=str(out),
+    )
+    return cases.run_and_store(
+        CACHE,
+        name,
+        row,
+        lambda: run_scene(
+            "sphere", mesh=mesh, solver="relax", out_dir=out, progress=False, overrides=overrides, **settings
+        ),
+        KEYS,
+    )
 
 
 def report() -> list:
     rows, missing = cases.cached(CACHE, CASES)
-    lines = ["# Cloth on a sphere by dynamic relaxation, with Coulomb friction (Sec. 4.2-4.3, issue #5)", "",
-             "Generated by `python -m verification.dynamic_sphere --report` from `verification/out/dynamic_sphere/`. "
-             "Scene `sphere` (30x30 cm wool on a 10 cm sphere, friction 0.3 unless said), `--solver relax`, "
-             "damping as in the settings column (Rayleigh alpha = 5 1/s or kinetic), steady state when E_kin/W_ext < 1e-6 and the residual < 1e-3 of the weight. "
-             "Wall times on a shared 2-core machine, numba threads = 1; load = 1/5/15-min load average at start -> end.",
-             "",
-             "| case | settings | mesh | thickness strain | mass scaling | friction | steady | t_sim [s] | steps | dt [s] | "
-             "crit. dt [s] | wall [s] | el-steps/s | folds | DC | max interp. nodes (at t [s]) | interp. at end | "
-             "energy err | friction work / W_ext | Eq. 24 jumps (samples, corners, energy) | load start -> end |",
-             "|" + "---|" * 21]
+    lines = [
+        "# Cloth on a sphere by dynamic relaxation, with Coulomb friction (Sec. 4.2-4.3, issue #5)",
+        "",
+        "Generated by `python -m verification.dynamic_sphere --report` from `verification/out/dynamic_sphere/`. "
+        "Scene `sphere` (30x30 cm wool on a 10 cm sphere, friction 0.3 unless said), `--solver relax`, "
+        "damping as in the settings column (Rayleigh alpha = 5 1/s or kinetic), steady state when E_kin/W_ext < 1e-6 and the residual < 1e-3 of the weight. "
+        "Wall times on a shared 2-core machine, numba threads = 1; load = 1/5/15-min load average at start -> end.",
+        "",
+        "| case | settings | mesh | thickness strain | mass scaling | friction | steady | t_sim [s] | steps | dt [s] | "
+        "crit. dt [s] | wall [s] | el-steps/s | folds | DC | max interp. nodes (at t [s]) | interp. at end | "
+        "energy err | friction work / W_ext | Eq. 24 jumps (samples, corners, energy) | load start -> end |",
+        "|" + "---|" * 21,
+    ]
     for r in rows:
         if r.get("error"):
-            lines.append(f"| {r['case']} | {r['label']} | {r['mesh']} | {r['thickness_strain']} | | | ERROR | | | | | | | | | | | | | "
-                         f"| {r['load_start']} -> {r['load_end']} |")
+            lines.append(
+                f"| {r['case']} | {r['label']} | {r['mesh']} | {r['thickness_strain']} | | | ERROR | | | | | | | | | | | | | "
+                f"| {r['load_start']} -> {r['load_end']} |"
+            )
             continue
         fr = r.get("friction") or [0.0]
         fw = r.get("friction_work")
         W = r.get("external_work") or 0.0
-        jumps = ("–" if r.get("thickness_strain_switch_samples") is None else
-                 f"{r['thickness_strain_switch_samples']}, {r['thickness_strain_corner_switches']}, "
-                 f"{r['thickness_strain_energy_jump']:.3g}")
+        jumps = (
+            "–"
+            if r.get("thickness_strain_switch_samples") is None
+            else f"{r['thickness_strain_switch_samples']}, {r['thickness_strain_corner_switches']}, "
+            f"{r['thickness_strain_energy_jump']:.3g}"
+        )
         ms = f"{r.get('mass_scaling_mode')} x{r.get('mass_scaling'):g}" if r.get("mass_scaling") else "–"
         lines.append(
             f"| {r['case']} | {r.get('label', '')} | {r['mesh']} | {r['thickness_strain']} | {ms} | {fr[0] if fr else 0:g} | "
@@ -247,7 +356,8 @@ def report() -> list:
             f"({cell(r.get('max_interpenetration_time'), '.2f')}) | {r.get('interpenetrated_nodes')} | "
             f"{cell(r.get('energy_balance_error'), '.2e')} | "
             f"{('–' if fw is None else format(fw / W if W else 0.0, '.3f'))} | {jumps} | "
-            f"{r['load_start']} -> {r['load_end']} |")
+            f"{r['load_start']} -> {r['load_end']} |"
+        )
     lines.append("")
     lines.append("Messages:")
     lines.append("")
@@ -263,9 +373,28 @@ def report() -> list:
 
 
 def main(argv=None):
-    cases.main(argv, __doc__, CASES, run_case, report, lambda n, c: f"{n:20s} {c[0]:8s} {c[3]}",
-               echo_keys=("case", "error", "steady_state_reached", "t_final", "steps", "wall_time_s", "fold_count",
-                          "max_interpenetrated_nodes", "energy_balance_error", "load_start", "load_end", "message"))
+    cases.main(
+        argv,
+        __doc__,
+        CASES,
+        run_case,
+        report,
+        lambda n, c: f"{n:20s} {c[0]:8s} {c[3]}",
+        echo_keys=(
+            "case",
+            "error",
+            "steady_state_reached",
+            "t_final",
+            "steps",
+            "wall_time_s",
+            "fold_count",
+            "max_interpenetrated_nodes",
+            "energy_balance_error",
+            "load_start",
+            "load_end",
+            "message",
+        ),
+    )
 
 
 if __name__ == "__main__":

@@ -23,22 +23,51 @@ from pathlib import Path
 import numpy as np
 
 OUT = Path(__file__).resolve().parent / "out" / "fold_pursuit"
-KEYS = ("converged", "message", "drape_coefficient", "fold_count", "fold_angles_deg", "steps", "iterations",
-        "positive_definite", "min_tangent_eigenvalue", "max_interpenetrated_nodes", "interpenetrated_nodes")
-START = {"flat": None,
-         "pert10": {"perturbation.shape": "folds", "perturbation.folds": 10, "perturbation.amplitude": 2.0,
-                    "perturbation.phase": 0.0}}
+KEYS = (
+    "converged",
+    "message",
+    "drape_coefficient",
+    "fold_count",
+    "fold_angles_deg",
+    "steps",
+    "iterations",
+    "positive_definite",
+    "min_tangent_eigenvalue",
+    "max_interpenetrated_nodes",
+    "interpenetrated_nodes",
+)
+START = {
+    "flat": None,
+    "pert10": {
+        "perturbation.shape": "folds",
+        "perturbation.folds": 10,
+        "perturbation.amplitude": 2.0,
+        "perturbation.phase": 0.0,
+    },
+}
 
 
 def main(tag: str) -> dict:
     from solidshell import run_scene
 
     t = time.perf_counter()
-    relaxed = run_scene("square-on-disc", mesh="30x240", solver="relax", out_dir=None, progress=False,
-                        overrides=START[tag], damping="rayleigh", alpha=50.0, mass_scaling=100.0,
-                        mass_scaling_mode="director")
-    out = {"tag": tag, "relax": {k: relaxed.summary.get(k) for k in KEYS if k in relaxed.summary},
-           "relax_wall_s": time.perf_counter() - t}
+    relaxed = run_scene(
+        "square-on-disc",
+        mesh="30x240",
+        solver="relax",
+        out_dir=None,
+        progress=False,
+        overrides=START[tag],
+        damping="rayleigh",
+        alpha=50.0,
+        mass_scaling=100.0,
+        mass_scaling_mode="director",
+    )
+    out = {
+        "tag": tag,
+        "relax": {k: relaxed.summary.get(k) for k in KEYS if k in relaxed.summary},
+        "relax_wall_s": time.perf_counter() - t,
+    }
     t = time.perf_counter()
     U = np.asarray(relaxed.U)
     static = run_scene("square-on-disc", mesh="30x240", solver="static", out_dir=None, progress=False, U0=U)

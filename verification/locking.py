@@ -42,8 +42,21 @@ from __future__ import annotations
 import argparse
 
 from verification.checks.cantilevers import (  # noqa: F401  (the computations live in the package)
-    B, E, L, MH_REF, RATIOS, beams, circle, column_buckling, curved_cantilever, end_moment, macneal_harder_beam,
-    macneal_harder_mesh, strip_mesh, tip_load)
+    MH_REF,
+    RATIOS,
+    B,
+    E,
+    L,
+    beams,
+    circle,
+    column_buckling,
+    curved_cantilever,
+    end_moment,
+    macneal_harder_beam,
+    macneal_harder_mesh,
+    strip_mesh,
+    tip_load,
+)
 
 from . import OUT, write_json
 
@@ -51,8 +64,10 @@ from . import OUT, write_json
 def run(ratios=RATIOS, n=8, verbose=True):
     shear = []
     if verbose:
-        print(f"Shear locking: cantilever {n}x1, nu = 0, tip load; error vs Timoshenko beam "
-              f"(and vs the {n}-element Timoshenko beam, {beams.discrete_timoshenko_tip_deflection(1, L, E, B, L / 1000, n) / beams.timoshenko_tip_deflection(1, L, E, B, L / 1000) - 1:+.3%} vs Timoshenko)")
+        print(
+            f"Shear locking: cantilever {n}x1, nu = 0, tip load; error vs Timoshenko beam "
+            f"(and vs the {n}-element Timoshenko beam, {beams.discrete_timoshenko_tip_deflection(1, L, E, B, L / 1000, n) / beams.timoshenko_tip_deflection(1, L, E, B, L / 1000) - 1:+.3%} vs Timoshenko)"
+        )
         print(f"{'mesh':6s} {'L/h':>7s} {'tip/ref - 1':>12s} {'vs beam el.':>12s}")
     for kind in ("quad", "tri/", "tri\\"):
         for r in ratios:
@@ -63,15 +78,19 @@ def run(ratios=RATIOS, n=8, verbose=True):
     bend = []
     if verbose:
         print("Thickness locking: end moment, nu = 0.3, vs plane-stress theory")
-        print(f"{'mesh':6s} {'support':10s} {'L/h':>7s} {'rot/ref - 1':>12s} {'w/ref - 1':>12s} {'kappa_y/kappa_x':>16s}")
+        print(
+            f"{'mesh':6s} {'support':10s} {'L/h':>7s} {'rot/ref - 1':>12s} {'w/ref - 1':>12s} {'kappa_y/kappa_x':>16s}"
+        )
     for kind in ("quad", "tri/", "tri\\"):
         for support in ("free", "restrained", "clamped"):
             for r in ratios:
                 row = end_moment(r, kind, 0.3, support, n)
                 bend.append(row)
                 if verbose:
-                    print(f"{kind:6s} {support:10s} {r:7.0f} {row['rel_error_rotation']:+12.4e} "
-                          f"{row['rel_error_deflection']:+12.4e} {row['kappa_y'] / row['kappa_x']:16.6f}")
+                    print(
+                        f"{kind:6s} {support:10s} {r:7.0f} {row['rel_error_rotation']:+12.4e} "
+                        f"{row['rel_error_deflection']:+12.4e} {row['kappa_y'] / row['kappa_x']:16.6f}"
+                    )
     mh = []
     if verbose:
         print("MacNeal-Harder straight cantilever (6 elements), tip displacement / reference:")
@@ -89,7 +108,9 @@ def run(ratios=RATIOS, n=8, verbose=True):
             row = column_buckling(nn, kind)
             col.append(row)
             if verbose:
-                print(f"  {kind:5s} n={nn:3d}  P_cr/ref - 1 = {row['rel_error']:+.3e}   2nd/1st {row['second_over_first']:.3f}")
+                print(
+                    f"  {kind:5s} n={nn:3d}  P_cr/ref - 1 = {row['rel_error']:+.3e}   2nd/1st {row['second_over_first']:.3f}"
+                )
     curv = []
     if verbose:
         print("Quarter-circle strip (trapezoidal/membrane locking), tip load, error vs curved-beam theory:")
@@ -99,7 +120,10 @@ def run(ratios=RATIOS, n=8, verbose=True):
                 rr = [curved_cantilever(nn, kind, r, load) for r in (10.0, 100.0, 1000.0, 10000.0)]
                 curv += rr
                 if verbose:
-                    print(f"  {kind:5s} {load:10s} n={nn:3d} " + "  ".join(f"R/h={x['R_over_h']:.0f}: {x['rel_error']:+.3e}" for x in rr))
+                    print(
+                        f"  {kind:5s} {load:10s} n={nn:3d} "
+                        + "  ".join(f"R/h={x['R_over_h']:.0f}: {x['rel_error']:+.3e}" for x in rr)
+                    )
     circ = []
     if verbose:
         print("Large rotation: strip rolled into a circle by a prescribed tip director (L/h = 100):")
@@ -108,9 +132,11 @@ def run(ratios=RATIOS, n=8, verbose=True):
             for row in circle(nn, kind):
                 circ.append(row)
                 if verbose:
-                    print(f"  {kind:5s} n={nn:3d} phi={row['phi_over_pi']:.1f}pi converged={row['converged']} "
-                          f"tip error/L {row['error_over_L']:.2e}  M/(EI phi/L) {row['moment_ratio']:.5f}  "
-                          f"max||x_n|-1| {row['max_director_stretch']:.1e}")
+                    print(
+                        f"  {kind:5s} n={nn:3d} phi={row['phi_over_pi']:.1f}pi converged={row['converged']} "
+                        f"tip error/L {row['error_over_L']:.2e}  M/(EI phi/L) {row['moment_ratio']:.5f}  "
+                        f"max||x_n|-1| {row['max_director_stretch']:.1e}"
+                    )
     return shear, bend, mh, col, circ, curv
 
 
@@ -123,8 +149,7 @@ def plot(shear, path):
     fig, ax = plt.subplots(figsize=(6, 4))
     for kind, mk in (("quad", "o"), ("tri/", "^"), ("tri\\", "v")):
         sel = [r for r in shear if r["kind"] == kind]
-        ax.loglog([r["L_over_h"] for r in sel], [max(abs(r["rel_error"]), 1e-16) for r in sel], marker=mk,
-                  label=kind)
+        ax.loglog([r["L_over_h"] for r in sel], [max(abs(r["rel_error"]), 1e-16) for r in sel], marker=mk, label=kind)
     ax.axhline(0.01, color="grey", lw=0.5)
     ax.set_xlabel("L/h")
     ax.set_ylabel("|tip deflection error| vs Timoshenko")
@@ -141,9 +166,21 @@ def main(argv=None):
     ap.add_argument("-n", type=int, default=8, help="elements along the strip")
     args = ap.parse_args(argv)
     shear, bend, mh, col, circ, curv = run(n=args.n)
-    p = write_json("locking", {"description": __doc__.splitlines()[0], "L": L, "b": B, "E": E,
-                               "tip_load": shear, "end_moment": bend, "macneal_harder_beam": mh,
-                               "column_buckling": col, "circle": circ, "curved_cantilever": curv})
+    p = write_json(
+        "locking",
+        {
+            "description": __doc__.splitlines()[0],
+            "L": L,
+            "b": B,
+            "E": E,
+            "tip_load": shear,
+            "end_moment": bend,
+            "macneal_harder_beam": mh,
+            "column_buckling": col,
+            "circle": circ,
+            "curved_cantilever": curv,
+        },
+    )
     plot(shear, OUT / "locking.png")
     print("wrote", p, "and", OUT / "locking.png")
     return shear, bend, mh, col, circ, curv

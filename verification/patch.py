@@ -5,8 +5,7 @@ The table printer over verification.checks.elements, where the computation and i
 
 from __future__ import annotations
 
-from verification.checks.elements import (  # noqa: F401  (the computations live in the package)
-    AMP, AREA, INNER, MAT, NODES, OUTER, QUADS, exact_field, patch_mesh, run_one)
+from verification.checks.elements import AMP, AREA, INNER, MAT, NODES, OUTER, QUADS, exact_field, patch_mesh, run_one  # noqa: F401  (the computations live in the package)
 
 from . import write_json
 
@@ -14,15 +13,19 @@ from . import write_json
 def run(verbose=True):
     rows = []
     if verbose:
-        print(f"{'mesh':10s} {'case':9s} {'|U-Uex|/|U|':>12s} {'residual':>10s} {'energy err':>11s} {'bend. strain':>12s}")
+        print(
+            f"{'mesh':10s} {'case':9s} {'|U-Uex|/|U|':>12s} {'residual':>10s} {'energy err':>11s} {'bend. strain':>12s}"
+        )
     for kind in ("quads", "tris", "mixed", "quads-rot", "tris-rot", "mixed-rot"):
         for case in ("membrane", "bending"):
             row = run_one(kind, case)
             rows.append(row)
             if verbose:
                 bs = row.get("bending_strain_error")
-                print(f"{kind:10s} {case:9s} {row['displacement_error']:12.2e} {row['equilibrium_residual']:10.2e} "
-                      f"{row['energy_error']:+11.2e} {'' if bs is None else f'{bs:12.2e}'}")
+                print(
+                    f"{kind:10s} {case:9s} {row['displacement_error']:12.2e} {row['equilibrium_residual']:10.2e} "
+                    f"{row['energy_error']:+11.2e} {'' if bs is None else f'{bs:12.2e}'}"
+                )
     return rows
 
 
@@ -38,8 +41,10 @@ def thickness_scan(verbose=True):
             row = run_one(kind, "bending", h)
             rows.append(row)
             if verbose:
-                print(f"  h={h:7.0e} {kind:10s} |U-Uex|/|U| {row['displacement_error']:.1e}  residual "
-                      f"{row['equilibrium_residual']:.1e}  residual*(h/0.24)^2 {row['equilibrium_residual'] * (h / 0.24) ** 2:.1e}")
+                print(
+                    f"  h={h:7.0e} {kind:10s} |U-Uex|/|U| {row['displacement_error']:.1e}  residual "
+                    f"{row['equilibrium_residual']:.1e}  residual*(h/0.24)^2 {row['equilibrium_residual'] * (h / 0.24) ** 2:.1e}"
+                )
     return rows
 
 

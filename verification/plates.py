@@ -11,13 +11,26 @@ import time
 import numpy as np
 
 from verification.checks.plates import (  # noqa: F401  (the computations live in the package)
-    NU, A, centre_deflection, mitc3_plate, plate_bc, plate_buckling, square_plate_mesh, triangle_vs_mitc3)
+    NU,
+    A,
+    centre_deflection,
+    mitc3_plate,
+    plate_bc,
+    plate_buckling,
+    square_plate_mesh,
+    triangle_vs_mitc3,
+)
 
 from . import OUT, plate_reference, rate, write_json
 
 
-def run(ns=(4, 8, 16, 32), kinds=("quad", "quad~", "tri", "trix"), supports=("clamped", "ss_hard", "ss_soft"),
-        ratios=(100.0, 1000.0), verbose=True):
+def run(
+    ns=(4, 8, 16, 32),
+    kinds=("quad", "quad~", "tri", "trix"),
+    supports=("clamped", "ss_hard", "ss_soft"),
+    ratios=(100.0, 1000.0),
+    verbose=True,
+):
     refs = plate_reference()
     ref = refs["alpha"]
     exact = {"clamped": ref["clamped"], "ss_hard": ref["simply_supported"], "ss_soft": ref["simply_supported"]}
@@ -34,10 +47,19 @@ def run(ns=(4, 8, 16, 32), kinds=("quad", "quad~", "tri", "trix"), supports=("cl
                     w = centre_deflection(n, kind, support, ah)
                     err = (w - exact[support]) / exact[support]
                     r = rate(prev, err) if prev is not None else None
-                    row = dict(support=support, mesh=kind, a_over_h=ah, n=n, alpha=w, exact=exact[support],
-                               rel_error=err, rate=r, seconds=time.perf_counter() - t0)
+                    row = dict(
+                        support=support,
+                        mesh=kind,
+                        a_over_h=ah,
+                        n=n,
+                        alpha=w,
+                        exact=exact[support],
+                        rel_error=err,
+                        rate=r,
+                        seconds=time.perf_counter() - t0,
+                    )
                     if support == "ss_hard" and c_mindlin is not None:
-                        wm = exact[support] + c_mindlin / ah**2     # hard SS Reissner-Mindlin plate
+                        wm = exact[support] + c_mindlin / ah**2  # hard SS Reissner-Mindlin plate
                         row.update(mindlin=wm, rel_error_vs_mindlin=(w - wm) / wm)
                     rows.append(row)
                     if verbose:
@@ -62,8 +84,13 @@ def plot(rows, path):
                 sel = [r for r in rows if r["support"] == support and r["mesh"] == kind and r["a_over_h"] == ah]
                 if not sel:
                     continue
-                ax.loglog([A / r["n"] for r in sel], [max(abs(r["rel_error"]), 1e-16) for r in sel], ls, marker=mk,
-                          label=f"{kind}, a/h={ah:.0f}")
+                ax.loglog(
+                    [A / r["n"] for r in sel],
+                    [max(abs(r["rel_error"]), 1e-16) for r in sel],
+                    ls,
+                    marker=mk,
+                    label=f"{kind}, a/h={ah:.0f}",
+                )
         hh = np.array([A / 4, A / 32])
         ax.loglog(hh, 0.3 * (hh / hh[0]) ** 2, "k:", label="O(h^2)")
         ax.axhline(0.01, color="grey", lw=0.5)
@@ -93,15 +120,32 @@ def main(argv=None):
         for n in (4, 8, 16):
             b = plate_buckling(n, kind)
             buck.append(b)
-            print(f"  {kind:5s} N={n:3d}  k = " + ", ".join(f"{v:.4f}" for v in b["k"]) + "  rel.err "
-                  + ", ".join(f"{e:+.2e}" for e in b["rel_error"]) + "  (ref 4, 6.25, 11.11)")
-    p = write_json("plates", {"description": __doc__.splitlines()[0], "nu": NU, "a": A, "rows": rows,
-                              "triangle_vs_independent_mitc3": mitc3, "buckling": buck})
+            print(
+                f"  {kind:5s} N={n:3d}  k = "
+                + ", ".join(f"{v:.4f}" for v in b["k"])
+                + "  rel.err "
+                + ", ".join(f"{e:+.2e}" for e in b["rel_error"])
+                + "  (ref 4, 6.25, 11.11)"
+            )
+    p = write_json(
+        "plates",
+        {
+            "description": __doc__.splitlines()[0],
+            "nu": NU,
+            "a": A,
+            "rows": rows,
+            "triangle_vs_independent_mitc3": mitc3,
+            "buckling": buck,
+        },
+    )
     OUT.mkdir(exist_ok=True)
     plot(rows, OUT / "plates.png")
     print("wrote", p, "and", OUT / "plates.png")
-    bad = [r for r in rows if r["n"] == 32 and r["mesh"] in ("quad", "quad~") and r["support"] != "ss_soft"
-           and abs(r["rel_error"]) > 0.01]
+    bad = [
+        r
+        for r in rows
+        if r["n"] == 32 and r["mesh"] in ("quad", "quad~") and r["support"] != "ss_soft" and abs(r["rel_error"]) > 0.01
+    ]
     print("32x32 quads within 1%:", "yes" if not bad else f"NO ({len(bad)} cases)")
     return rows
 

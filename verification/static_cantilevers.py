@@ -34,14 +34,20 @@ def main(argv=None):
         for alpha in (1.0, 4.0, 10.0):
             d = end_shear(n, alpha)
             out["end_shear"].append(d)
-            print(f"{d['mesh']:>6} {alpha:6g} {d['w_over_L']:9.5f} {d['w_ref']:8.5f} {d['w_rel_error']:9.2e} "
-                  f"{d['u_over_L']:9.5f} {d['u_ref']:8.5f} {d['u_rel_error']:9.2e} {d['iterations']:6d}", flush=True)
+            print(
+                f"{d['mesh']:>6} {alpha:6g} {d['w_over_L']:9.5f} {d['w_ref']:8.5f} {d['w_rel_error']:9.2e} "
+                f"{d['u_over_L']:9.5f} {d['u_ref']:8.5f} {d['u_rel_error']:9.2e} {d['iterations']:6d}",
+                flush=True,
+            )
     print("end moment (circle of radius L/phi; closure at 2 pi):")
     for n in a.meshes:
         d = end_moment(n)
         out["end_moment"].append(d)
-        print(f"{d['mesh']:>6}  closure |tip|/L = {d['closure_error_over_L']:.2e}  max tip error along the "
-              f"path /L = {d['max_tip_error_over_L_along_path']:.2e}  iterations {d['iterations']}", flush=True)
+        print(
+            f"{d['mesh']:>6}  closure |tip|/L = {d['closure_error_over_L']:.2e}  max tip error along the "
+            f"path /L = {d['max_tip_error_over_L_along_path']:.2e}  iterations {d['iterations']}",
+            flush=True,
+        )
     os.makedirs(os.path.join(HERE, "out"), exist_ok=True)
     with open(os.path.join(HERE, "out", "static_cantilevers.json"), "w") as fh:
         json.dump(out, fh, indent=1)

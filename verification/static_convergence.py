@@ -32,8 +32,7 @@ VARIANTS = [
     ("paper element, uniform meshes", None, {}),
     ("assumed membrane, uniform meshes", "ans", {"model.membrane": "ans"}),
     ("paper element, graded meshes (grading 8)", "g8", {"geometry.grading": 8.0}),
-    ("assumed membrane, graded meshes (grading 8)", "ans-g8",
-     {"model.membrane": "ans", "geometry.grading": 8.0}),
+    ("assumed membrane, graded meshes (grading 8)", "ans-g8", {"model.membrane": "ans", "geometry.grading": 8.0}),
 ]
 
 
@@ -55,16 +54,18 @@ def rows(tag, overrides, run=True):
             p.write_text(json.dumps(r, indent=1, default=str))
             out.append(r)
         else:
-            out.append({"scene": SCENE, "mesh": m, "solver": LABEL, "converged": None,
-                        "message": "not run"})
+            out.append({"scene": SCENE, "mesh": m, "solver": LABEL, "converged": None, "message": "not run"})
     return out
 
 
 def study(name, rs):
     """Lines of the report and the JSON record of one variant."""
-    lines = [f"## {name}", "",
-             "| mesh | nodes | converged | DC | rel. change vs previous | folds | iterations | wall [s] | pos. def. |",
-             "|---|---|---|---|---|---|---|---|---|"]
+    lines = [
+        f"## {name}",
+        "",
+        "| mesh | nodes | converged | DC | rel. change vs previous | folds | iterations | wall [s] | pos. def. |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
     prev = None
     res = {"variant": name, "rows": rs}
     for r in rs:
@@ -74,10 +75,12 @@ def study(name, rs):
             rel = abs(dc - prev) / abs(dc)
             ch = f"{100 * rel:.2f} %"
             res.setdefault("relative_changes", []).append(rel)
-        lines.append(f"| {r['mesh']} | {r.get('n_nodes', '–')} | {r.get('converged')} | "
-                     f"{_f(dc, '.4f')} | {ch} | {r.get('fold_count', '–')} | "
-                     f"{r.get('iterations', '–')} | {_f(r.get('wall_time_s'), '.1f')} | "
-                     f"{r.get('positive_definite', '–')} |")
+        lines.append(
+            f"| {r['mesh']} | {r.get('n_nodes', '–')} | {r.get('converged')} | "
+            f"{_f(dc, '.4f')} | {ch} | {r.get('fold_count', '–')} | "
+            f"{r.get('iterations', '–')} | {_f(r.get('wall_time_s'), '.1f')} | "
+            f"{r.get('positive_definite', '–')} |"
+        )
         prev = dc if dc is not None else prev
     dcs = [r.get("drape_coefficient") for r in rs]
     if all(d is not None for d in dcs) and all(r.get("converged") for r in rs):
@@ -85,14 +88,18 @@ def study(name, rs):
         res["finest_relative_change"] = rel
         res["meets_1_percent_target"] = bool(rel < 0.01)
         d1, d2 = dcs[0] - dcs[1], dcs[1] - dcs[2]
-        text = (f"Change between {MESHES[1]} and {MESHES[2]}: {100 * rel:.2f} % "
-                f"(target < 1 %: {'met' if rel < 0.01 else 'NOT met'}).")
+        text = (
+            f"Change between {MESHES[1]} and {MESHES[2]}: {100 * rel:.2f} % "
+            f"(target < 1 %: {'met' if rel < 0.01 else 'NOT met'})."
+        )
         if d1 * d2 > 0 and abs(d1) > abs(d2):
             p = math.log2(d1 / d2)
-            lim = dcs[2] - d2 / (2.0 ** p - 1.0)
+            lim = dcs[2] - d2 / (2.0**p - 1.0)
             res.update(observed_order=p, richardson_limit=lim)
-            text += (f" Observed order {p:.2f}; Richardson limit {lim:.4f}, i.e. the finest mesh "
-                     f"is {100 * (dcs[2] - lim) / lim:+.2f} % from it.")
+            text += (
+                f" Observed order {p:.2f}; Richardson limit {lim:.4f}, i.e. the finest mesh "
+                f"is {100 * (dcs[2] - lim) / lim:+.2f} % from it."
+            )
         lines += ["", text]
     else:
         lines += ["", "Not every mesh converged: no convergence figure."]
@@ -101,17 +108,22 @@ def study(name, rs):
 
 def main(argv=None):
     run = "--collect" not in (argv if argv is not None else sys.argv[1:])
-    lines = ["# square-pedestal: mesh convergence of the drape coefficient (static newton)", "",
-             "DC = (A_proj - A_ped) / (A_sheet - A_ped).  Wall times are the solver's, on a 2-core "
-             "machine shared with other jobs.", ""]
+    lines = [
+        "# square-pedestal: mesh convergence of the drape coefficient (static newton)",
+        "",
+        "DC = (A_proj - A_ped) / (A_sheet - A_ped).  Wall times are the solver's, on a 2-core "
+        "machine shared with other jobs.",
+        "",
+    ]
     records = []
     for name, tag, over in VARIANTS:
         ls, rec = study(name, rows(tag, over, run=run))
         lines += ls + [""]
         records.append(rec)
     OUT.mkdir(exist_ok=True)
-    (OUT / "static_convergence.json").write_text(json.dumps({"scene": SCENE, "solver": LABEL,
-                                                             "variants": records}, indent=1, default=str))
+    (OUT / "static_convergence.json").write_text(
+        json.dumps({"scene": SCENE, "solver": LABEL, "variants": records}, indent=1, default=str)
+    )
     (OUT / "static_convergence.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
     return 0

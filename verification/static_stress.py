@@ -17,7 +17,7 @@ from verification.cases import cell
 from verification.static_scenes import OUT, RUNS, run_case
 
 SCENE, MESH = "square-pedestal", "24x8x4"
-WOOL = dict(bending_warp=0.083, bending_weft=0.063, torsion=0.027, weight=0.019)   # Table 1
+WOOL = dict(bending_warp=0.083, bending_weft=0.063, torsion=0.027, weight=0.019)  # Table 1
 CASES = {
     "bending x0.1": {f"material.{k}": 0.1 * WOOL[k] for k in ("bending_warp", "bending_weft", "torsion")},
     "bending x10": {f"material.{k}": 10.0 * WOOL[k] for k in ("bending_warp", "bending_weft", "torsion")},
@@ -49,22 +49,32 @@ def main(argv=None):
                 d = Path(r["run_dir"])
                 r["files_written"] = sorted(f.name for f in d.iterdir()) if d.exists() else []
                 p.write_text(json.dumps(r, indent=1, default=str))
-                print(f"  converged={r.get('converged')} it={r.get('iterations')} "
-                      f"DC={r.get('drape_coefficient')} :: {r.get('message')}", flush=True)
+                print(
+                    f"  converged={r.get('converged')} it={r.get('iterations')} "
+                    f"DC={r.get('drape_coefficient')} :: {r.get('message')}",
+                    flush=True,
+                )
             rows.append(r)
-    lines = [f"# Static stress cases: {SCENE} {MESH}", "",
-             "bending = bending_warp, bending_weft and torsion scaled together; paper-c0.01 is capped "
-             "at the iteration limit of verification/static_scenes.py.  'last state written' = the run "
-             "directory holds summary.json and result.vtu of the final (or last) state.", "",
-             "| case | solver | converged | iterations | linear solves | DC | folds | wall [s] | "
-             "pos. def. | last state written | message |", "|" + "---|" * 11]
+    lines = [
+        f"# Static stress cases: {SCENE} {MESH}",
+        "",
+        "bending = bending_warp, bending_weft and torsion scaled together; paper-c0.01 is capped "
+        "at the iteration limit of verification/static_scenes.py.  'last state written' = the run "
+        "directory holds summary.json and result.vtu of the final (or last) state.",
+        "",
+        "| case | solver | converged | iterations | linear solves | DC | folds | wall [s] | "
+        "pos. def. | last state written | message |",
+        "|" + "---|" * 11,
+    ]
     for r in rows:
         msg = (r.get("message") or "").replace("|", "/")
-        lines.append(f"| {r['case']} | {r['solver']} | {cell(r.get('converged'))} | "
-                     f"{cell(r.get('iterations'))} | {cell(r.get('linear_solves'))} | "
-                     f"{cell(r.get('drape_coefficient'), '.3f')} | {cell(r.get('fold_count'))} | "
-                     f"{cell(r.get('wall_time_s'), '.1f')} | {cell(r.get('positive_definite'))} | "
-                     f"{cell(r.get('run_dir_written'))} | {msg} |")
+        lines.append(
+            f"| {r['case']} | {r['solver']} | {cell(r.get('converged'))} | "
+            f"{cell(r.get('iterations'))} | {cell(r.get('linear_solves'))} | "
+            f"{cell(r.get('drape_coefficient'), '.3f')} | {cell(r.get('fold_count'))} | "
+            f"{cell(r.get('wall_time_s'), '.1f')} | {cell(r.get('positive_definite'))} | "
+            f"{cell(r.get('run_dir_written'))} | {msg} |"
+        )
     OUT.mkdir(exist_ok=True)
     (OUT / "static_stress.json").write_text(json.dumps(rows, indent=1, default=str))
     (OUT / "static_stress.md").write_text("\n".join(lines) + "\n")

@@ -36,10 +36,14 @@ def main(argv=None):
         ref = json.load(fh)["strip"]
     rows = []
     sols = {}
-    print(f"strip 5x1 cm, wool, self-weight; reference: heavy elastica (tip z warp "
-          f"{ref['warp']['tip_z']:.6f}, weft {ref['weft']['tip_z']:.6f} cm); solver {a.method}")
-    print(f"{'cut':5} {'mesh':>6} {'tip z [cm]':>12} {'rel err':>10} {'rate':>6} {'shape err':>10} "
-          f"{'iters':>6} {'solves':>6} {'time [s]':>8}")
+    print(
+        f"strip 5x1 cm, wool, self-weight; reference: heavy elastica (tip z warp "
+        f"{ref['warp']['tip_z']:.6f}, weft {ref['weft']['tip_z']:.6f} cm); solver {a.method}"
+    )
+    print(
+        f"{'cut':5} {'mesh':>6} {'tip z [cm]':>12} {'rel err':>10} {'rate':>6} {'shape err':>10} "
+        f"{'iters':>6} {'solves':>6} {'time [s]':>8}"
+    )
     for cut in ("warp", "weft"):
         prev = None
         for n in a.meshes:
@@ -47,16 +51,32 @@ def main(argv=None):
             sols[(cut, n)] = sol
             r = sol["result"]
             err = (sol["tip_z"] - ref[cut]["tip_z"]) / ref[cut]["tip_z"]
-            rate = (np.log(abs(prev[1] / err)) / np.log(n / prev[0])
-                    if prev is not None and err != 0 and prev[1] != 0 else float("nan"))
+            rate = (
+                np.log(abs(prev[1] / err)) / np.log(n / prev[0])
+                if prev is not None and err != 0 and prev[1] != 0
+                else float("nan")
+            )
             se = shape_error(sol, ref[cut])
-            rows.append(dict(cut=cut, mesh=f"{n}x1", tip_z=sol["tip_z"], rel_error=err, rate=rate,
-                             shape_error_cm=se, converged=r.converged,
-                             iterations=r.info["iterations"], linear_solves=r.info["linear_solves"],
-                             wall_time_s=sol["wall"]))
-            print(f"{cut:5} {n:>4}x1 {sol['tip_z']:12.6f} {err:10.2e} {rate:6.2f} {se:10.2e} "
-                  f"{r.info['iterations']:6d} {r.info['linear_solves']:6d} {sol['wall']:8.2f}"
-                  + ("" if r.converged else "  NOT CONVERGED: " + r.message), flush=True)
+            rows.append(
+                dict(
+                    cut=cut,
+                    mesh=f"{n}x1",
+                    tip_z=sol["tip_z"],
+                    rel_error=err,
+                    rate=rate,
+                    shape_error_cm=se,
+                    converged=r.converged,
+                    iterations=r.info["iterations"],
+                    linear_solves=r.info["linear_solves"],
+                    wall_time_s=sol["wall"],
+                )
+            )
+            print(
+                f"{cut:5} {n:>4}x1 {sol['tip_z']:12.6f} {err:10.2e} {rate:6.2f} {se:10.2e} "
+                f"{r.info['iterations']:6d} {r.info['linear_solves']:6d} {sol['wall']:8.2f}"
+                + ("" if r.converged else "  NOT CONVERGED: " + r.message),
+                flush=True,
+            )
             prev = (n, err)
     # Richardson: e(h) = e_inf + C h^p from the three finest meshes (doubling).  e_inf is what the
     # shell converges to minus the elastica: the model difference (the shell stretches -- tensile
@@ -69,24 +89,25 @@ def main(argv=None):
             if d1 * d2 > 0:
                 p_ = np.log2(d1 / d2)
                 e_inf = e[-1] - d2 / (2**p_ - 1)
-                print(f"{cut}: Richardson from the three finest meshes: order p = {p_:.2f}, "
-                      f"limit error e_inf = {e_inf:.2e} (shell model vs inextensible elastica)")
+                print(
+                    f"{cut}: Richardson from the three finest meshes: order p = {p_:.2f}, "
+                    f"limit error e_inf = {e_inf:.2e} (shell model vs inextensible elastica)"
+                )
     os.makedirs(a.out, exist_ok=True)
     with open(os.path.join(a.out, "strip_refinement.json"), "w") as fh:
         json.dump(rows, fh, indent=1)
     if not a.no_plot:
         import matplotlib
+
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
 
         fig, ax = plt.subplots(figsize=(7.5, 5.5))
         for cut, col in (("warp", "C0"), ("weft", "C3")):
-            ax.plot(ref[cut]["curve"]["x"], ref[cut]["curve"]["z"], "-", color=col, lw=2,
-                    label=f"{cut}: elastica")
+            ax.plot(ref[cut]["curve"]["x"], ref[cut]["curve"]["z"], "-", color=col, lw=2, label=f"{cut}: elastica")
             for n, mk in zip(a.meshes[:2], ("o", "s")):
                 sol = sols[(cut, n)]
-                ax.plot(sol["cx"], sol["cz"], mk, color=col, mfc="none", ms=5,
-                        label=f"{cut}: {n}x1 solid-shell")
+                ax.plot(sol["cx"], sol["cz"], mk, color=col, mfc="none", ms=5, label=f"{cut}: {n}x1 solid-shell")
         ax.set_aspect("equal")
         ax.set_xlabel("x [cm]")
         ax.set_ylabel("z [cm]")

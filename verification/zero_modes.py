@@ -25,8 +25,16 @@ def main():
     mat = IsotropicShell(E=1.0e4, nu=0.3, h=0.01)
     rows = []
     print(f"{'mesh':<14}{'zero modes':>11}   eigenvalues 1..8 / max eigenvalue")
-    for n, kind in [(1, "quad"), (1, "tri"), (2, "quad"), (2, "tri"), (2, "mixed"), (4, "quad"),
-                    (4, "tri"), (4, "mixed")]:
+    for n, kind in [
+        (1, "quad"),
+        (1, "tri"),
+        (2, "quad"),
+        (2, "tri"),
+        (2, "mixed"),
+        (4, "quad"),
+        (4, "tri"),
+        (4, "mixed"),
+    ]:
         mesh = patch(n, kind)
         K = Model(mesh, mat).tangent(np.zeros((mesh.n_nodes, 6))).toarray()
         ev = np.linalg.eigvalsh(K)

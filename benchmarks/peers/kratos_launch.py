@@ -24,15 +24,18 @@ import time
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
 WORKER = os.path.join(HERE, "kratos_shell.py")
-INSTALL = ("python3.11 -m venv .venv-kratos && .venv-kratos/bin/pip install KratosMultiphysics "
-           "KratosStructuralMechanicsApplication")
+INSTALL = (
+    "python3.11 -m venv .venv-kratos && .venv-kratos/bin/pip install KratosMultiphysics "
+    "KratosStructuralMechanicsApplication"
+)
 MISSING_STATUS = 3
 
 
 def _has_kratos(python: str) -> bool:
     try:
-        r = subprocess.run([python, "-c", "import KratosMultiphysics.StructuralMechanicsApplication"],
-                           capture_output=True, timeout=120)
+        r = subprocess.run(
+            [python, "-c", "import KratosMultiphysics.StructuralMechanicsApplication"], capture_output=True, timeout=120
+        )
     except (OSError, subprocess.TimeoutExpired):
         return False
     return r.returncode == 0
@@ -40,8 +43,11 @@ def _has_kratos(python: str) -> bool:
 
 def find_kratos_python() -> str | None:
     """The first interpreter (see module docstring) that imports Kratos' structural application."""
-    cands = [os.environ.get("SOLIDSHELL_KRATOS_PYTHON"), os.path.join(ROOT, ".venv-kratos", "bin", "python"),
-             sys.executable]
+    cands = [
+        os.environ.get("SOLIDSHELL_KRATOS_PYTHON"),
+        os.path.join(ROOT, ".venv-kratos", "bin", "python"),
+        sys.executable,
+    ]
     for c in cands:
         if c and os.path.exists(c) and _has_kratos(c):
             return c
@@ -52,8 +58,7 @@ def require_kratos() -> str:
     """The Kratos interpreter, or one line on stderr and exit status 3."""
     py = find_kratos_python()
     if py is None:
-        print(f"KratosMultiphysics not found (set SOLIDSHELL_KRATOS_PYTHON or install it: {INSTALL})",
-              file=sys.stderr)
+        print(f"KratosMultiphysics not found (set SOLIDSHELL_KRATOS_PYTHON or install it: {INSTALL})", file=sys.stderr)
         sys.exit(MISSING_STATUS)
     return py
 
@@ -62,8 +67,9 @@ def run_once(python: str, problem: dict, timeout: float = 3600.0) -> dict:
     """One worker run; the answer dict plus ``wall_process_s`` (start-up, import and solve)."""
     env = dict(os.environ, OMP_NUM_THREADS="1")
     t0 = time.perf_counter()
-    r = subprocess.run([python, WORKER], input=json.dumps(problem), capture_output=True, text=True,
-                       env=env, timeout=timeout)
+    r = subprocess.run(
+        [python, WORKER], input=json.dumps(problem), capture_output=True, text=True, env=env, timeout=timeout
+    )
     wall = time.perf_counter() - t0
     if r.returncode != 0:
         tail = " | ".join(line for line in r.stderr.strip().splitlines()[-3:])
@@ -85,12 +91,22 @@ def run_kratos(python: str, problem: dict, steps=(1, 2, 4, 8, 16, 32, 64), verbo
     for s in steps:
         out = run_once(python, dict(problem, steps=s))
         total += out["wall_solve_s"]
-        attempts.append({"steps": s, "converged": out["converged"], "wall_solve_s": out["wall_solve_s"],
-                         "iterations": out["iterations"]})
+        attempts.append(
+            {
+                "steps": s,
+                "converged": out["converged"],
+                "wall_solve_s": out["wall_solve_s"],
+                "iterations": out["iterations"],
+            }
+        )
         if verbose:
-            print(f"  Kratos {s} load step(s): {'converged' if out['converged'] else 'failed at step '}"
-                  f"{'' if out['converged'] else len(out['iterations'])}, {sum(out['iterations'])} Newton "
-                  f"iterations, {out['wall_solve_s']:.2f} s", file=sys.stderr, flush=True)
+            print(
+                f"  Kratos {s} load step(s): {'converged' if out['converged'] else 'failed at step '}"
+                f"{'' if out['converged'] else len(out['iterations'])}, {sum(out['iterations'])} Newton "
+                f"iterations, {out['wall_solve_s']:.2f} s",
+                file=sys.stderr,
+                flush=True,
+            )
         if out["converged"]:
             break
     out["attempts"] = attempts

@@ -33,8 +33,8 @@ import time
 
 def solve(p: dict) -> dict:
     import KratosMultiphysics as KM
-    import KratosMultiphysics.StructuralMechanicsApplication as SMA
     import KratosMultiphysics.LinearSolversApplication  # noqa: F401  (registers sparse_lu)
+    import KratosMultiphysics.StructuralMechanicsApplication as SMA
     from KratosMultiphysics import python_linear_solver_factory as lsf
 
     KM.Logger.GetDefaultOutput().SetSeverity(KM.Logger.Severity.INFO if p.get("echo") else KM.Logger.Severity.WARNING)
@@ -53,8 +53,10 @@ def solve(p: dict) -> dict:
     # Kratos 10.x maps ShellThickElementCorotational3D4N to its MITC4 element, which takes the
     # through-thickness-integrated Reissner-Mindlin law; the thin element integrates a plane-stress law.
     thick = "Thick" in p["element"] and hasattr(SMA, "ReissnerMindlinShellElasticConstitutiveLaw")
-    prop.SetValue(KM.CONSTITUTIVE_LAW, SMA.ReissnerMindlinShellElasticConstitutiveLaw() if thick
-                  else SMA.LinearElasticPlaneStress2DLaw())
+    prop.SetValue(
+        KM.CONSTITUTIVE_LAW,
+        SMA.ReissnerMindlinShellElasticConstitutiveLaw() if thick else SMA.LinearElasticPlaneStress2DLaw(),
+    )
     for i, (x, y, z) in enumerate(p["nodes"]):
         mp.CreateNewNode(i + 1, float(x), float(y), float(z))
     vu = KM.VariableUtils()
@@ -80,10 +82,28 @@ def solve(p: dict) -> dict:
         if p.get("line_search"):
             # Kratos' Newton with a line search along each Newton direction (secant on the
             # directional residual, step in [min_alpha, max_alpha])
-            st = KM.LineSearchStrategy(mp, scheme, crit, bs, KM.Parameters(json.dumps({
-                "max_iteration": max_iter, "compute_reactions": False, "reform_dofs_at_each_step": False,
-                "move_mesh_flag": True, "max_line_search_iterations": 10, "first_alpha_value": float(p.get("ls_first", 0.5)),
-                "second_alpha_value": float(p.get("ls_second", 1.0)), "min_alpha": 0.05, "max_alpha": 1.0, "line_search_tolerance": 0.5})))
+            st = KM.LineSearchStrategy(
+                mp,
+                scheme,
+                crit,
+                bs,
+                KM.Parameters(
+                    json.dumps(
+                        {
+                            "max_iteration": max_iter,
+                            "compute_reactions": False,
+                            "reform_dofs_at_each_step": False,
+                            "move_mesh_flag": True,
+                            "max_line_search_iterations": 10,
+                            "first_alpha_value": float(p.get("ls_first", 0.5)),
+                            "second_alpha_value": float(p.get("ls_second", 1.0)),
+                            "min_alpha": 0.05,
+                            "max_alpha": 1.0,
+                            "line_search_tolerance": 0.5,
+                        }
+                    )
+                ),
+            )
         else:
             st = KM.ResidualBasedNewtonRaphsonStrategy(mp, scheme, crit, bs, max_iter, False, False, True)
         st.SetEchoLevel(echo)
@@ -124,19 +144,36 @@ def solve(p: dict) -> dict:
 
     disp = [list(n.GetSolutionStepValue(KM.DISPLACEMENT)) for n in mp.Nodes]
     rot = [list(n.GetSolutionStepValue(KM.ROTATION)) for n in mp.Nodes]
-    out = {"displacement": disp, "rotation": rot, "converged": converged, "iterations": iters,
-           "load_factor": len(iters) / steps if converged else (len(iters) - 1) / steps, "seeded": bool(p.get("initial")),
-           "wall_setup_s": t_setup, "wall_solve_s": t_solve,
-           "kratos_version": KM.KratosGlobals.Kernel.Version(), "element": p["element"]}
+    out = {
+        "displacement": disp,
+        "rotation": rot,
+        "converged": converged,
+        "iterations": iters,
+        "load_factor": len(iters) / steps if converged else (len(iters) - 1) / steps,
+        "seeded": bool(p.get("initial")),
+        "wall_setup_s": t_setup,
+        "wall_solve_s": t_solve,
+        "kratos_version": KM.KratosGlobals.Kernel.Version(),
+        "element": p["element"],
+    }
     if p.get("matrix"):
         A = strategy.GetSystemMatrix()
         # dof ids of the fixed dofs: the block builder keeps them in the system with a unit-like
         # diagonal; the caller drops them before the stability check.
         names = [f"{d}_{c}" for d in ("DISPLACEMENT", "ROTATION") for c in "XYZ"]
-        fixed = sorted(node.GetDof(KM.KratosGlobals.GetVariable(v)).EquationId
-                       for node in mp.Nodes for v in names if node.IsFixed(KM.KratosGlobals.GetVariable(v)))
-        out["matrix"] = {"indptr": list(A.index1_data()), "indices": list(A.index2_data()),
-                         "data": list(A.value_data()), "n": A.Size1(), "fixed": fixed}
+        fixed = sorted(
+            node.GetDof(KM.KratosGlobals.GetVariable(v)).EquationId
+            for node in mp.Nodes
+            for v in names
+            if node.IsFixed(KM.KratosGlobals.GetVariable(v))
+        )
+        out["matrix"] = {
+            "indptr": list(A.index1_data()),
+            "indices": list(A.index2_data()),
+            "data": list(A.value_data()),
+            "n": A.Size1(),
+            "fixed": fixed,
+        }
     return out
 
 

@@ -59,22 +59,32 @@ import math
 import os
 import time
 
+import kratos_launch  # benchmarks/peers, this script's folder
 import numpy as np
 
-import kratos_launch  # benchmarks/peers, this script's folder
-
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-JSON_PATH = os.path.join(ROOT, "reference", "pedestal_kratos.json")   # the checkout's reference data
+JSON_PATH = os.path.join(ROOT, "reference", "pedestal_kratos.json")  # the checkout's reference data
 SHEET, PEDESTAL, WEIGHT = 20.0, 10.0, 0.019
-T_MEAN = 0.5 * (1118.2 + 759.5)          # gf/cm
-B_MEAN = 0.5 * (0.083 + 0.063)           # gf cm
+T_MEAN = 0.5 * (1118.2 + 759.5)  # gf/cm
+B_MEAN = 0.5 * (0.083 + 0.063)  # gf cm
 H_ISO = math.sqrt(12.0 * B_MEAN / T_MEAN)
-SECTION = {"E": T_MEAN / H_ISO, "nu": 0.0, "h": H_ISO, "weight": WEIGHT,
-           "matched": "isotropic, nu = 0, E h = mean tensile rigidity 938.85 gf/cm, "
-                      "E h^3/12 = mean bending rigidity 0.073 gf cm (wool, Table 1)"}
+SECTION = {
+    "E": T_MEAN / H_ISO,
+    "nu": 0.0,
+    "h": H_ISO,
+    "weight": WEIGHT,
+    "matched": "isotropic, nu = 0, E h = mean tensile rigidity 938.85 gf/cm, "
+    "E h^3/12 = mean bending rigidity 0.073 gf cm (wool, Table 1)",
+}
 ELEMENT = "ShellThickElementCorotational3D4N"
-PIN = {"24x8x4": {"perturbation.shape": "folds", "perturbation.folds": 2, "perturbation.amplitude": 0.1,
-                  "perturbation.phase": 90.0}}
+PIN = {
+    "24x8x4": {
+        "perturbation.shape": "folds",
+        "perturbation.folds": 2,
+        "perturbation.amplitude": 0.1,
+        "perturbation.phase": 90.0,
+    }
+}
 """The state each mesh's run is pinned to, as dotted scene keys (``solidshell.perturbation``): a starting
 state, not an imperfection, so the equilibrium is the unperturbed model's.  With this isotropic section
 the problem has the square's full symmetry, and on 24x8x4 the drape breaks it: its two 4-fold states
@@ -159,28 +169,49 @@ def run_kratos(py: str, mesh_name: str, seed_U=None) -> dict:
     from solidshell.analysis import drape_summary
 
     mesh = problem(mesh_name)
-    prob = {"nodes": mesh.nodes.tolist(), "quads": mesh.quads.tolist(),
-            "clamped": mesh.node_set("clamped").tolist(),
-            "section": {k: SECTION[k] for k in ("E", "nu", "h")}, "weight": WEIGHT, "element": ELEMENT,
-            "tol": 1e-12, "abs_tol": ABS_TOL * WEIGHT * (SHEET**2 - PEDESTAL**2), "max_iter": 60, "matrix": True,
-            "line_search": True}
+    prob = {
+        "nodes": mesh.nodes.tolist(),
+        "quads": mesh.quads.tolist(),
+        "clamped": mesh.node_set("clamped").tolist(),
+        "section": {k: SECTION[k] for k in ("E", "nu", "h")},
+        "weight": WEIGHT,
+        "element": ELEMENT,
+        "tol": 1e-12,
+        "abs_tol": ABS_TOL * WEIGHT * (SHEET**2 - PEDESTAL**2),
+        "max_iter": 60,
+        "matrix": True,
+        "line_search": True,
+    }
     if seed_U is not None:
-        prob["initial"] = {"displacement": seed_U[:, :3].tolist(),
-                           "rotation": nodal_rotation_vectors(mesh, seed_U).tolist()}
+        prob["initial"] = {
+            "displacement": seed_U[:, :3].tolist(),
+            "rotation": nodal_rotation_vectors(mesh, seed_U).tolist(),
+        }
     out = kratos_launch.run_kratos(py, prob, verbose=True, steps=(1,) if seed_U is not None else (1, 4, 16, 64))
     U = np.zeros((mesh.n_nodes, 6))
     U[:, :3] = np.asarray(out["displacement"])
     pd, lmin = kratos_stability(out.pop("matrix")) if out["converged"] else (None, None)
     s = drape_summary(mesh, U, pedestal_area=PEDESTAL**2)
     state = "not converged" if not out["converged"] else ("stable" if pd else "unstable")
-    return {"mesh": mesh_name, "code": "kratos", "element": f"Kratos {out['kratos_version']} {ELEMENT}",
-            "dc": s["drape_coefficient"], "fold_count": s["fold_count"], "state": state,
-            "positive_definite": pd, "min_tangent_eigenvalue": lmin,
-            "projected_boundary": s["projected_boundary"], "center": s["center"], "section": SECTION,
-            "load_steps": out["attempts"][-1]["steps"], "newton_iterations": sum(out["iterations"]),
-            "wall_solve_s": out["wall_solve_s"], "wall_solve_all_tries_s": out["wall_solve_total_s"],
-            "attempts": out["attempts"],
-            "start": "solidshell's state (line-searched Newton at full weight)" if seed_U is not None else "flat sheet"}
+    return {
+        "mesh": mesh_name,
+        "code": "kratos",
+        "element": f"Kratos {out['kratos_version']} {ELEMENT}",
+        "dc": s["drape_coefficient"],
+        "fold_count": s["fold_count"],
+        "state": state,
+        "positive_definite": pd,
+        "min_tangent_eigenvalue": lmin,
+        "projected_boundary": s["projected_boundary"],
+        "center": s["center"],
+        "section": SECTION,
+        "load_steps": out["attempts"][-1]["steps"],
+        "newton_iterations": sum(out["iterations"]),
+        "wall_solve_s": out["wall_solve_s"],
+        "wall_solve_all_tries_s": out["wall_solve_total_s"],
+        "attempts": out["attempts"],
+        "start": "solidshell's state (line-searched Newton at full weight)" if seed_U is not None else "flat sheet",
+    }
 
 
 def run_solidshell(mesh_name: str) -> dict:
@@ -188,10 +219,9 @@ def run_solidshell(mesh_name: str) -> dict:
     from solidshell.boundary import clamp, gravity_loads
     from solidshell.material import IsotropicShell
     from solidshell.model import Model
+    from solidshell.perturbation import initial_state
     from solidshell.solvers.static import solve_static
     from solidshell.units import G0
-
-    from solidshell.perturbation import initial_state
 
     mesh = problem(mesh_name)
     mat = IsotropicShell(E=SECTION["E"], nu=SECTION["nu"], h=SECTION["h"], density=WEIGHT / (SECTION["h"] * G0))
@@ -205,13 +235,25 @@ def run_solidshell(mesh_name: str) -> dict:
     s = drape_summary(mesh, r.U, pedestal_area=PEDESTAL**2)
     pd = r.info.get("positive_definite")
     state = "not converged" if not r.converged else ("stable" if pd else "unstable")
-    return {"mesh": mesh_name, "code": "solidshell", "element": "solid-shell quad (ANS), solve_static defaults",
-            "dc": s["drape_coefficient"], "fold_count": s["fold_count"], "state": state,
-            "positive_definite": pd, "min_tangent_eigenvalue": r.info.get("min_tangent_eigenvalue"),
-            "projected_boundary": s["projected_boundary"], "center": s["center"], "section": SECTION,
-            "newton_iterations": r.info["iterations"], "wall_solve_s": wall, "status": r.info.get("status"),
-            "start": "flat sheet" + (" with the pinning start (overrides)" if pin else ""),
-            **({"overrides": pin} if pin else {}), "U": r.U}
+    return {
+        "mesh": mesh_name,
+        "code": "solidshell",
+        "element": "solid-shell quad (ANS), solve_static defaults",
+        "dc": s["drape_coefficient"],
+        "fold_count": s["fold_count"],
+        "state": state,
+        "positive_definite": pd,
+        "min_tangent_eigenvalue": r.info.get("min_tangent_eigenvalue"),
+        "projected_boundary": s["projected_boundary"],
+        "center": s["center"],
+        "section": SECTION,
+        "newton_iterations": r.info["iterations"],
+        "wall_solve_s": wall,
+        "status": r.info.get("status"),
+        "start": "flat sheet" + (" with the pinning start (overrides)" if pin else ""),
+        **({"overrides": pin} if pin else {}),
+        "U": r.U,
+    }
 
 
 def boundary_distance(a: dict, b: dict, n_theta: int = 720) -> dict:
@@ -234,16 +276,23 @@ def compare(records):
         for r in (k, s):
             if r is not None:
                 eig = r.get("min_tangent_eigenvalue")
-                print(f"{mesh_name:9} {r['code']:10} DC {r['dc']:.4f}  folds {r['fold_count']}  {r['state']:13} "
-                      f"min eig {eig if eig is None else f'{eig:.2e}'}  {r['wall_solve_s']:.2f} s"
-                      + (f" (load steps {r['load_steps']}, all tries {r['wall_solve_all_tries_s']:.2f} s)"
-                         if r["code"] == "kratos" else ""))
+                print(
+                    f"{mesh_name:9} {r['code']:10} DC {r['dc']:.4f}  folds {r['fold_count']}  {r['state']:13} "
+                    f"min eig {eig if eig is None else f'{eig:.2e}'}  {r['wall_solve_s']:.2f} s"
+                    + (
+                        f" (load steps {r['load_steps']}, all tries {r['wall_solve_all_tries_s']:.2f} s)"
+                        if r["code"] == "kratos"
+                        else ""
+                    )
+                )
         if k and s and k["state"] == s["state"] == "stable":
             d = boundary_distance(k, s)
-            print(f"{mesh_name:9} DC difference {s['dc'] - k['dc']:+.4f}; projected boundary distance "
-                  f"max {d['max_cm']:.3f} cm, rms {d['rms_cm']:.3f} cm; time ratio solidshell/Kratos "
-                  f"{s['wall_solve_s'] / k['wall_solve_s']:.2f}"
-                  + (" (Kratos started from solidshell's state)" if k.get("start", "").startswith("solidshell") else ""))
+            print(
+                f"{mesh_name:9} DC difference {s['dc'] - k['dc']:+.4f}; projected boundary distance "
+                f"max {d['max_cm']:.3f} cm, rms {d['rms_cm']:.3f} cm; time ratio solidshell/Kratos "
+                f"{s['wall_solve_s'] / k['wall_solve_s']:.2f}"
+                + (" (Kratos started from solidshell's state)" if k.get("start", "").startswith("solidshell") else "")
+            )
         elif k and s:
             print(f"{mesh_name:9} not compared: states {k['state']} (Kratos) / {s['state']} (solidshell)")
 
@@ -252,14 +301,19 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--meshes", nargs="+", default=["24x8x4", "48x16x4"])
     ap.add_argument("--out", default=JSON_PATH)
-    ap.add_argument("--from-flat", action="store_true",
-                    help="also run Kratos from the flat sheet with 1, 4, 16, 64 load steps (diverged on 6x2x4 "
-                         "and 12x4x4: minutes of failed Newton iterations)")
+    ap.add_argument(
+        "--from-flat",
+        action="store_true",
+        help="also run Kratos from the flat sheet with 1, 4, 16, 64 load steps (diverged on 6x2x4 "
+        "and 12x4x4: minutes of failed Newton iterations)",
+    )
     a = ap.parse_args(argv)
     py = kratos_launch.require_kratos()
     load0 = os.getloadavg()
-    print(f"square pedestal, matched isotropic section E = {SECTION['E']:.1f} gf/cm^2, nu = 0, "
-          f"h = {SECTION['h']:.6f} cm; load average {load0[0]:.2f} {load0[1]:.2f} {load0[2]:.2f}")
+    print(
+        f"square pedestal, matched isotropic section E = {SECTION['E']:.1f} gf/cm^2, nu = 0, "
+        f"h = {SECTION['h']:.6f} cm; load average {load0[0]:.2f} {load0[1]:.2f} {load0[2]:.2f}"
+    )
     problem(a.meshes[0])
     records = []
     for m in a.meshes:
@@ -267,8 +321,10 @@ def main(argv=None):
         U = ss.pop("U")
         if a.from_flat:
             flat = run_kratos(py, m)
-            print(f"{m:9} Kratos from the flat sheet: {flat['state']}, attempts "
-                  + ", ".join(f"{t['steps']} steps {'ok' if t['converged'] else 'failed'}" for t in flat["attempts"]))
+            print(
+                f"{m:9} Kratos from the flat sheet: {flat['state']}, attempts "
+                + ", ".join(f"{t['steps']} steps {'ok' if t['converged'] else 'failed'}" for t in flat["attempts"])
+            )
             if flat["state"] != "not converged":
                 records.append(flat)
         kr = run_kratos(py, m, seed_U=U if ss["state"] != "not converged" else None)
@@ -276,7 +332,7 @@ def main(argv=None):
             kr["overrides"] = PIN[m]
         records += [kr, ss]
         compare([kr, ss])
-        with open(a.out, "w") as fh:      # after every mesh: a long run stopped later keeps these
+        with open(a.out, "w") as fh:  # after every mesh: a long run stopped later keeps these
             json.dump(records, fh, indent=1)
     load1 = os.getloadavg()
     print(f"load average after: {load1[0]:.2f} {load1[1]:.2f} {load1[2]:.2f}")

@@ -40,9 +40,8 @@ import argparse
 import json
 import os
 
-import numpy as np
-
 import kratos_launch  # benchmarks/peers, this script's folder
+import numpy as np
 
 L, WIDTH, WEIGHT, B_WARP, T_WARP = 5.0, 1.0, 0.019, 0.083, 1118.2
 H_K = (12.0 * B_WARP / T_WARP) ** 0.5
@@ -54,9 +53,17 @@ def kratos_strip(py: str, element: str, n: int, m: int) -> dict:
     from solidshell.meshing import build_mesh
 
     mesh = build_mesh("strip", f"{n}x{m}", length=L, width=WIDTH)
-    prob = {"nodes": mesh.nodes.tolist(), "quads": mesh.quads.tolist(),
-            "clamped": mesh.node_set("clamped").tolist(), "section": SECTION_K, "weight": WEIGHT,
-            "element": element, "tol": 1e-9, "abs_tol": 1e-12 * WEIGHT * L * WIDTH, "max_iter": 30}
+    prob = {
+        "nodes": mesh.nodes.tolist(),
+        "quads": mesh.quads.tolist(),
+        "clamped": mesh.node_set("clamped").tolist(),
+        "section": SECTION_K,
+        "weight": WEIGHT,
+        "element": element,
+        "tol": 1e-9,
+        "abs_tol": 1e-12 * WEIGHT * L * WIDTH,
+        "max_iter": 30,
+    }
     out = kratos_launch.run_kratos(py, prob)
     tip = mesh.node_set("tip")
     u = np.asarray(out["displacement"])
@@ -87,28 +94,55 @@ def main(argv=None):
 
     ref = references.elastica_strip()["strip"]["warp"]["tip_z"]
     load0 = os.getloadavg()
-    solve_strip(MESHES[0], "warp")          # warm-up: numba compilation / cache load, not timed
+    solve_strip(MESHES[0], "warp")  # warm-up: numba compilation / cache load, not timed
     rows = []
 
     def record(code, element, mesh, n_el, tip_z, converged, iters, wall, extra=None):
         err = abs((tip_z - ref) / ref)
-        row = dict(code=code, element=element, mesh=mesh, elements=n_el, tip_z=tip_z, tip_error=err,
-                   converged=converged, iterations=iters, wall_s=wall, **(extra or {}))
+        row = dict(
+            code=code,
+            element=element,
+            mesh=mesh,
+            elements=n_el,
+            tip_z=tip_z,
+            tip_error=err,
+            converged=converged,
+            iterations=iters,
+            wall_s=wall,
+            **(extra or {}),
+        )
         rows.append(row)
-        print(f"{code:10} {element:36} {mesh:>6} {n_el:5d} {err:9.2e} {iters:6d} {wall:8.3f}"
-              + (f"  (all tries {extra['wall_all_tries_s']:.3f} s, load steps {extra['load_steps']}, "
-                 f"set-up {extra['wall_setup_s']:.3f} s, process {extra['wall_process_s']:.2f} s)"
-                 if extra else "") + ("" if converged else "  NOT CONVERGED"), flush=True)
+        print(
+            f"{code:10} {element:36} {mesh:>6} {n_el:5d} {err:9.2e} {iters:6d} {wall:8.3f}"
+            + (
+                f"  (all tries {extra['wall_all_tries_s']:.3f} s, load steps {extra['load_steps']}, "
+                f"set-up {extra['wall_setup_s']:.3f} s, process {extra['wall_process_s']:.2f} s)"
+                if extra
+                else ""
+            )
+            + ("" if converged else "  NOT CONVERGED"),
+            flush=True,
+        )
         return err
 
-    print(f"heavy strip 5x1 cm warp, elastica tip z {ref:.6f} cm; load average {load0[0]:.2f} "
-          f"{load0[1]:.2f} {load0[2]:.2f} (1/5/15 min) on {os.cpu_count()} cores")
+    print(
+        f"heavy strip 5x1 cm warp, elastica tip z {ref:.6f} cm; load average {load0[0]:.2f} "
+        f"{load0[1]:.2f} {load0[2]:.2f} (1/5/15 min) on {os.cpu_count()} cores"
+    )
     print(f"{'code':10} {'element':36} {'mesh':>6} {'elems':>5} {'tip err':>9} {'iters':>6} {'time [s]':>8}")
     for n in MESHES:
         sol = solve_strip(n, "warp")
         r = sol["result"]
-        record("solidshell", "solid-shell quad (ANS)", f"{n}x1", n, sol["tip_z"], r.converged,
-               r.info["iterations"], sol["wall"])
+        record(
+            "solidshell",
+            "solid-shell quad (ANS)",
+            f"{n}x1",
+            n,
+            sol["tip_z"],
+            r.converged,
+            r.info["iterations"],
+            sol["wall"],
+        )
     for element, width_div in (("ShellThickElementCorotational3D4N", 5), ("ShellThinElementCorotational3D4N", 0)):
         for n in MESHES:
             m = max(1, n // width_div) if width_div else 1
@@ -117,11 +151,23 @@ def main(argv=None):
             except RuntimeError as e:
                 print(f"Kratos {element} {n}x{m}: {e}")
                 break
-            record("Kratos", element, f"{n}x{m}", o["n_elements"], o["tip_z"], o["converged"],
-                         sum(o["iterations"]), o["wall_solve_s"],
-                         {"wall_all_tries_s": o["wall_solve_total_s"], "load_steps": o["attempts"][-1]["steps"],
-                          "wall_setup_s": o["wall_setup_s"], "wall_process_s": o["wall_process_s"],
-                          "attempts": o["attempts"]})
+            record(
+                "Kratos",
+                element,
+                f"{n}x{m}",
+                o["n_elements"],
+                o["tip_z"],
+                o["converged"],
+                sum(o["iterations"]),
+                o["wall_solve_s"],
+                {
+                    "wall_all_tries_s": o["wall_solve_total_s"],
+                    "load_steps": o["attempts"][-1]["steps"],
+                    "wall_setup_s": o["wall_setup_s"],
+                    "wall_process_s": o["wall_process_s"],
+                    "attempts": o["attempts"],
+                },
+            )
             if not o["converged"]:
                 break
     load1 = os.getloadavg()
@@ -136,16 +182,37 @@ def main(argv=None):
                 continue
             ratio = ss["wall_s"] / kr["wall_s"]
             ratio_all = ss["wall_s"] / kr["wall_all_tries_s"]
-            summary.append(dict(level=lev, element=element, solidshell_mesh=ss["mesh"], kratos_mesh=kr["mesh"],
-                                solidshell_s=ss["wall_s"], kratos_s=kr["wall_s"], kratos_all_tries_s=kr["wall_all_tries_s"],
-                                ratio=ratio, ratio_all_tries=ratio_all))
-            print(f"tip error < {lev:.1%}: solidshell {ss['mesh']} ({ss['tip_error']:.2e}, {ss['wall_s']:.3f} s) vs "
-                  f"Kratos {element} {kr['mesh']} ({kr['tip_error']:.2e}, {kr['wall_s']:.3f} s): "
-                  f"time ratio solidshell/Kratos = {ratio:.2f} ({ratio_all:.2f} counting Kratos' failed load-step tries)")
+            summary.append(
+                dict(
+                    level=lev,
+                    element=element,
+                    solidshell_mesh=ss["mesh"],
+                    kratos_mesh=kr["mesh"],
+                    solidshell_s=ss["wall_s"],
+                    kratos_s=kr["wall_s"],
+                    kratos_all_tries_s=kr["wall_all_tries_s"],
+                    ratio=ratio,
+                    ratio_all_tries=ratio_all,
+                )
+            )
+            print(
+                f"tip error < {lev:.1%}: solidshell {ss['mesh']} ({ss['tip_error']:.2e}, {ss['wall_s']:.3f} s) vs "
+                f"Kratos {element} {kr['mesh']} ({kr['tip_error']:.2e}, {kr['wall_s']:.3f} s): "
+                f"time ratio solidshell/Kratos = {ratio:.2f} ({ratio_all:.2f} counting Kratos' failed load-step tries)"
+            )
     if a.json:
         with open(a.json, "w") as fh:
-            json.dump({"load_average_before": load0, "load_average_after": load1, "rows": rows,
-                       "summary": summary, "reference_tip_z": ref}, fh, indent=1)
+            json.dump(
+                {
+                    "load_average_before": load0,
+                    "load_average_after": load1,
+                    "rows": rows,
+                    "summary": summary,
+                    "reference_tip_z": ref,
+                },
+                fh,
+                indent=1,
+            )
     return rows
 
 

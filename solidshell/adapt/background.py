@@ -58,7 +58,7 @@ def circle_projector(centre, radius):
     mid-edge nodes of boundary edges whose two end nodes already lie on the curve, so straight
     boundary edges (the square sheet's sides) are left alone."""
     c = np.zeros(3)
-    c[:len(centre)] = np.asarray(centre, dtype=float)
+    c[: len(centre)] = np.asarray(centre, dtype=float)
     radii = np.atleast_1d(np.asarray(radius, dtype=float))
     if radii.ndim != 1 or not radii.size or not np.all(np.isfinite(radii) & (radii > 0.0)):
         raise InputError(f"circle radius must be a positive length (or a list of them), got {radius!r}")
@@ -85,8 +85,7 @@ def _edge_table(C):
     element side (m,4), number of sides on each edge (E,), first side 4e+k on each edge (E,))."""
     sides = np.stack([C, np.roll(C, -1, axis=1)], axis=2).reshape(-1, 2)
     key = np.sort(sides, axis=1)
-    edges, first, inv, cnt = np.unique(key, axis=0, return_index=True, return_inverse=True,
-                                       return_counts=True)
+    edges, first, inv, cnt = np.unique(key, axis=0, return_index=True, return_inverse=True, return_counts=True)
     return edges, inv.reshape(C.shape), cnt, first
 
 
@@ -127,8 +126,9 @@ class BackgroundMesh:
 
     # ------------------------------------------------------------------ construction
     @classmethod
-    def from_level0(cls, mesh: ShellMesh, levels: int = 3, curves=None,
-                    transitions: str | None = None) -> "BackgroundMesh":
+    def from_level0(
+        cls, mesh: ShellMesh, levels: int = 3, curves=None, transitions: str | None = None
+    ) -> "BackgroundMesh":
         """All levels of ``mesh`` split ``levels`` times; ``curves`` places new boundary nodes on
         the true curve; ``transitions`` is the variant policy of the transition patterns
         (transition.TRANSITION_POLICIES; None: transition.DEFAULT_TRANSITIONS)."""
@@ -136,8 +136,10 @@ class BackgroundMesh:
 
         transitions = check_policy(DEFAULT_TRANSITIONS if transitions is None else transitions)
         if len(mesh.tris):
-            raise InputError(f"adaptivity needs a level-0 mesh of quadrilaterals only; this one has "
-                             f"{len(mesh.tris)} triangle(s) (only quadrilateral level-0 meshes are supported)")
+            raise InputError(
+                f"adaptivity needs a level-0 mesh of quadrilaterals only; this one has "
+                f"{len(mesh.tris)} triangle(s) (only quadrilateral level-0 meshes are supported)"
+            )
         try:
             levels_i = int(levels)
         except (TypeError, ValueError):
@@ -148,9 +150,11 @@ class BackgroundMesh:
         est = estimate_background_bytes(n0, levels_i)
         avail = _available_bytes()
         if levels_i > MAX_LEVELS or est > avail // 2:
-            raise InputError(f"adapt levels = {levels_i} on {n0} level-0 quads needs a background mesh of "
-                             f"{n0 * 4 ** levels_i:.3g} elements, about {est / 2**30:.3g} GiB, more than half "
-                             f"the {avail / 2**30:.3g} GiB available; use fewer levels")
+            raise InputError(
+                f"adapt levels = {levels_i} on {n0} level-0 quads needs a background mesh of "
+                f"{n0 * 4**levels_i:.3g} elements, about {est / 2**30:.3g} GiB, more than half "
+                f"the {avail / 2**30:.3g} GiB available; use fewer levels"
+            )
         self = cls()
         self.levels, self.n0, self.level0, self.transitions = levels_i, n0, mesh, transitions
         X = [mesh.nodes.astype(float)]
@@ -176,15 +180,16 @@ class BackgroundMesh:
                 bnd = np.flatnonzero(cnt == 1)
                 if bnd.size:
                     tol = 1e-9 * L
-                    on = (np.linalg.norm(curves(Xall[A[bnd]]) - Xall[A[bnd]], axis=1) <= tol) & \
-                         (np.linalg.norm(curves(Xall[B[bnd]]) - Xall[B[bnd]], axis=1) <= tol)
+                    on = (np.linalg.norm(curves(Xall[A[bnd]]) - Xall[A[bnd]], axis=1) <= tol) & (
+                        np.linalg.norm(curves(Xall[B[bnd]]) - Xall[B[bnd]], axis=1) <= tol
+                    )
                     sel = bnd[on]
                     if sel.size:
                         XM[sel] = curves(XM[sel])
             # E: the corner two steps along from the side's first node in the first owning element
             e_own, k_own = np.divmod(first_side, 4)
             Ecorner = C[e_own, (k_own + 2) % 4]
-            mid = N + side_edge                      # (m,4) node index of each side's mid node
+            mid = N + side_edge  # (m,4) node index of each side's mid node
             cen = N + ne + np.arange(m)
             # 8-node serendipity at xi = eta = 0: corners -1/4, mid-edge nodes 1/2
             XC = -0.25 * Xall[C].sum(1) + 0.5 * XM[side_edge].sum(1)
@@ -283,7 +288,7 @@ class BackgroundMesh:
                 tab[:, m] = 0
                 continue
             n = self.n_elements(l)
-            for a in range(0, n, _VARIANT_CHUNK):     # bounded temporaries on a deep background
+            for a in range(0, n, _VARIANT_CHUNK):  # bounded temporaries on a deep background
                 e = np.arange(a, min(a + _VARIANT_CHUNK, n))
                 ch = self.conn[l + 1][(4 * e[:, None] + np.arange(4)).ravel()].reshape(-1, 4, 4)
                 loc = np.concatenate([self.conn[l][e], ch[:, :, 1], ch[:, :1, 2]], axis=1)
@@ -311,9 +316,13 @@ def boundary_area_report(mesh: ShellMesh, levels: int, curves, exact: float | No
     reported with the relative errors when given."""
     a_avg = BackgroundMesh.from_level0(mesh, levels).mesh_at_level(levels).area()
     a_prj = BackgroundMesh.from_level0(mesh, levels, curves).mesh_at_level(levels).area()
-    out = {"level0": mesh.area(), "averaged": a_avg, "projected": a_prj, "difference": a_prj - a_avg,
-           "relative_difference": (a_prj - a_avg) / a_prj}
+    out = {
+        "level0": mesh.area(),
+        "averaged": a_avg,
+        "projected": a_prj,
+        "difference": a_prj - a_avg,
+        "relative_difference": (a_prj - a_avg) / a_prj,
+    }
     if exact is not None:
-        out.update(exact=float(exact), error_averaged=(a_avg - exact) / exact,
-                   error_projected=(a_prj - exact) / exact)
+        out.update(exact=float(exact), error_averaged=(a_avg - exact) / exact, error_projected=(a_prj - exact) / exact)
     return out

@@ -37,8 +37,19 @@ import numpy as np
 
 from ..errors import InputError
 
-__all__ = ["DEFAULT_CONST", "DEFAULT_EPS", "GUARD_OFF", "check_thresholds", "side_lengths",
-           "level_side_lengths", "leaf_bending_strain", "leaf_alignment", "Marks", "mark", "guard"]
+__all__ = [
+    "DEFAULT_CONST",
+    "DEFAULT_EPS",
+    "GUARD_OFF",
+    "check_thresholds",
+    "side_lengths",
+    "level_side_lengths",
+    "leaf_bending_strain",
+    "leaf_alignment",
+    "Marks",
+    "mark",
+    "guard",
+]
 
 DEFAULT_CONST = 0.5
 DEFAULT_EPS = 0.2
@@ -129,8 +140,9 @@ class Marks:
     merge: np.ndarray
 
 
-def mark(eps_b_leaf, leaves, L, const: float = DEFAULT_CONST, eps: float = DEFAULT_EPS,
-         max_level: int | None = None) -> Marks:
+def mark(
+    eps_b_leaf, leaves, L, const: float = DEFAULT_CONST, eps: float = DEFAULT_EPS, max_level: int | None = None
+) -> Marks:
     """Split/merge marks of Eqs. (25)-(26).
 
     eps_b_leaf : (n_leaf,) ||eps_b|| per leaf [1/length]
@@ -147,7 +159,7 @@ def mark(eps_b_leaf, leaves, L, const: float = DEFAULT_CONST, eps: float = DEFAU
     top = len(L) - 1 if max_level is None else min(int(max_level), len(L) - 1)
     lev, idx = lv[:, 0], lv[:, 1]
     Li = np.zeros(len(eb))
-    for l in np.unique(lev):                    # a handful of levels, vectorised within each
+    for l in np.unique(lev):  # a handful of levels, vectorised within each
         sel = lev == l
         Li[sel] = L[l][idx[sel]]
     split = (eb * Li > c) & (lev < top)

@@ -27,22 +27,31 @@ import numpy as np
 
 from ..errors import InputError
 from ..problem import SolveResult, no_progress
+from ..solvers.blas import single_threaded_blas
+from ..solvers.explicit import Integrator, checkpoint, parse_settings, threads_for
 from .background import BackgroundMesh
 from .criteria import GUARD_OFF, Marks, guard, leaf_alignment, leaf_bending_strain, level_side_lengths, mark
 from .forest import ActiveMesh, AdaptiveMesh
 from .settings import AdaptSettings
 from .settle import DirectorSettler
 from .transfer import to_new_mesh
-from ..solvers.blas import single_threaded_blas
-from ..solvers.explicit import Integrator, checkpoint, parse_settings, threads_for
 
 _STATE_PREFIX = "adapt_"
 #: adapt keys whose default changed when they were added: how runs before the key behaved
 _BEFORE_KEY = {"transitions": "quality"}
-_CHECK_STEPS = 100      # steps between two looks at the sheet's speed (adapt.travel)
+_CHECK_STEPS = 100  # steps between two looks at the sheet's speed (adapt.travel)
 _PHASES = ("mark", "mesh", "problem", "transfer", "settle", "integrator")
-_REMESH_KEYS = ("t", "step", "splits", "merges", "nodes_in", "nodes_out", "active_nodes", "energy_jump",
-                "kinetic_before")
+_REMESH_KEYS = (
+    "t",
+    "step",
+    "splits",
+    "merges",
+    "nodes_in",
+    "nodes_out",
+    "active_nodes",
+    "energy_jump",
+    "kinetic_before",
+)
 
 
 @dataclass
@@ -71,30 +80,42 @@ class AdaptiveRun:
     """One adaptive dynamic run.  ``integrator_cls`` is the explicit Integrator (its from_state
     continues a state on a new problem)."""
 
-    def __init__(self, level0, make_problem, integrator_cls, settings, adapt: AdaptSettings, *, relax: bool,
-                 curves=None, progress=no_progress, restart=None):
+    def __init__(
+        self,
+        level0,
+        make_problem,
+        integrator_cls,
+        settings,
+        adapt: AdaptSettings,
+        *,
+        relax: bool,
+        curves=None,
+        progress=no_progress,
+        restart=None,
+    ):
         self.make_problem, self.cls, self.settings, self.adapt = make_problem, integrator_cls, settings, adapt
         self.relax, self.progress = relax, _monotone(progress or no_progress)
-        self.bg = BackgroundMesh.from_level0(level0, adapt.total_levels, curves if adapt.project_boundary else None,
-                                             adapt.transitions)
+        self.bg = BackgroundMesh.from_level0(
+            level0, adapt.total_levels, curves if adapt.project_boundary else None, adapt.transitions
+        )
         self.L = level_side_lengths(self.bg)
-        self._h_fine = float(np.min(self.L[adapt.levels]))   # smallest side of Eq. (25)'s finest level
+        self._h_fine = float(np.min(self.L[adapt.levels]))  # smallest side of Eq. (25)'s finest level
         self.forest = AdaptiveMesh(self.bg)
         self.segments: list[Segment] = []
-        self.history = []          # (t, active nodes, elements) after every mesh change and at the start
-        self.remeshes = []         # per remesh: t, splits, merges, nodes in/out, energy jump
+        self.history = []  # (t, active nodes, elements) after every mesh change and at the start
+        self.remeshes = []  # per remesh: t, splits, merges, nodes in/out, energy jump
         self.remesh_seconds = 0.0
-        self.phase_seconds = dict.fromkeys(_PHASES, 0.0)   # remeshing time by phase (the profile's rows)
+        self.phase_seconds = dict.fromkeys(_PHASES, 0.0)  # remeshing time by phase (the profile's rows)
         # per level: the step at which each element was made a leaf by a split (-1: never), for
         # adapt.merge_hold
         self.born = [np.full(self.bg.n_elements(l), -1, dtype=np.int64) for l in range(self.bg.levels + 1)]
         # per level: leaves made by a split the guard alone asked for (adapt.guard_alignment), never
         # merged again: a fold's n_p . d_p need not recover on the finer mesh (docs/adaptivity.md)
         self.by_guard = [np.zeros(self.bg.n_elements(l), dtype=bool) for l in range(self.bg.levels + 1)]
-        self.settle_failures = 0   # director settlings whose residual did not fall by three digits
-        self.new_node_fallbacks = 0   # remeshes whose new-node settling fell short (directors only)
-        self.pushed_out = 0        # inserted nodes placed inside a contact body and moved to its surface
-        self.frozen = None         # (t, step) at which adapt.freeze_leaves stopped the passes
+        self.settle_failures = 0  # director settlings whose residual did not fall by three digits
+        self.new_node_fallbacks = 0  # remeshes whose new-node settling fell short (directors only)
+        self.pushed_out = 0  # inserted nodes placed inside a contact body and moved to its surface
+        self.frozen = None  # (t, step) at which adapt.freeze_leaves stopped the passes
         self.integ = None
         self.restart_path = restart
 
@@ -120,13 +141,22 @@ class AdaptiveRun:
             raise InputError(f"restart file {path} was not written by an adaptive run")
         for i, (t0, step0) in enumerate(np.asarray(extra[_STATE_PREFIX + "segments"]).reshape(-1, 2)):
             pre = f"{_STATE_PREFIX}s{i}_"
-            leaves = {k[len(pre):]: v for k, v in extra.items() if k.startswith(pre)}
+            leaves = {k[len(pre) :]: v for k, v in extra.items() if k.startswith(pre)}
             forest = AdaptiveMesh.from_state_arrays(self.bg, leaves)
             self.segments.append(Segment(float(t0), int(step0), forest.active_mesh(), leaves))
         self.history = [(float(t), int(n), int(m)) for t, n, m in extra[_STATE_PREFIX + "history"]]
-        self.remeshes = [dict(zip(_REMESH_KEYS, (float(x) if k in ("t", "energy_jump", "kinetic_before") else int(x)
-                                                  for k, x in zip(_REMESH_KEYS, row))))
-                         for row in extra[_STATE_PREFIX + "remeshes"]]
+        self.remeshes = [
+            dict(
+                zip(
+                    _REMESH_KEYS,
+                    (
+                        float(x) if k in ("t", "energy_jump", "kinetic_before") else int(x)
+                        for k, x in zip(_REMESH_KEYS, row)
+                    ),
+                )
+            )
+            for row in extra[_STATE_PREFIX + "remeshes"]
+        ]
         self.remesh_seconds = float(extra[_STATE_PREFIX + "remesh_seconds"])
         for l, b in enumerate(self.born):
             b[:] = np.asarray(extra.get(f"{_STATE_PREFIX}born_{l}", b), dtype=np.int64)
@@ -141,8 +171,9 @@ class AdaptiveRun:
         self.forest = AdaptiveMesh.from_state_arrays(self.bg, self.segments[-1].leaves)
         act = self.segments[-1].active
         self._check_same_adapt(extra, path)
-        integ = self.cls.resume(self._problem(act), state, self.settings, source=path,
-                                progress=self.progress, relax=self.relax)
+        integ = self.cls.resume(
+            self._problem(act), state, self.settings, source=path, progress=self.progress, relax=self.relax
+        )
         self._enter(integ, act, new_segment=False)
 
     def _adapt_key(self) -> dict:
@@ -157,8 +188,10 @@ class AdaptiveRun:
         saved = {**defaults, **_BEFORE_KEY, **json.loads(str(extra.get(_STATE_PREFIX + "settings", "{}")))}
         diff = sorted(k for k in set(saved) | set(now) if saved.get(k) != now.get(k))
         if diff:
-            raise InputError(f"restart file {path} was written with other adaptive settings: "
-                             + ", ".join(f"adapt.{k} {saved.get(k)!r} -> {now.get(k)!r}" for k in diff))
+            raise InputError(
+                f"restart file {path} was written with other adaptive settings: "
+                + ", ".join(f"adapt.{k} {saved.get(k)!r} -> {now.get(k)!r}" for k in diff)
+            )
 
     def _enter(self, integ, act: ActiveMesh, new_segment: bool = True) -> None:
         self.integ, self.active = integ, act
@@ -178,17 +211,20 @@ class AdaptiveRun:
         used = {self._segment_of(t, U) for t, U in zip(frames.frame_t, frames.frame_U)}
         used.add(len(self.segments) - 1)
         keep = sorted(used)
-        out = {_STATE_PREFIX + "segments": np.array([[self.segments[i].t0, self.segments[i].step0] for i in keep]),
-               _STATE_PREFIX + "history": np.array(self.history, dtype=float).reshape(-1, 3),
-               _STATE_PREFIX + "remeshes": np.array([[r[k] for k in _REMESH_KEYS] for r in self.remeshes],
-                                                    dtype=float).reshape(-1, len(_REMESH_KEYS)),
-               _STATE_PREFIX + "remesh_seconds": np.asarray(self.remesh_seconds),
-               _STATE_PREFIX + "phase_seconds": np.array([self.phase_seconds[k] for k in _PHASES]),
-               _STATE_PREFIX + "settings": np.asarray(json.dumps(self._adapt_key(), sort_keys=True)),
-               _STATE_PREFIX + "frozen": np.array(self.frozen if self.frozen is not None else [], dtype=float),
-               _STATE_PREFIX + "counters": np.array(self._counters(), dtype=np.int64),
-               **{f"{_STATE_PREFIX}born_{l}": b.copy() for l, b in enumerate(self.born)},
-               **{f"{_STATE_PREFIX}guard_{l}": g.copy() for l, g in enumerate(self.by_guard)}}
+        out = {
+            _STATE_PREFIX + "segments": np.array([[self.segments[i].t0, self.segments[i].step0] for i in keep]),
+            _STATE_PREFIX + "history": np.array(self.history, dtype=float).reshape(-1, 3),
+            _STATE_PREFIX + "remeshes": np.array(
+                [[r[k] for k in _REMESH_KEYS] for r in self.remeshes], dtype=float
+            ).reshape(-1, len(_REMESH_KEYS)),
+            _STATE_PREFIX + "remesh_seconds": np.asarray(self.remesh_seconds),
+            _STATE_PREFIX + "phase_seconds": np.array([self.phase_seconds[k] for k in _PHASES]),
+            _STATE_PREFIX + "settings": np.asarray(json.dumps(self._adapt_key(), sort_keys=True)),
+            _STATE_PREFIX + "frozen": np.array(self.frozen if self.frozen is not None else [], dtype=float),
+            _STATE_PREFIX + "counters": np.array(self._counters(), dtype=np.int64),
+            **{f"{_STATE_PREFIX}born_{l}": b.copy() for l, b in enumerate(self.born)},
+            **{f"{_STATE_PREFIX}guard_{l}": g.copy() for l, g in enumerate(self.by_guard)},
+        }
         for j, i in enumerate(keep):
             out.update({f"{_STATE_PREFIX}s{j}_{k}": v for k, v in self.segments[i].leaves.items()})
         return out
@@ -199,11 +235,11 @@ class AdaptiveRun:
         """Steps c-g of §5.5 until the integrator stops (t_end, steady state, a failure, Ctrl-C)."""
         wall0 = time.perf_counter()
         if self.integ is None:
-            with self._threads(self.bg.level0):     # the first critical-step estimate included
+            with self._threads(self.bg.level0):  # the first critical-step estimate included
                 self.restart(self.restart_path) if self.restart_path else self.start()
         check = self._check
         while True:
-            with self._threads(self.active.mesh):   # 1 thread on small meshes, remeshing included
+            with self._threads(self.active.mesh):  # 1 thread on small meshes, remeshing included
                 status = self.integ.advance(check - self.integ.state.step % check)
                 if status != "running":
                     break
@@ -334,7 +370,7 @@ class AdaptiveRun:
         step = self.integ.state.step
         for l in range(1, self.bg.levels + 1):
             was_leaf_parent = np.asarray(before[f"leaf_{l - 1}"], dtype=bool)
-            made = self.forest.leaf[l] & np.repeat(was_leaf_parent, 4)   # children of a parent split now
+            made = self.forest.leaf[l] & np.repeat(was_leaf_parent, 4)  # children of a parent split now
             self.born[l][made] = step
         by_guard = np.asarray(by_guard, dtype=np.int64).reshape(-1, 2)
         for l in np.unique(by_guard[:, 0]):
@@ -344,7 +380,7 @@ class AdaptiveRun:
     def _switch(self, new: ActiveMesh, n_split: int, n_merge: int) -> None:
         old, integ = self.active, self.integ
         st = integ.state
-        v = (st.D - st.D_prev) / st.dt          # half-step velocity: no force evaluation needed
+        v = (st.D - st.D_prev) / st.dt  # half-step velocity: no force evaluation needed
         kinetic_before = 0.5 * float(np.add.reduce(integ.Mf * v * v))
         Nb = len(self.bg.Xo)
         inserted = np.setdiff1d(new.nodes, old.nodes, assume_unique=True)
@@ -354,31 +390,39 @@ class AdaptiveRun:
             st.D, st.D_prev = self._transfer(st.D, st.D_prev, old, new)
             _impose_prescribed(problem, st.D, st.D_prev)
             st.anchors = _remap_anchors(st.anchors, old.nodes, new.nodes, Nb)
-            if np.any(st.mode):      # the top mode, interpolated: Lanczos' start on the new mesh
+            if np.any(st.mode):  # the top mode, interpolated: Lanczos' start on the new mesh
                 st.mode = to_new_mesh(self.bg, st.mode, old.nodes, new.nodes, "linear", "serendipity")
         if self.adapt.settle_directors:
             with self._timed("settle"):
                 st.D, st.D_prev = self._settle(problem, st.D, st.D_prev, new, inserted)
         with self._timed("transfer"):
-            self.pushed_out += _outside_bodies(problem, new.mesh.nodes, st.D, st.D_prev,
-                                               np.searchsorted(new.nodes, inserted))
+            self.pushed_out += _outside_bodies(
+                problem, new.mesh.nodes, st.D, st.D_prev, np.searchsorted(new.nodes, inserted)
+            )
         jump0 = st.remesh_energy_jump
         # every new mesh gets its own critical step: a pass that adds no finer level can still make
         # stiffer elements (transition patches at a graded level 0's corners; docs/adaptivity.md)
         with self._timed("integrator"):
-            self.integ = self.cls.from_state(problem, st, self.settings,
-                                             reestimate_step=True,
-                                             progress=self.progress, relax=self.relax)
+            self.integ = self.cls.from_state(
+                problem, st, self.settings, reestimate_step=True, progress=self.progress, relax=self.relax
+            )
         self.integ.restarted_from = integ.restarted_from
         self.integ.steps_done, self.integ.t_loop = integ.steps_done, integ.t_loop
         self.integ.wall0 = integ.wall0
         self.integ.warnings = integ.warnings
-        self.remeshes.append(dict(t=float(st.t), step=int(st.step), splits=n_split, merges=n_merge,
-                                  nodes_in=int(len(inserted)),
-                                  nodes_out=int(len(np.setdiff1d(old.nodes, new.nodes, assume_unique=True))),
-                                  active_nodes=int(new.mesh.n_nodes),
-                                  energy_jump=float(self.integ.state.remesh_energy_jump - jump0),
-                                  kinetic_before=kinetic_before))
+        self.remeshes.append(
+            dict(
+                t=float(st.t),
+                step=int(st.step),
+                splits=n_split,
+                merges=n_merge,
+                nodes_in=int(len(inserted)),
+                nodes_out=int(len(np.setdiff1d(old.nodes, new.nodes, assume_unique=True))),
+                active_nodes=int(new.mesh.n_nodes),
+                energy_jump=float(self.integ.state.remesh_energy_jump - jump0),
+                kinetic_before=kinetic_before,
+            )
+        )
         self._enter(self.integ, new)
 
     def _transfer(self, D, Dp, old: ActiveMesh, new: ActiveMesh):
@@ -410,7 +454,7 @@ class AdaptiveRun:
         def both(nodes=None):
             settler = DirectorSettler(problem.model, problem.loads, problem.fixed, nodes, region)
             D_s, rep = settler(D, max_iter=_SETTLE_ITER_NEW if nodes is not None else _SETTLE_ITER)
-            if nodes is not None:   # the directors' rate only: the new nodes keep their interpolated step
+            if nodes is not None:  # the directors' rate only: the new nodes keep their interpolated step
                 settler = DirectorSettler(problem.model, problem.loads, problem.fixed, None, region)
             return D_s, D_s - settler.quasi_static_step(D_s, D - Dp), int(not rep.converged)
 
@@ -418,7 +462,7 @@ class AdaptiveRun:
             D_s, Dp_s, short = both(np.searchsorted(new.nodes, inserted))
             if not short:
                 return D_s, Dp_s
-            self.new_node_fallbacks += 1   # not settled: the new nodes keep their DK placement
+            self.new_node_fallbacks += 1  # not settled: the new nodes keep their DK placement
         D_s, Dp_s, short = both()
         self.settle_failures += short
         return D_s, Dp_s
@@ -443,19 +487,24 @@ class AdaptiveRun:
             s = self.segments[i]
             if s.t0 <= t + 1e-12 and s.active.mesh.n_nodes == n:
                 return i
-        raise RuntimeError(f"no mesh of this run has {n} nodes at t = {t} s")   # a bug, not user input
+        raise RuntimeError(f"no mesh of this run has {n} nodes at t = {t} s")  # a bug, not user input
 
     def _series(self, frames) -> list:
-        return [(float(t), self.segments[self._segment_of(t, U)].active.mesh, np.asarray(U).reshape(-1, 6))
-                for t, U in frames]
+        return [
+            (float(t), self.segments[self._segment_of(t, U)].active.mesh, np.asarray(U).reshape(-1, 6))
+            for t, U in frames
+        ]
 
     def summary_info(self) -> dict:
         counts = [h[1] for h in self.history]
         return {
             "adaptive": True,
-            "adapt_levels": int(self.adapt.levels), "adapt_const": float(self.adapt.const),
-            "adapt_eps": float(self.adapt.eps), "adapt_every": int(self.adapt.every),
-            "adapt_travel": float(self.adapt.travel), "adapt_merge_hold": int(self.adapt.merge_hold),
+            "adapt_levels": int(self.adapt.levels),
+            "adapt_const": float(self.adapt.const),
+            "adapt_eps": float(self.adapt.eps),
+            "adapt_every": int(self.adapt.every),
+            "adapt_travel": float(self.adapt.travel),
+            "adapt_merge_hold": int(self.adapt.merge_hold),
             "adapt_transfer": self.adapt.transfer,
             "adapt_settle_directors": bool(self.adapt.settle_directors),
             "adapt_settle_scope": self.adapt.settle_scope,
@@ -472,8 +521,10 @@ class AdaptiveRun:
             "settle_failures": int(self.settle_failures),
             "settle_new_node_fallbacks": int(self.new_node_fallbacks),
             "remesh_nodes_pushed_out": int(self.pushed_out),
-            "level0_elements": int(self.bg.n_elements(0)), "background_nodes": int(len(self.bg.Xo)),
-            "max_active_nodes": int(max(counts)), "final_active_nodes": int(counts[-1]),
+            "level0_elements": int(self.bg.n_elements(0)),
+            "background_nodes": int(len(self.bg.Xo)),
+            "max_active_nodes": int(max(counts)),
+            "final_active_nodes": int(counts[-1]),
             "active_nodes_history": [[round(t, 6), n, m] for t, n, m in self.history],
             "remesh_count": len(self.remeshes),
             "remesh_time_s": float(self.remesh_seconds),
@@ -492,6 +543,7 @@ def _monotone(cb):
     def call(fraction, text=""):
         best[0] = max(best[0], float(fraction))
         cb(best[0], text)
+
     return call
 
 
@@ -551,12 +603,12 @@ def _rows_in(rows, table) -> np.ndarray:
         return np.zeros(len(rows), dtype=bool)
     base = int(max(rows.max(), table.max())) + 1
     k = rows.shape[1]
-    if base ** k < 2 ** 63:
+    if base**k < 2**63:
         w = base ** np.arange(k - 1, -1, -1, dtype=np.int64)
         return np.isin(rows.astype(np.int64) @ w, table.astype(np.int64) @ w)
     _, inv = np.unique(np.vstack([table, rows]), axis=0, return_inverse=True)
     inv = inv.ravel()
-    return np.isin(inv[len(table):], inv[:len(table)])
+    return np.isin(inv[len(table) :], inv[: len(table)])
 
 
 def _same_leaves(a: dict, b: dict) -> bool:
@@ -597,11 +649,29 @@ def _remap_anchors(anchors, old_nodes, new_nodes, Nb):
     return full[:, new_nodes]
 
 
-def run_adaptive(level0, make_problem, settings, adapt: AdaptSettings, *, relax: bool, curves=None,
-                 progress=no_progress, restart=None) -> AdaptiveOutput:
+def run_adaptive(
+    level0,
+    make_problem,
+    settings,
+    adapt: AdaptSettings,
+    *,
+    relax: bool,
+    curves=None,
+    progress=no_progress,
+    restart=None,
+) -> AdaptiveOutput:
     """Run an adaptive explicit (``relax=False``) or relaxation (``relax=True``) drape from the
     level-0 mesh ``level0``; ``make_problem(mesh) -> Problem`` poses the scene on any active mesh
     (and accepts ``coarse_quads=`` (n_quads,) bool, the quads to give "ans" membranes, when
     ``adapt.coarse_membrane = "ans"``)."""
-    return AdaptiveRun(level0, make_problem, Integrator, parse_settings(settings, relax), adapt, relax=relax,
-                       curves=curves, progress=progress, restart=restart).run()
+    return AdaptiveRun(
+        level0,
+        make_problem,
+        Integrator,
+        parse_settings(settings, relax),
+        adapt,
+        relax=relax,
+        curves=curves,
+        progress=progress,
+        restart=restart,
+    ).run()

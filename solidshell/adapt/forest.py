@@ -95,8 +95,9 @@ class AdaptiveMesh:
 
     def leaves(self) -> np.ndarray:
         """(K,2) (level, index) of every active leaf, by level then index."""
-        return np.concatenate([np.column_stack([np.full(f.sum(), l), np.flatnonzero(f)])
-                               for l, f in enumerate(self.leaf)]).astype(np.int64)
+        return np.concatenate(
+            [np.column_stack([np.full(f.sum(), l), np.flatnonzero(f)]) for l, f in enumerate(self.leaf)]
+        ).astype(np.int64)
 
     def n_leaves(self) -> int:
         return int(sum(f.sum() for f in self.leaf))
@@ -222,7 +223,7 @@ class AdaptiveMesh:
             lc.append(loc)
             vr.append(bg.transition_variants(l, e, mask) if mask.any() else np.zeros(e.size, np.int8))
         lv, ee, mk, lc, vr = (np.concatenate(x) for x in (lv, ee, mk, lc, vr))
-        qparts, tparts = [], []          # (cells, level, index, sub, kind)
+        qparts, tparts = [], []  # (cells, level, index, sub, kind)
         for m in np.unique(mk):
             sel = np.flatnonzero(mk == m)
             pid, variants = TABLE[int(m)]
@@ -231,10 +232,17 @@ class AdaptiveMesh:
                 sv = sel[pick == v]
                 for cells, parts in ((q, qparts), (t, tparts)):
                     if len(cells) and sv.size:
-                        c = lc[sv][:, cells]            # (n, k, nn)
+                        c = lc[sv][:, cells]  # (n, k, nn)
                         n, k = c.shape[:2]
-                        parts.append((c.reshape(n * k, -1), np.repeat(lv[sv], k), np.repeat(ee[sv], k),
-                                      np.tile(np.arange(k), n), np.full(n * k, pid)))
+                        parts.append(
+                            (
+                                c.reshape(n * k, -1),
+                                np.repeat(lv[sv], k),
+                                np.repeat(ee[sv], k),
+                                np.tile(np.arange(k), n),
+                                np.full(n * k, pid),
+                            )
+                        )
 
         def gather(parts, nn):
             if not parts:
@@ -254,10 +262,10 @@ class AdaptiveMesh:
         for k, v in bg.node_sets.items():
             r = remap[v]
             sets[k] = r[r >= 0]
-        mesh = ShellMesh(bg.Xo[nodes], quads=remap[Q], tris=remap[T], directors=bg.Xn[nodes],
-                         node_sets=sets, check=check)
-        return ActiveMesh(mesh, nodes, np.concatenate([qleaf, tleaf]), np.concatenate([qkind, tkind]),
-                          remap >= 0)
+        mesh = ShellMesh(
+            bg.Xo[nodes], quads=remap[Q], tris=remap[T], directors=bg.Xn[nodes], node_sets=sets, check=check
+        )
+        return ActiveMesh(mesh, nodes, np.concatenate([qleaf, tleaf]), np.concatenate([qkind, tkind]), remap >= 0)
 
     # ------------------------------------------------------------------ checkpoint
     def state_arrays(self) -> dict[str, np.ndarray]:
@@ -270,8 +278,10 @@ class AdaptiveMesh:
     def from_state_arrays(cls, bg: BackgroundMesh, arrays) -> "AdaptiveMesh":
         meta = np.asarray(arrays["meta"])
         if list(meta[1:]) != [bg.levels, bg.n0, bg.n_nodes] or meta[0] != _STATE_VERSION:
-            raise InputError(f"adaptive state (levels, n0, nodes) = {tuple(meta[1:])} does not match the "
-                             f"background mesh {(bg.levels, bg.n0, bg.n_nodes)}")
+            raise InputError(
+                f"adaptive state (levels, n0, nodes) = {tuple(meta[1:])} does not match the "
+                f"background mesh {(bg.levels, bg.n0, bg.n_nodes)}"
+            )
         self = cls(bg)
         for l in range(bg.levels + 1):
             f = np.asarray(arrays[f"leaf_{l}"], dtype=bool)

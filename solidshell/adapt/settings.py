@@ -107,7 +107,7 @@ class AdaptSettings(SettingsModel):
 
     @model_validator(mode="after")
     def _hysteresis(self):
-        check_thresholds(self.const, self.eps)       # the criteria's own rule: 0 < eps < const
+        check_thresholds(self.const, self.eps)  # the criteria's own rule: 0 < eps < const
         return self
 
     @model_validator(mode="after")

@@ -28,8 +28,7 @@ import numpy as np
 
 from ..solvers.linear import Cholesky, LowerCSC
 
-
-_SHIFTS = (0.0, 1e-3, 1e-1, 10.0)   # Levenberg shifts, in units of the mean diagonal of K_nn
+_SHIFTS = (0.0, 1e-3, 1e-1, 10.0)  # Levenberg shifts, in units of the mean diagonal of K_nn
 
 
 @dataclass
@@ -74,11 +73,11 @@ class DirectorSettler:
             moved = np.union1d(region, [] if nodes is None else nodes).astype(np.int64)
             model = model.around(moved)
         self.model = model
-        self._chol = Cholesky()          # CHOLMOD; one symbolic analysis for all steps (one pattern)
-        self._lower = None               # K_nn's lower-triangle pattern, built at the first step
+        self._chol = Cholesky()  # CHOLMOD; one symbolic analysis for all steps (one pattern)
+        self._lower = None  # K_nn's lower-triangle pattern, built at the first step
         self._K = None
-        self._factored = False           # the last factorisation succeeded (quasi_static_step reuses it)
-        self._shift = 0.0                # and its Levenberg shift
+        self._factored = False  # the last factorisation succeeded (quasi_static_step reuses it)
+        self._shift = 0.0  # and its Levenberg shift
 
     def _step(self, U, r, shift):
         """K_nn^-1 r at U, or (K_nn + shift mean|diag K_nn| I)^-1 r; None where that matrix is not
@@ -114,7 +113,7 @@ class DirectorSettler:
         if step is None or not np.all(np.isfinite(step)) or not float(r @ step) > 0.0:
             return None
         idx, P, s = self.idx, self.P, 1.0
-        for _ in range(8):          # a full step may overshoot
+        for _ in range(8):  # a full step may overshoot
             flat[idx] = base + s * step
             E_t, F_t = self.model.energy_and_force(U)
             pi_t = float(E_t) - float(P @ flat)
@@ -162,7 +161,7 @@ class DirectorSettler:
         v[idx] = 0.0
         v[self.fixed.ravel()] = 0.0
         if not (self._factored and self._shift == 0.0):
-            if self._step(U, np.zeros(len(idx)), 0.0) is None:    # not convex: keep the step
+            if self._step(U, np.zeros(len(idx)), 0.0) is None:  # not convex: keep the step
                 return np.array(step, dtype=float).ravel()
         flat = U.ravel()
         base = flat.copy()

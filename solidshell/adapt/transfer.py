@@ -62,8 +62,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Edges", "dk_midedge", "linear_midedge", "serendipity_centre", "kirchhoff_centre_director",
-           "fill_new_nodes", "to_new_mesh", "STRETCH_MODES", "METHODS", "CENTRE_MODES"]
+__all__ = [
+    "Edges",
+    "dk_midedge",
+    "linear_midedge",
+    "serendipity_centre",
+    "kirchhoff_centre_director",
+    "fill_new_nodes",
+    "to_new_mesh",
+    "STRETCH_MODES",
+    "METHODS",
+    "CENTRE_MODES",
+]
 
 STRETCH_MODES = ("length", "paper")
 METHODS = ("dk", "linear")
@@ -86,11 +96,10 @@ def _edge_frame(A, B, E, dirs, side=None):
     bad = nn <= 1e-10 * np.linalg.norm(E - A, axis=-1)
     if np.any(bad):
         if side is None:
-            raise ValueError(f"E is collinear with A-B in the initial configuration of "
-                             f"{int(bad.sum())} edge(s)")
+            raise ValueError(f"E is collinear with A-B in the initial configuration of {int(bad.sum())} edge(s)")
         dz = dirs[bad] - np.sum(dirs[bad] * y[bad], -1, keepdims=True) * y[bad]
         n = n.copy()
-        n[bad] = dz * side[bad, None]            # side is applied again below
+        n[bad] = dz * side[bad, None]  # side is applied again below
         nn = np.linalg.norm(n, axis=-1)
     z = n / nn[:, None]
     if side is None:
@@ -137,23 +146,28 @@ def dk_midedge(edges: Edges, UA, UB, UE, *, stretch: str = "length"):
     if stretch not in STRETCH_MODES:
         raise ValueError(f"stretch must be one of {STRETCH_MODES}, got {stretch!r}")
     e = edges
-    XoA, XoB, XoE, XoM, XnA, XnB, XnM = (np.asarray(a, float) for a in (e.XoA, e.XoB, e.XoE, e.XoM, e.XnA, e.XnB,
-                                                                        e.XnM))
+    XoA, XoB, XoE, XoM, XnA, XnB, XnM = (
+        np.asarray(a, float) for a in (e.XoA, e.XoB, e.XoE, e.XoM, e.XnA, e.XnB, e.XnM)
+    )
     UA, UB, UE = (np.asarray(a, float) for a in (UA, UB, UE))
     xA, xB, xE = XoA + UA[:, :3], XoB + UB[:, :3], XoE + UE[:, :3]
     xnA, xnB = XnA + UA[:, 3:], XnB + UB[:, 3:]
 
     R0, side = _edge_frame(XoA, XoB, XoE, XnA + XnB)
     R1, _ = _edge_frame(xA, xB, xE, xnA + xnB, side)
-    loc0 = lambda v: np.einsum("kji,kj->ki", R0, v)      # R0^T v
-    loc1 = lambda v: np.einsum("kji,kj->ki", R1, v)      # R1^T v
+
+    def loc0(v):
+        return np.einsum("kji,kj->ki", R0, v)  # R0^T v
+
+    def loc1(v):
+        return np.einsum("kji,kj->ki", R1, v)  # R1^T v
 
     L = np.linalg.norm(XoB - XoA, axis=-1)
-    mloc = loc0(XoM - XoA)                 # M in the initial edge frame
-    s = mloc[:, 1] / L                     # its position along the edge (1/2 at the chord middle)
-    vB = np.linalg.norm(xB - xA, axis=-1) - L                   # Eq. (31): v_oB
-    dA = loc1(xnA) - loc0(XnA)                                  # Eq. (30)
-    dB = loc1(xnB) - loc0(XnB)                                  # Eq. (31)
+    mloc = loc0(XoM - XoA)  # M in the initial edge frame
+    s = mloc[:, 1] / L  # its position along the edge (1/2 at the chord middle)
+    vB = np.linalg.norm(xB - xA, axis=-1) - L  # Eq. (31): v_oB
+    dA = loc1(xnA) - loc0(XnA)  # Eq. (30)
+    dB = loc1(xnB) - loc0(XnB)  # Eq. (31)
     nM0 = loc0(XnM)
 
     # Hermite cubic with w_oA = w_oB = 0 and DK slopes w'_A = -v_nA, w'_B = -v_nB (Eqs. 27-29, 32)
@@ -162,15 +176,16 @@ def dk_midedge(edges: Edges, UA, UB, UE, *, stretch: str = "length"):
     v_nM = -((1.0 - s) * (1.0 - 3.0 * s) * tA + s * (3.0 * s - 2.0) * tB)
     u_nM = (1.0 - s) * dA[:, 0] + s * dB[:, 0]
 
-    uloc = np.stack([np.zeros_like(s), s * vB, w_oM], axis=-1)   # u_oM, v_oM, w_oM
-    xM = xA + np.einsum("kij,kj->ki", R1, mloc + uloc)           # Eqs. (33)-(34)
+    uloc = np.stack([np.zeros_like(s), s * vB, w_oM], axis=-1)  # u_oM, v_oM, w_oM
+    xM = xA + np.einsum("kij,kj->ki", R1, mloc + uloc)  # Eqs. (33)-(34)
 
     cx, cy = nM0[:, 0] + u_nM, nM0[:, 1] + v_nM
     if stretch == "paper":
         cz = nM0[:, 2] + (1.0 - s) * dA[:, 2] + s * dB[:, 2]
     else:
-        lam = ((1.0 - s) * np.linalg.norm(xnA, axis=-1) / np.linalg.norm(XnA, axis=-1)
-               + s * np.linalg.norm(xnB, axis=-1) / np.linalg.norm(XnB, axis=-1))
+        lam = (1.0 - s) * np.linalg.norm(xnA, axis=-1) / np.linalg.norm(XnA, axis=-1) + s * np.linalg.norm(
+            xnB, axis=-1
+        ) / np.linalg.norm(XnB, axis=-1)
         ell2 = (lam * np.linalg.norm(XnM, axis=-1)) ** 2
         cz = np.copysign(np.sqrt(np.maximum(ell2 - cx * cx - cy * cy, 0.0)), nM0[:, 2])
     xnM = np.einsum("kij,kj->ki", R1, np.stack([cx, cy, cz], axis=-1))
@@ -209,10 +224,10 @@ def kirchhoff_centre_director(Xo_c, Xn_c, Xo_m, U_m, U_c, stretch_c):
     Returns (K,3) the centre's U_n.
     """
     xm = Xo_m + U_m[..., :3]
-    T = np.stack([Xo_m[:, 1] - Xo_m[:, 3], Xo_m[:, 2] - Xo_m[:, 0]], axis=1) * 0.5   # (K,2,3)
+    T = np.stack([Xo_m[:, 1] - Xo_m[:, 3], Xo_m[:, 2] - Xo_m[:, 0]], axis=1) * 0.5  # (K,2,3)
     t = np.stack([xm[:, 1] - xm[:, 3], xm[:, 2] - xm[:, 0]], axis=1) * 0.5
-    a = np.einsum("kj,kij->ki", Xn_c, T)                      # X_n.X_o,xi and X_n.X_o,eta
-    G = np.einsum("kij,klj->kil", t, t)                       # Gram matrix of the tangents
+    a = np.einsum("kj,kij->ki", Xn_c, T)  # X_n.X_o,xi and X_n.X_o,eta
+    G = np.einsum("kij,klj->kil", t, t)  # Gram matrix of the tangents
     # an element folded flat onto a line has no tangent plane: keep the serendipity director there
     flat = np.linalg.det(G) <= 1e-12 * np.einsum("kii->k", G) ** 2
     G[flat] = np.eye(2)
@@ -232,8 +247,9 @@ def _midedge_values(bg, U, A, B, E, M, method, stretch):
     return dk_midedge(Edges.of(bg.Xo, bg.Xn, A, B, E, M), U[A], U[B], U[E], stretch=stretch)
 
 
-def fill_new_nodes(bg, Ubg, new_nodes, method: str = "dk", known=None, *, stretch: str = "length",
-                   centre: str = "kirchhoff"):
+def fill_new_nodes(
+    bg, Ubg, new_nodes, method: str = "dk", known=None, *, stretch: str = "length", centre: str = "kirchhoff"
+):
     """States of newly inserted background nodes from already known ones (§5.4).
 
     Parameters
@@ -273,15 +289,18 @@ def fill_new_nodes(bg, Ubg, new_nodes, method: str = "dk", known=None, *, stretc
     is_mid = mid_p[new, 0] >= 0
     is_cen = cen_p[new, 0] >= 0
     if np.any(~(is_mid | is_cen)):
-        raise ValueError(f"nodes {new[~(is_mid | is_cen)][:5].tolist()} are neither mid-edge nor "
-                         "centre nodes: level-0 nodes cannot be inserted")
+        raise ValueError(
+            f"nodes {new[~(is_mid | is_cen)][:5].tolist()} are neither mid-edge nor "
+            "centre nodes: level-0 nodes cannot be inserted"
+        )
     level = np.asarray(bg.node_level)[new]
 
     def need(nodes, what):
         if not np.all(valid[nodes]):
             bad = np.unique(nodes[~valid[nodes]])
-            raise ValueError(f"{what} needs nodes {bad[:5].tolist()} that are neither known nor "
-                             "inserted at a lower level")
+            raise ValueError(
+                f"{what} needs nodes {bad[:5].tolist()} that are neither known nor inserted at a lower level"
+            )
 
     for lev in np.unique(level):
         mids = new[is_mid & (level == lev)]
@@ -295,20 +314,33 @@ def fill_new_nodes(bg, Ubg, new_nodes, method: str = "dk", known=None, *, stretc
             cp = cen_p[cens]
             corners, m = cp[:, :4], cp[:, 4:]
             need(corners.ravel(), "a centre node")
-            Um = U[m]                                        # (k,4,6)
+            Um = U[m]  # (k,4,6)
             todo = ~valid[m]
             if np.any(todo):
-                ki, kk = np.nonzero(todo)                    # element, edge k (corner k -> k+1)
-                Um[ki, kk] = _midedge_values(bg, U, corners[ki, kk], corners[ki, (kk + 1) % 4],
-                                             corners[ki, (kk + 2) % 4], m[ki, kk], method, stretch)
+                ki, kk = np.nonzero(todo)  # element, edge k (corner k -> k+1)
+                Um[ki, kk] = _midedge_values(
+                    bg,
+                    U,
+                    corners[ki, kk],
+                    corners[ki, (kk + 1) % 4],
+                    corners[ki, (kk + 2) % 4],
+                    m[ki, kk],
+                    method,
+                    stretch,
+                )
             Uc = serendipity_centre(U[corners], Um)
             if centre == "kirchhoff" and method == "dk":
                 Xn = np.asarray(bg.Xn)
-                lam = lambda nodes, Ux: (np.linalg.norm(Xn[nodes] + Ux[..., 3:], axis=-1)
-                                         / np.linalg.norm(Xn[nodes], axis=-1))[..., None]
+
+                def lam(nodes, Ux):
+                    return (np.linalg.norm(Xn[nodes] + Ux[..., 3:], axis=-1) / np.linalg.norm(Xn[nodes], axis=-1))[
+                        ..., None
+                    ]
+
                 stretch_c = serendipity_centre(lam(corners, U[corners]), lam(m, Um))[:, 0]
-                Uc[:, 3:] = kirchhoff_centre_director(np.asarray(bg.Xo)[cens], Xn[cens],
-                                                      np.asarray(bg.Xo)[m], Um, Uc, stretch_c)
+                Uc[:, 3:] = kirchhoff_centre_director(
+                    np.asarray(bg.Xo)[cens], Xn[cens], np.asarray(bg.Xo)[m], Um, Uc, stretch_c
+                )
             U[cens] = Uc
             valid[cens] = True
     return U

@@ -45,7 +45,7 @@ PATTERN_NAMES = {0: "plain", 1: "one side", 2: "two adjacent", 3: "two opposite"
 TRANSITION_POLICIES = ("quality", "fewest_nodes")
 #: fewer active nodes, and no loss in the drape coefficient, on the scenes measured (docs/adaptivity.md)
 DEFAULT_TRANSITIONS = "fewest_nodes"
-CENTRE = 8          # local index of the centre node
+CENTRE = 8  # local index of the centre node
 
 
 def check_policy(policy: str) -> str:
@@ -54,20 +54,31 @@ def check_policy(policy: str) -> str:
         raise InputError(f"adapt transitions must be one of {', '.join(TRANSITION_POLICIES)}, got {policy!r}")
     return policy
 
+
 # variants of each canonical pattern: (quads, triangles); the first is the one drawn in the docs
 # and the one chosen on a square parent, the others serve distorted parents (see choose_variant)
 _CANON = {
-    1: (0b0001, [([[0, 4, 8, 3], [4, 1, 2, 8]], [[8, 2, 3]]),
-                 ([[4, 1, 2, 3]], [[0, 4, 3]]),
-                 ([[0, 4, 2, 3]], [[4, 1, 2]]),
-                 ([[8, 1, 2, 3], [0, 4, 8, 3]], [[4, 1, 8]]),
-                 ([[4, 1, 2, 8], [8, 2, 3, 0]], [[0, 4, 8]])]),
+    1: (
+        0b0001,
+        [
+            ([[0, 4, 8, 3], [4, 1, 2, 8]], [[8, 2, 3]]),
+            ([[4, 1, 2, 3]], [[0, 4, 3]]),
+            ([[0, 4, 2, 3]], [[4, 1, 2]]),
+            ([[8, 1, 2, 3], [0, 4, 8, 3]], [[4, 1, 8]]),
+            ([[4, 1, 2, 8], [8, 2, 3, 0]], [[0, 4, 8]]),
+        ],
+    ),
     2: (0b0011, [([[0, 4, 8, 3], [4, 1, 5, 8], [8, 5, 2, 3]], [])]),
     3: (0b0101, [([[0, 4, 6, 3], [4, 1, 2, 6]], [])]),
-    4: (0b0111, [([[0, 4, 8, 3], [4, 1, 5, 8], [8, 5, 2, 6]], [[8, 6, 3]]),
-                 ([[0, 8, 6, 3], [4, 1, 5, 8], [8, 5, 2, 6]], [[0, 4, 8]]),
-                 ([[4, 5, 2, 6], [0, 4, 6, 3]], [[4, 1, 5]]),
-                 ([[4, 1, 5, 6], [0, 4, 6, 3]], [[5, 2, 6]])]),
+    4: (
+        0b0111,
+        [
+            ([[0, 4, 8, 3], [4, 1, 5, 8], [8, 5, 2, 6]], [[8, 6, 3]]),
+            ([[0, 8, 6, 3], [4, 1, 5, 8], [8, 5, 2, 6]], [[0, 4, 8]]),
+            ([[4, 5, 2, 6], [0, 4, 6, 3]], [[4, 1, 5]]),
+            ([[4, 1, 5, 6], [0, 4, 6, 3]], [[5, 2, 6]]),
+        ],
+    ),
     5: (0b1111, [([[0, 4, 8, 7], [4, 1, 5, 8], [8, 5, 2, 6], [7, 8, 6, 3]], [])]),
 }
 

@@ -10,8 +10,11 @@ from ..errors import InputError
 
 
 def add_parser(sub) -> None:
-    b = sub.add_parser("bench", help="work-precision studies (error against wall time) and throughput; "
-                                     "JSON, Markdown and log-log PNG per study")
+    b = sub.add_parser(
+        "bench",
+        help="work-precision studies (error against wall time) and throughput; "
+        "JSON, Markdown and log-log PNG per study",
+    )
     b.add_argument("names", nargs="*", metavar="NAME", help="studies (default: all; --list names them)")
     b.add_argument("--quick", action="store_true", help="coarser meshes, fewer configurations (minutes)")
     b.add_argument("--out", metavar="DIR", default="bench", help="output folder (default: bench)")

@@ -32,9 +32,9 @@ class Config:
 class Study:
     name: str
     title: str
-    error_keys: tuple                  # (key, description) of the errors each row gets
-    configs: Callable[[bool], list]    # quick -> [Config]
-    errors: Callable[[dict, dict], dict]   # (row, reference row) -> {error key: value}
+    error_keys: tuple  # (key, description) of the errors each row gets
+    configs: Callable[[bool], list]  # quick -> [Config]
+    errors: Callable[[dict, dict], dict]  # (row, reference row) -> {error key: value}
     reference_note: str = ""
     notes: list = field(default_factory=list)
 
@@ -51,9 +51,14 @@ def machine() -> dict:
         pass
     import numba
 
-    return {"cpu": cpu, "cores": os.cpu_count(), "numba_threads": numba.get_num_threads(),
-            "python": platform.python_version(), "platform": platform.platform(), "utc": time.strftime(
-                "%Y-%m-%d %H:%M:%S", time.gmtime())}
+    return {
+        "cpu": cpu,
+        "cores": os.cpu_count(),
+        "numba_threads": numba.get_num_threads(),
+        "python": platform.python_version(),
+        "platform": platform.platform(),
+        "utc": time.strftime("%Y-%m-%d %H:%M:%S", time.gmtime()),
+    }
 
 
 def load() -> list:
@@ -69,29 +74,42 @@ def run_study(study: Study, quick: bool, say=print) -> dict:
         t = time.perf_counter()
         row = dict(c.run())
         row.setdefault("wall_s", time.perf_counter() - t)
-        row.update(family=c.family, label=c.label, reference=c.reference, load_before=before,
-                   load_after=load())
+        row.update(family=c.family, label=c.label, reference=c.reference, load_before=before, load_after=load())
         rows.append(row)
-        say(f"    {row['wall_s']:.2f} s  " + ", ".join(f"{k} {v:.6g}" for k, v in row.items()
-                                                       if k in ("dc", "tip_z", "steps", "rate") and v is not None))
+        say(
+            f"    {row['wall_s']:.2f} s  "
+            + ", ".join(
+                f"{k} {v:.6g}" for k, v in row.items() if k in ("dc", "tip_z", "steps", "rate") and v is not None
+            )
+        )
     ref = next((r for r in rows if r["reference"]), None)
     for r in rows:
-        r["errors"] = study.errors(r, ref)        # ref None: the study's reference is not a run
-    return {"study": study.name, "title": study.title, "quick": quick, "machine": machine(),
-            "reference": study.reference_note, "error_keys": [list(k) for k in study.error_keys],
-            "notes": list(study.notes), "rows": rows}
+        r["errors"] = study.errors(r, ref)  # ref None: the study's reference is not a run
+    return {
+        "study": study.name,
+        "title": study.title,
+        "quick": quick,
+        "machine": machine(),
+        "reference": study.reference_note,
+        "error_keys": [list(k) for k in study.error_keys],
+        "notes": list(study.notes),
+        "rows": rows,
+    }
 
 
 def cheapest(result: dict, key: str, target: float = TARGET):
     """The row of least wall time whose error ``key`` is at most ``target`` (not the reference
     itself), or None."""
-    ok = [r for r in result["rows"] if not r["reference"] and r["errors"].get(key) is not None
-          and r["errors"][key] <= target]
+    ok = [
+        r
+        for r in result["rows"]
+        if not r["reference"] and r["errors"].get(key) is not None and r["errors"][key] <= target
+    ]
     return min(ok, key=lambda r: r["wall_s"]) if ok else None
 
 
 def _fmt(v) -> str:
-    from verification.checks.runner import fmt_value   # the verification tables' cell format
+    from verification.checks.runner import fmt_value  # the verification tables' cell format
 
     return fmt_value(v, 3, "–")
 
@@ -99,27 +117,46 @@ def _fmt(v) -> str:
 def table(result: dict) -> str:
     keys = [k for k, _ in result["error_keys"]]
     extra = sorted({k for r in result["rows"] for k in r.get("show", {})})
-    head = ["family", "configuration", "wall [s]", *[f"error: {d}" for _, d in result["error_keys"]], *extra,
-            "load before → after"]
-    head = [h.replace("|", "\\|") for h in head]          # a |x| in a header would end its cell
+    head = [
+        "family",
+        "configuration",
+        "wall [s]",
+        *[f"error: {d}" for _, d in result["error_keys"]],
+        *extra,
+        "load before → after",
+    ]
+    head = [h.replace("|", "\\|") for h in head]  # a |x| in a header would end its cell
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for r in result["rows"]:
-        cells = [r["family"], r["label"] + (" (reference)" if r["reference"] else ""), f"{r['wall_s']:.2f}",
-                 *[_fmt(r["errors"].get(k)) for k in keys], *[_fmt(r.get("show", {}).get(k)) for k in extra],
-                 f"{r['load_before'][0]} → {r['load_after'][0]}"]
+        cells = [
+            r["family"],
+            r["label"] + (" (reference)" if r["reference"] else ""),
+            f"{r['wall_s']:.2f}",
+            *[_fmt(r["errors"].get(k)) for k in keys],
+            *[_fmt(r.get("show", {}).get(k)) for k in extra],
+            f"{r['load_before'][0]} → {r['load_after'][0]}",
+        ]
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines)
 
 
 def markdown(result: dict, command: str) -> str:
     m = result["machine"]
-    out = [f"# Work-precision: {result['title']}", "",
-           f"`{command}` on {m['utc']} UTC: {m['cpu']}, {m['cores']} cores (shared), {m['numba_threads']} numba "
-           f"thread(s), Python {m['python']}.  Reference: {result['reference']}", "", table(result), ""]
+    out = [
+        f"# Work-precision: {result['title']}",
+        "",
+        f"`{command}` on {m['utc']} UTC: {m['cpu']}, {m['cores']} cores (shared), {m['numba_threads']} numba "
+        f"thread(s), Python {m['python']}.  Reference: {result['reference']}",
+        "",
+        table(result),
+        "",
+    ]
     for k, d in result["error_keys"]:
         c = cheapest(result, k)
-        out.append(f"- Cheapest configuration within {TARGET:.0%} ({d}): "
-                   + (f"**{c['family']}, {c['label']}**, {c['wall_s']:.2f} s" if c else "none of these"))
+        out.append(
+            f"- Cheapest configuration within {TARGET:.0%} ({d}): "
+            + (f"**{c['family']}, {c['label']}**, {c['wall_s']:.2f} s" if c else "none of these")
+        )
     out += [f"- {n}" for n in result["notes"]]
     return "\n".join(out) + "\n"
 
@@ -127,6 +164,7 @@ def markdown(result: dict, command: str) -> str:
 def picture(result: dict, path: Path) -> None:
     """Error against wall time, log-log, one line per family and one panel per error measure."""
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
@@ -135,8 +173,11 @@ def picture(result: dict, path: Path) -> None:
     fams = list(dict.fromkeys(r["family"] for r in result["rows"]))
     for ax, (k, desc) in zip(axes[0], keys):
         for i, fam in enumerate(fams):
-            pts = [(r["wall_s"], r["errors"][k], r["label"]) for r in result["rows"]
-                   if r["family"] == fam and r["errors"].get(k) is not None and r["errors"][k] > 0]
+            pts = [
+                (r["wall_s"], r["errors"][k], r["label"])
+                for r in result["rows"]
+                if r["family"] == fam and r["errors"].get(k) is not None and r["errors"][k] > 0
+            ]
             if not pts:
                 continue
             pts.sort()
@@ -144,7 +185,7 @@ def picture(result: dict, path: Path) -> None:
             for x, y, lab in pts:
                 ax.annotate(lab, (x, y), textcoords="offset points", xytext=(4, 4), fontsize=7, color=f"C{i}")
         ref = next((r for r in result["rows"] if r["reference"]), None)
-        if ref is not None:          # its error is 0: not on a log axis; its cost is
+        if ref is not None:  # its error is 0: not on a log axis; its cost is
             ax.axvline(ref["wall_s"], color="k", lw=0.8, ls=":", label=f"reference: {ref['family']}, {ref['label']}")
         ax.axhline(TARGET, color="0.5", lw=0.8, ls="--")
         ax.text(ax.get_xlim()[0], TARGET, f" {TARGET:.0%}", va="bottom", fontsize=8, color="0.4")
@@ -153,8 +194,9 @@ def picture(result: dict, path: Path) -> None:
         ax.grid(True, which="both", lw=0.3, alpha=0.5)
         ax.legend(fontsize=8)
     m = result["machine"]
-    sub = textwrap.fill(f"{m['cpu']}, {m['numba_threads']} thread(s); reference: {result['reference']}",
-                        50 + 60 * len(keys))
+    sub = textwrap.fill(
+        f"{m['cpu']}, {m['numba_threads']} thread(s); reference: {result['reference']}", 50 + 60 * len(keys)
+    )
     fig.suptitle(f"{result['title']}\n{sub}", fontsize=9)
     fig.tight_layout()
     fig.savefig(path, dpi=130)

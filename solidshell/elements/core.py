@@ -82,8 +82,12 @@ def _sign_quasi(xo, xn, conn_e, nn, i, mu):
 def _thickness_strain(xe, i, quasi, sign, norm_X):
     """eps_zz at local node i (Eq. 5 / Eq. 15) in displacement form: x.x/2 - X.X/2 = v.(x - v/2)
     (Green) or, for Eq. (24), s|x| - |X| with |x| - |X| = v.(2x - v)/(|x| + |X|) (v = U_n)."""
-    x0 = xe[i, 3]; x1 = xe[i, 4]; x2 = xe[i, 5]
-    v0 = xe[i, 9]; v1 = xe[i, 10]; v2 = xe[i, 11]
+    x0 = xe[i, 3]
+    x1 = xe[i, 4]
+    x2 = xe[i, 5]
+    v0 = xe[i, 9]
+    v1 = xe[i, 10]
+    v2 = xe[i, 11]
     d = v0 * (x0 - 0.5 * v0) + v1 * (x1 - 0.5 * v1) + v2 * (x2 - 0.5 * v2)
     if not quasi:
         return d
@@ -94,8 +98,7 @@ def _thickness_strain(xe, i, quasi, sign, norm_X):
 
 
 @njit(cache=True, fastmath=_FM_EXACT, error_model="numpy")
-def _element_force(e, xo, xn, U, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_z,
-                   quasi, mu, fe, gs, gz, zs, at, dt, xe):
+def _element_force(e, xo, xn, U, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_z, quasi, mu, fe, gs, gz, zs, at, dt, xe):
     """Energy of element e; its force into fe (nn,6).  Workspaces: gs (nt,), gz, zs (nn,),
     at, dt (nt,3) (tying-point tangent and director), xe (nn,12) (the element's x_o | x_n | U_o |
     U_n).  Every strain is formed in the displacement form of Eq. (3) (module docstring)."""
@@ -114,34 +117,77 @@ def _element_force(e, xo, xn, U, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_z,
     energy = 0.0
     # ---- membrane and bending at the integration points
     for g in range(ngp):
-        a1x = 0.0; a1y = 0.0; a1z = 0.0; a2x = 0.0; a2y = 0.0; a2z = 0.0
-        b1x = 0.0; b1y = 0.0; b1z = 0.0; b2x = 0.0; b2y = 0.0; b2z = 0.0
-        u1x = 0.0; u1y = 0.0; u1z = 0.0; u2x = 0.0; u2y = 0.0; u2z = 0.0
-        v1x = 0.0; v1y = 0.0; v1z = 0.0; v2x = 0.0; v2y = 0.0; v2z = 0.0
+        a1x = 0.0
+        a1y = 0.0
+        a1z = 0.0
+        a2x = 0.0
+        a2y = 0.0
+        a2z = 0.0
+        b1x = 0.0
+        b1y = 0.0
+        b1z = 0.0
+        b2x = 0.0
+        b2y = 0.0
+        b2z = 0.0
+        u1x = 0.0
+        u1y = 0.0
+        u1z = 0.0
+        u2x = 0.0
+        u2y = 0.0
+        u2z = 0.0
+        v1x = 0.0
+        v1y = 0.0
+        v1z = 0.0
+        v2x = 0.0
+        v2y = 0.0
+        v2z = 0.0
         for i in range(nn):
             d1 = dN[g, i, 0]
             d2 = dN[g, i, 1]
-            a1x += d1 * xe[i, 0]; a1y += d1 * xe[i, 1]; a1z += d1 * xe[i, 2]
-            a2x += d2 * xe[i, 0]; a2y += d2 * xe[i, 1]; a2z += d2 * xe[i, 2]
-            b1x += d1 * xe[i, 3]; b1y += d1 * xe[i, 4]; b1z += d1 * xe[i, 5]
-            b2x += d2 * xe[i, 3]; b2y += d2 * xe[i, 4]; b2z += d2 * xe[i, 5]
-            u1x += d1 * xe[i, 6]; u1y += d1 * xe[i, 7]; u1z += d1 * xe[i, 8]
-            u2x += d2 * xe[i, 6]; u2y += d2 * xe[i, 7]; u2z += d2 * xe[i, 8]
-            v1x += d1 * xe[i, 9]; v1y += d1 * xe[i, 10]; v1z += d1 * xe[i, 11]
-            v2x += d2 * xe[i, 9]; v2y += d2 * xe[i, 10]; v2z += d2 * xe[i, 11]
+            a1x += d1 * xe[i, 0]
+            a1y += d1 * xe[i, 1]
+            a1z += d1 * xe[i, 2]
+            a2x += d2 * xe[i, 0]
+            a2y += d2 * xe[i, 1]
+            a2z += d2 * xe[i, 2]
+            b1x += d1 * xe[i, 3]
+            b1y += d1 * xe[i, 4]
+            b1z += d1 * xe[i, 5]
+            b2x += d2 * xe[i, 3]
+            b2y += d2 * xe[i, 4]
+            b2z += d2 * xe[i, 5]
+            u1x += d1 * xe[i, 6]
+            u1y += d1 * xe[i, 7]
+            u1z += d1 * xe[i, 8]
+            u2x += d2 * xe[i, 6]
+            u2y += d2 * xe[i, 7]
+            u2z += d2 * xe[i, 8]
+            v1x += d1 * xe[i, 9]
+            v1y += d1 * xe[i, 10]
+            v1z += d1 * xe[i, 11]
+            v2x += d2 * xe[i, 9]
+            v2y += d2 * xe[i, 10]
+            v2z += d2 * xe[i, 11]
         # displacement form: a.b - A.B = u.b + a.v - u.v with A = a - u, B = b - v
         e0 = u1x * (a1x - 0.5 * u1x) + u1y * (a1y - 0.5 * u1y) + u1z * (a1z - 0.5 * u1z)
         e1 = u2x * (a2x - 0.5 * u2x) + u2y * (a2y - 0.5 * u2y) + u2z * (a2z - 0.5 * u2z)
-        e2 = (u1x * (a2x - u2x) + u1y * (a2y - u2y) + u1z * (a2z - u2z)
-              + a1x * u2x + a1y * u2y + a1z * u2z)
-        k0 = (u1x * (b1x - v1x) + u1y * (b1y - v1y) + u1z * (b1z - v1z)
-              + a1x * v1x + a1y * v1y + a1z * v1z)
-        k1 = (u2x * (b2x - v2x) + u2y * (b2y - v2y) + u2z * (b2z - v2z)
-              + a2x * v2x + a2y * v2y + a2z * v2z)
-        k2 = (u1x * (b2x - v2x) + u1y * (b2y - v2y) + u1z * (b2z - v2z)
-              + a1x * v2x + a1y * v2y + a1z * v2z
-              + u2x * (b1x - v1x) + u2y * (b1y - v1y) + u2z * (b1z - v1z)
-              + a2x * v1x + a2y * v1y + a2z * v1z)
+        e2 = u1x * (a2x - u2x) + u1y * (a2y - u2y) + u1z * (a2z - u2z) + a1x * u2x + a1y * u2y + a1z * u2z
+        k0 = u1x * (b1x - v1x) + u1y * (b1y - v1y) + u1z * (b1z - v1z) + a1x * v1x + a1y * v1y + a1z * v1z
+        k1 = u2x * (b2x - v2x) + u2y * (b2y - v2y) + u2z * (b2z - v2z) + a2x * v2x + a2y * v2y + a2z * v2z
+        k2 = (
+            u1x * (b2x - v2x)
+            + u1y * (b2y - v2y)
+            + u1z * (b2z - v2z)
+            + a1x * v2x
+            + a1y * v2y
+            + a1z * v2z
+            + u2x * (b1x - v1x)
+            + u2y * (b1y - v1y)
+            + u2z * (b1z - v1z)
+            + a2x * v1x
+            + a2y * v1y
+            + a2z * v1z
+        )
         C = Cmb[e, g]
         n0 = C[0, 0, 0] * e0 + C[0, 0, 1] * e1 + C[0, 0, 2] * e2
         n1 = C[0, 1, 0] * e0 + C[0, 1, 1] * e1 + C[0, 1, 2] * e2
@@ -232,8 +278,7 @@ def _force_workspace(nn, nt):
 
 
 @njit(cache=True, parallel=True, fastmath=_FM_EXACT)
-def energy_force(xo, xn, U, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_z, quasi, mu, f_out,
-                 w_out, nth):
+def energy_force(xo, xn, U, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_z, quasi, mu, f_out, w_out, nth):
     """Element energies into w_out (M,) and element forces into f_out (M, nn, 6), all elements.
 
     xo, xn : (N,3) current nodal mid-surface positions and directors (X + U)
@@ -252,8 +297,9 @@ def energy_force(xo, xn, U, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_z, quasi,
     for th in prange(nth):
         gs, gz, zs, at, dt, xe = _force_workspace(nn, nt)
         for e in range(th * chunk, min(M, (th + 1) * chunk)):
-            w_out[e] = _element_force(e, xo, xn, U, conn, dN, alpha, beta, tie, Cmb, Cs, Cz,
-                                      r_z, quasi, mu, f_out[e], gs, gz, zs, at, dt, xe)
+            w_out[e] = _element_force(
+                e, xo, xn, U, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_z, quasi, mu, f_out[e], gs, gz, zs, at, dt, xe
+            )
 
 
 @njit(cache=True, inline="always")
@@ -275,24 +321,40 @@ def _add_bt_d_gp(Ke, B, D, gp_membrane, half):
     nd = Ke.shape[1]
     for a in range(0, nd, 3):
         nb = _row_end(a, nd, half)
-        x3 = B[3, a]; y3 = B[3, a + 1]; z3 = B[3, a + 2]
-        x4 = B[4, a]; y4 = B[4, a + 1]; z4 = B[4, a + 2]
-        x5 = B[5, a]; y5 = B[5, a + 1]; z5 = B[5, a + 2]
+        x3 = B[3, a]
+        y3 = B[3, a + 1]
+        z3 = B[3, a + 2]
+        x4 = B[4, a]
+        y4 = B[4, a + 1]
+        z4 = B[4, a + 2]
+        x5 = B[5, a]
+        y5 = B[5, a + 1]
+        z5 = B[5, a + 2]
         if (a % 6) < 3 and gp_membrane:
-            x0 = B[0, a]; y0 = B[0, a + 1]; z0 = B[0, a + 2]
-            x1 = B[1, a]; y1 = B[1, a + 1]; z1 = B[1, a + 2]
-            x2 = B[2, a]; y2 = B[2, a + 1]; z2 = B[2, a + 2]
+            x0 = B[0, a]
+            y0 = B[0, a + 1]
+            z0 = B[0, a + 2]
+            x1 = B[1, a]
+            y1 = B[1, a + 1]
+            z1 = B[1, a + 2]
+            x2 = B[2, a]
+            y2 = B[2, a + 1]
+            z2 = B[2, a + 2]
             for b in range(nb):
-                d0 = D[0, b]; d1 = D[1, b]; d2 = D[2, b]; d3 = D[3, b]; d4 = D[4, b]; d5 = D[5, b]
-                Ke[a, b] = ((((((Ke[a, b] + x0 * d0) + x1 * d1) + x2 * d2) + x3 * d3) + x4 * d4)
-                            + x5 * d5)
-                Ke[a + 1, b] = ((((((Ke[a + 1, b] + y0 * d0) + y1 * d1) + y2 * d2) + y3 * d3)
-                                 + y4 * d4) + y5 * d5)
-                Ke[a + 2, b] = ((((((Ke[a + 2, b] + z0 * d0) + z1 * d1) + z2 * d2) + z3 * d3)
-                                 + z4 * d4) + z5 * d5)
-        else:       # the membrane rows vanish on director dofs (and everywhere without gp_membrane)
+                d0 = D[0, b]
+                d1 = D[1, b]
+                d2 = D[2, b]
+                d3 = D[3, b]
+                d4 = D[4, b]
+                d5 = D[5, b]
+                Ke[a, b] = (((((Ke[a, b] + x0 * d0) + x1 * d1) + x2 * d2) + x3 * d3) + x4 * d4) + x5 * d5
+                Ke[a + 1, b] = (((((Ke[a + 1, b] + y0 * d0) + y1 * d1) + y2 * d2) + y3 * d3) + y4 * d4) + y5 * d5
+                Ke[a + 2, b] = (((((Ke[a + 2, b] + z0 * d0) + z1 * d1) + z2 * d2) + z3 * d3) + z4 * d4) + z5 * d5
+        else:  # the membrane rows vanish on director dofs (and everywhere without gp_membrane)
             for b in range(nb):
-                d3 = D[3, b]; d4 = D[4, b]; d5 = D[5, b]
+                d3 = D[3, b]
+                d4 = D[4, b]
+                d5 = D[5, b]
                 Ke[a, b] = ((Ke[a, b] + x3 * d3) + x4 * d4) + x5 * d5
                 Ke[a + 1, b] = ((Ke[a + 1, b] + y3 * d3) + y4 * d4) + y5 * d5
                 Ke[a + 2, b] = ((Ke[a + 2, b] + z3 * d3) + z4 * d4) + z5 * d5
@@ -340,9 +402,39 @@ def _add_bt_d_tying(Ke, B, D, nt, half, tk):
 
 
 @njit(cache=True, fastmath=_FM_EXACT, error_model="numpy")
-def _element_tangent(e, xo, xn, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_z,
-                     quasi, mu, gp_membrane, slot, half, Ke, B, D, oo, on, nz, gs, gz, zs, at, dt, v4,
-                     xe, tk):
+def _element_tangent(
+    e,
+    xo,
+    xn,
+    conn,
+    dN,
+    alpha,
+    beta,
+    tie,
+    Cmb,
+    Cs,
+    Cz,
+    r_z,
+    quasi,
+    mu,
+    gp_membrane,
+    slot,
+    half,
+    Ke,
+    B,
+    D,
+    oo,
+    on,
+    nz,
+    gs,
+    gz,
+    zs,
+    at,
+    dt,
+    v4,
+    xe,
+    tk,
+):
     """Tangent k_t of Eq. (9) of element e into Ke (nd,nd), nd = 6 nn, its dofs in the node order
     ``slot`` (local node i's dofs are 6 slot[i] + c: U_o then U_n).
 
@@ -368,7 +460,7 @@ def _element_tangent(e, xo, xn, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_z,
     ngp = dN.shape[0]
     nt = alpha.shape[0]
     nd = 6 * nn
-    ce = conn[e]
+    conn[e]
     for a in range(nd):
         for b in range(nd):
             Ke[a, b] = 0.0
@@ -391,8 +483,14 @@ def _element_tangent(e, xo, xn, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_z,
     w2 = v4[9]
     for g in range(ngp):
         for c in range(3):
-            a1[c] = 0.0; a2[c] = 0.0; b1[c] = 0.0; b2[c] = 0.0
-            u1[c] = 0.0; u2[c] = 0.0; w1[c] = 0.0; w2[c] = 0.0
+            a1[c] = 0.0
+            a2[c] = 0.0
+            b1[c] = 0.0
+            b2[c] = 0.0
+            u1[c] = 0.0
+            u2[c] = 0.0
+            w1[c] = 0.0
+            w2[c] = 0.0
         for i in range(nn):
             for c in range(3):
                 a1[c] += dN[g, i, 0] * xe[i, c]
@@ -412,8 +510,7 @@ def _element_tangent(e, xo, xn, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_z,
             st[2] += u1[c] * (a2[c] - u2[c]) + a1[c] * u2[c]
             st[3] += u1[c] * (b1[c] - w1[c]) + a1[c] * w1[c]
             st[4] += u2[c] * (b2[c] - w2[c]) + a2[c] * w2[c]
-            st[5] += (u1[c] * (b2[c] - w2[c]) + a1[c] * w2[c]
-                      + u2[c] * (b1[c] - w1[c]) + a2[c] * w1[c])
+            st[5] += u1[c] * (b2[c] - w2[c]) + a1[c] * w2[c] + u2[c] * (b1[c] - w1[c]) + a2[c] * w1[c]
         for r in range(3):
             sig[r] = Cmb[e, g, 0, r, 0] * st[0] + Cmb[e, g, 0, r, 1] * st[1] + Cmb[e, g, 0, r, 2] * st[2]
             sig[3 + r] = Cmb[e, g, 1, r, 0] * st[3] + Cmb[e, g, 1, r, 1] * st[4] + Cmb[e, g, 1, r, 2] * st[5]
@@ -436,8 +533,12 @@ def _element_tangent(e, xo, xn, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_z,
                 B[5, o + c] = d1 * b2[c] + d2 * b1[c]
                 B[5, o + 3 + c] = d2 * a1[c] + d1 * a2[c]
         for r in range(3):
-            c0 = Cmb[e, g, 0, r, 0]; c1 = Cmb[e, g, 0, r, 1]; c2 = Cmb[e, g, 0, r, 2]
-            k0 = Cmb[e, g, 1, r, 0]; k1 = Cmb[e, g, 1, r, 1]; k2 = Cmb[e, g, 1, r, 2]
+            c0 = Cmb[e, g, 0, r, 0]
+            c1 = Cmb[e, g, 0, r, 1]
+            c2 = Cmb[e, g, 0, r, 2]
+            k0 = Cmb[e, g, 1, r, 0]
+            k1 = Cmb[e, g, 1, r, 1]
+            k2 = Cmb[e, g, 1, r, 2]
             for b in range(nd):
                 D[r, b] = c0 * B[0, b] + c1 * B[1, b] + c2 * B[2, b]
                 D[3 + r, b] = k0 * B[3, b] + k1 * B[4, b] + k2 * B[5, b]
@@ -467,11 +568,11 @@ def _element_tangent(e, xo, xn, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_z,
         for u in range(nt):
             q += Cs[e, t, u] * gs[u]
         qt = q * tie[t, 2]
-        if tie[t, 1] > tie[t, 0]:           # x_o . x_n product: a U_o-U_n block
+        if tie[t, 1] > tie[t, 0]:  # x_o . x_n product: a U_o-U_n block
             for i in range(nn):
                 for j in range(nn):
                     on[i, j] += qt * alpha[t, i] * beta[t, j]
-        else:                               # x_o . x_o product: a symmetric U_o-U_o block
+        else:  # x_o . x_o product: a symmetric U_o-U_o block
             for i in range(nn):
                 for j in range(nn):
                     oo[i, j] += qt * (alpha[t, i] * beta[t, j] + beta[t, i] * alpha[t, j])
@@ -523,13 +624,40 @@ def _tangent_workspace(nn, nt):
     int (_add_bt_d_tying)."""
     nd = 6 * nn
     m = max(6, nt)
-    return (np.empty((m, nd)), np.empty((m, nd)), np.empty((nn, nn)), np.empty((nn, nn)),
-            np.empty((nn, 3, 3)), np.empty((10, 6)), np.empty(m, dtype=np.int64))
+    return (
+        np.empty((m, nd)),
+        np.empty((m, nd)),
+        np.empty((nn, nn)),
+        np.empty((nn, nn)),
+        np.empty((nn, 3, 3)),
+        np.empty((10, 6)),
+        np.empty(m, dtype=np.int64),
+    )
 
 
 @njit(cache=True, parallel=True, fastmath=_FM_EXACT)
-def force_tangent(xo, xn, U, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_z, quasi, mu,
-                  gp_membrane, f_out, w_out, K_out, nth, half=False):
+def force_tangent(
+    xo,
+    xn,
+    U,
+    conn,
+    dN,
+    alpha,
+    beta,
+    tie,
+    Cmb,
+    Cs,
+    Cz,
+    r_z,
+    quasi,
+    mu,
+    gp_membrane,
+    f_out,
+    w_out,
+    K_out,
+    nth,
+    half=False,
+):
     """Energies, forces (M,nn,6) and tangents (M,nd,nd) of all elements.  ``gp_membrane``: some
     membrane rigidity sits at the integration points (False when all of it is in the tying terms).
 
@@ -547,13 +675,44 @@ def force_tangent(xo, xn, U, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_z, quasi
         gs, gz, zs, at, dt, xe = _force_workspace(nn, nt)
         slot = np.arange(nn)
         for e in range(th * chunk, min(M, (th + 1) * chunk)):
-            w_out[e] = _element_force(e, xo, xn, U, conn, dN, alpha, beta, tie, Cmb, Cs, Cz,
-                                      r_z, quasi, mu, f_out[e], gs, gz, zs, at, dt, xe)
+            w_out[e] = _element_force(
+                e, xo, xn, U, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_z, quasi, mu, f_out[e], gs, gz, zs, at, dt, xe
+            )
             if half:
                 half_slots(conn[e], slot)
-            _element_tangent(e, xo, xn, conn, dN, alpha, beta, tie, Cmb, Cs, Cz, r_z,
-                             quasi, mu, gp_membrane, slot, half, K_out[e], B, D, oo, on, nz, gs, gz,
-                             zs, at, dt, v4, xe, tk)
+            _element_tangent(
+                e,
+                xo,
+                xn,
+                conn,
+                dN,
+                alpha,
+                beta,
+                tie,
+                Cmb,
+                Cs,
+                Cz,
+                r_z,
+                quasi,
+                mu,
+                gp_membrane,
+                slot,
+                half,
+                K_out[e],
+                B,
+                D,
+                oo,
+                on,
+                nz,
+                gs,
+                gz,
+                zs,
+                at,
+                dt,
+                v4,
+                xe,
+                tk,
+            )
 
 
 @njit(cache=True)

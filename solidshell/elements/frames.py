@@ -27,15 +27,23 @@ def covariant_maps(A1, A2, ex, ey):
     """Q = J2^-1 (...,2,2) with J2 = [[A1.ex, A1.ey], [A2.ex, A2.ey]], and the Voigt map T (...,3,3)
     taking natural (e_11, e_22, gamma_12) to local (eps_xx, eps_yy, gamma_xy): E_loc = Q E_nat Q^T.
     The same Q maps natural transverse shears (gamma_z1, gamma_z2) to (gamma_zx, gamma_zy)."""
-    J2 = np.stack([np.stack([np.sum(A1 * ex, -1), np.sum(A1 * ey, -1)], -1),
-                   np.stack([np.sum(A2 * ex, -1), np.sum(A2 * ey, -1)], -1)], -2)
+    J2 = np.stack(
+        [
+            np.stack([np.sum(A1 * ex, -1), np.sum(A1 * ey, -1)], -1),
+            np.stack([np.sum(A2 * ex, -1), np.sum(A2 * ey, -1)], -1),
+        ],
+        -2,
+    )
     Q = np.linalg.inv(J2)
     q00, q01, q10, q11 = Q[..., 0, 0], Q[..., 0, 1], Q[..., 1, 0], Q[..., 1, 1]
-    T = np.stack([
-        np.stack([q00 * q00, q01 * q01, q00 * q01], -1),
-        np.stack([q10 * q10, q11 * q11, q10 * q11], -1),
-        np.stack([2 * q00 * q10, 2 * q01 * q11, q00 * q11 + q01 * q10], -1),
-    ], -2)
+    T = np.stack(
+        [
+            np.stack([q00 * q00, q01 * q01, q00 * q01], -1),
+            np.stack([q10 * q10, q11 * q11, q10 * q11], -1),
+            np.stack([2 * q00 * q10, 2 * q01 * q11, q00 * q11 + q01 * q10], -1),
+        ],
+        -2,
+    )
     return Q, T
 
 

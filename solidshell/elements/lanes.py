@@ -46,9 +46,9 @@ generalised forces 60, nodal forces 96), 4 shear ties x 50 (the tying tables hav
 weights a row, and zero weights cost nothing: _w) + 28 + 9 + 8 nodal force updates x 18,
 thickness 44 + 28 + 9 + 28, current coordinates 24."""
 
-N_CMB = 4 * 2 * 9      # Cmb rows per element: (gp, membrane|bending, 3x3)
-N_CS = 16              # Cs rows (4x4 shear tying)
-N_CZ = 16              # Cz rows (4x4 nodal thickness)
+N_CMB = 4 * 2 * 9  # Cmb rows per element: (gp, membrane|bending, 3x3)
+N_CS = 16  # Cs rows (4x4 shear tying)
+N_CZ = 16  # Cz rows (4x4 nodal thickness)
 
 
 # ---------------------------------------------------------------- layout
@@ -66,9 +66,15 @@ def pack(conn, c, quasi_rz):
         a = np.concatenate([a, np.broadcast_to(fill, (pad, a.shape[1]))]) if pad else a
         return np.ascontiguousarray(a.reshape(B, LANES, -1).transpose(0, 2, 1))
 
-    return dict(conn=soa(np.asarray(conn, np.int64), np.asarray(conn[0], np.int64)),
-                Cmb=soa(c["Cmb"], 0.0), Cs=soa(c["Cs"], 0.0), Cz=soa(c["Cz"], 0.0),
-                r_z=soa(quasi_rz, 1.0), M=M, B=B)
+    return dict(
+        conn=soa(np.asarray(conn, np.int64), np.asarray(conn[0], np.int64)),
+        Cmb=soa(c["Cmb"], 0.0),
+        Cs=soa(c["Cs"], 0.0),
+        Cz=soa(c["Cz"], 0.0),
+        r_z=soa(quasi_rz, 1.0),
+        M=M,
+        B=B,
+    )
 
 
 def unpack_forces(fe, M):
@@ -88,9 +94,11 @@ def _w(w, x):
 @njit(forceinline=True, fastmath=_FM, error_model="numpy")
 def _comb(d, x):
     """sum_i d_i x_i over the four nodes (3-tuple); zero weights d_i add no operation (_w)."""
-    return (_w(d[0], x[0][0]) + _w(d[1], x[1][0]) + _w(d[2], x[2][0]) + _w(d[3], x[3][0]),
-            _w(d[0], x[0][1]) + _w(d[1], x[1][1]) + _w(d[2], x[2][1]) + _w(d[3], x[3][1]),
-            _w(d[0], x[0][2]) + _w(d[1], x[1][2]) + _w(d[2], x[2][2]) + _w(d[3], x[3][2]))
+    return (
+        _w(d[0], x[0][0]) + _w(d[1], x[1][0]) + _w(d[2], x[2][0]) + _w(d[3], x[3][0]),
+        _w(d[0], x[0][1]) + _w(d[1], x[1][1]) + _w(d[2], x[2][1]) + _w(d[3], x[3][1]),
+        _w(d[0], x[0][2]) + _w(d[1], x[1][2]) + _w(d[2], x[2][2]) + _w(d[3], x[3][2]),
+    )
 
 
 @njit(forceinline=True, fastmath=_FM, error_model="numpy")
@@ -107,14 +115,28 @@ def _lin2(s, a, t, b):
 @njit(forceinline=True, fastmath=_FM, error_model="numpy")
 def _acc2(f, d1, p, d2, q):
     """f_i + (d1_i p + d2_i q) for the four nodes."""
-    return ((f[0][0] + (d1[0] * p[0] + d2[0] * q[0]), f[0][1] + (d1[0] * p[1] + d2[0] * q[1]),
-             f[0][2] + (d1[0] * p[2] + d2[0] * q[2])),
-            (f[1][0] + (d1[1] * p[0] + d2[1] * q[0]), f[1][1] + (d1[1] * p[1] + d2[1] * q[1]),
-             f[1][2] + (d1[1] * p[2] + d2[1] * q[2])),
-            (f[2][0] + (d1[2] * p[0] + d2[2] * q[0]), f[2][1] + (d1[2] * p[1] + d2[2] * q[1]),
-             f[2][2] + (d1[2] * p[2] + d2[2] * q[2])),
-            (f[3][0] + (d1[3] * p[0] + d2[3] * q[0]), f[3][1] + (d1[3] * p[1] + d2[3] * q[1]),
-             f[3][2] + (d1[3] * p[2] + d2[3] * q[2])))
+    return (
+        (
+            f[0][0] + (d1[0] * p[0] + d2[0] * q[0]),
+            f[0][1] + (d1[0] * p[1] + d2[0] * q[1]),
+            f[0][2] + (d1[0] * p[2] + d2[0] * q[2]),
+        ),
+        (
+            f[1][0] + (d1[1] * p[0] + d2[1] * q[0]),
+            f[1][1] + (d1[1] * p[1] + d2[1] * q[1]),
+            f[1][2] + (d1[1] * p[2] + d2[1] * q[2]),
+        ),
+        (
+            f[2][0] + (d1[2] * p[0] + d2[2] * q[0]),
+            f[2][1] + (d1[2] * p[1] + d2[2] * q[1]),
+            f[2][2] + (d1[2] * p[2] + d2[2] * q[2]),
+        ),
+        (
+            f[3][0] + (d1[3] * p[0] + d2[3] * q[0]),
+            f[3][1] + (d1[3] * p[1] + d2[3] * q[1]),
+            f[3][2] + (d1[3] * p[2] + d2[3] * q[2]),
+        ),
+    )
 
 
 @njit(forceinline=True, fastmath=_FM, error_model="numpy")
@@ -126,10 +148,12 @@ def _sw(s, w, p):
 @njit(forceinline=True, fastmath=_FM, error_model="numpy")
 def _acc1(f, s, w, p):
     """f_i + s w_i p for the four nodes; a node with a zero weight w_i keeps f_i (_sw)."""
-    return ((f[0][0] + _sw(s, w[0], p[0]), f[0][1] + _sw(s, w[0], p[1]), f[0][2] + _sw(s, w[0], p[2])),
-            (f[1][0] + _sw(s, w[1], p[0]), f[1][1] + _sw(s, w[1], p[1]), f[1][2] + _sw(s, w[1], p[2])),
-            (f[2][0] + _sw(s, w[2], p[0]), f[2][1] + _sw(s, w[2], p[1]), f[2][2] + _sw(s, w[2], p[2])),
-            (f[3][0] + _sw(s, w[3], p[0]), f[3][1] + _sw(s, w[3], p[1]), f[3][2] + _sw(s, w[3], p[2])))
+    return (
+        (f[0][0] + _sw(s, w[0], p[0]), f[0][1] + _sw(s, w[0], p[1]), f[0][2] + _sw(s, w[0], p[2])),
+        (f[1][0] + _sw(s, w[1], p[0]), f[1][1] + _sw(s, w[1], p[1]), f[1][2] + _sw(s, w[1], p[2])),
+        (f[2][0] + _sw(s, w[2], p[0]), f[2][1] + _sw(s, w[2], p[1]), f[2][2] + _sw(s, w[2], p[2])),
+        (f[3][0] + _sw(s, w[3], p[0]), f[3][1] + _sw(s, w[3], p[1]), f[3][2] + _sw(s, w[3], p[2])),
+    )
 
 
 @njit(forceinline=True, error_model="numpy")
@@ -150,18 +174,36 @@ def gradients(d, x, n, u, v):
     derivatives of x_o, x_n, U_o, U_n there (Eq. 1)."""
     d1 = d[0]
     d2 = d[1]
-    return (d1, d2, _comb(d1, x), _comb(d2, x), _comb(d1, n), _comb(d2, n), _comb(d1, u), _comb(d2, u),
-            _comb(d1, v), _comb(d2, v))
+    return (
+        d1,
+        d2,
+        _comb(d1, x),
+        _comb(d2, x),
+        _comb(d1, n),
+        _comb(d2, n),
+        _comb(d1, u),
+        _comb(d2, u),
+        _comb(d1, v),
+        _comb(d2, v),
+    )
 
 
 @njit(forceinline=True, fastmath=_FM, error_model="numpy")
 def curvatures(a1, a2, b1, b2, u1, u2, v1, v2):
     """The bending strains of Eq. (3) (k_xixi, k_etaeta, 2 k_xieta) in displacement form:
     a.b - A.B = u.b + a.v - u.v with A = a - u, B = b - v."""
-    k0 = (u1[0] * (b1[0] - v1[0]) + u1[1] * (b1[1] - v1[1]) + u1[2] * (b1[2] - v1[2]) + _dot(a1, v1))
-    k1 = (u2[0] * (b2[0] - v2[0]) + u2[1] * (b2[1] - v2[1]) + u2[2] * (b2[2] - v2[2]) + _dot(a2, v2))
-    k2 = (u1[0] * (b2[0] - v2[0]) + u1[1] * (b2[1] - v2[1]) + u1[2] * (b2[2] - v2[2]) + _dot(a1, v2)
-          + u2[0] * (b1[0] - v1[0]) + u2[1] * (b1[1] - v1[1]) + u2[2] * (b1[2] - v1[2]) + _dot(a2, v1))
+    k0 = u1[0] * (b1[0] - v1[0]) + u1[1] * (b1[1] - v1[1]) + u1[2] * (b1[2] - v1[2]) + _dot(a1, v1)
+    k1 = u2[0] * (b2[0] - v2[0]) + u2[1] * (b2[1] - v2[1]) + u2[2] * (b2[2] - v2[2]) + _dot(a2, v2)
+    k2 = (
+        u1[0] * (b2[0] - v2[0])
+        + u1[1] * (b2[1] - v2[1])
+        + u1[2] * (b2[2] - v2[2])
+        + _dot(a1, v2)
+        + u2[0] * (b1[0] - v1[0])
+        + u2[1] * (b1[1] - v1[1])
+        + u2[2] * (b1[2] - v1[2])
+        + _dot(a2, v1)
+    )
     return k0, k1, k2
 
 
@@ -171,10 +213,9 @@ def _gauss_point(d, x, n, u, v, C, b, r, k, fo, fn):
     point's (dN/dxi, dN/deta); x, n, u, v: nodal x_o, x_n, U_o, U_n; C[r:r+18, k] its Cmb."""
     d1, d2, a1, a2, b1, b2, u1, u2, v1, v2 = gradients(d, x, n, u, v)
     # displacement form: a.b - A.B = u.b + a.v - u.v with A = a - u, B = b - v
-    e0 = (u1[0] * (a1[0] - 0.5 * u1[0]) + u1[1] * (a1[1] - 0.5 * u1[1]) + u1[2] * (a1[2] - 0.5 * u1[2]))
-    e1 = (u2[0] * (a2[0] - 0.5 * u2[0]) + u2[1] * (a2[1] - 0.5 * u2[1]) + u2[2] * (a2[2] - 0.5 * u2[2]))
-    e2 = (u1[0] * (a2[0] - u2[0]) + u1[1] * (a2[1] - u2[1]) + u1[2] * (a2[2] - u2[2])
-          + _dot(a1, u2))
+    e0 = u1[0] * (a1[0] - 0.5 * u1[0]) + u1[1] * (a1[1] - 0.5 * u1[1]) + u1[2] * (a1[2] - 0.5 * u1[2])
+    e1 = u2[0] * (a2[0] - 0.5 * u2[0]) + u2[1] * (a2[1] - 0.5 * u2[1]) + u2[2] * (a2[2] - 0.5 * u2[2])
+    e2 = u1[0] * (a2[0] - u2[0]) + u1[1] * (a2[1] - u2[1]) + u1[2] * (a2[2] - u2[2]) + _dot(a1, u2)
     k0, k1, k2 = curvatures(a1, a2, b1, b2, u1, u2, v1, v2)
     n0 = C[b, r + 0, k] * e0 + C[b, r + 1, k] * e1 + C[b, r + 2, k] * e2
     n1 = C[b, r + 3, k] * e0 + C[b, r + 4, k] * e1 + C[b, r + 5, k] * e2
@@ -184,10 +225,16 @@ def _gauss_point(d, x, n, u, v, C, b, r, k, fo, fn):
     m2 = C[b, r + 15, k] * k0 + C[b, r + 16, k] * k1 + C[b, r + 17, k] * k2
     w = 0.5 * (n0 * e0 + n1 * e1 + n2 * e2 + m0 * k0 + m1 * k1 + m2 * k2)
     # generalised forces on a1, a2 (p) and b1, b2 (q)
-    p1 = (n0 * a1[0] + n2 * a2[0] + m0 * b1[0] + m2 * b2[0], n0 * a1[1] + n2 * a2[1] + m0 * b1[1] + m2 * b2[1],
-          n0 * a1[2] + n2 * a2[2] + m0 * b1[2] + m2 * b2[2])
-    p2 = (n1 * a2[0] + n2 * a1[0] + m1 * b2[0] + m2 * b1[0], n1 * a2[1] + n2 * a1[1] + m1 * b2[1] + m2 * b1[1],
-          n1 * a2[2] + n2 * a1[2] + m1 * b2[2] + m2 * b1[2])
+    p1 = (
+        n0 * a1[0] + n2 * a2[0] + m0 * b1[0] + m2 * b2[0],
+        n0 * a1[1] + n2 * a2[1] + m0 * b1[1] + m2 * b2[1],
+        n0 * a1[2] + n2 * a2[2] + m0 * b1[2] + m2 * b2[2],
+    )
+    p2 = (
+        n1 * a2[0] + n2 * a1[0] + m1 * b2[0] + m2 * b1[0],
+        n1 * a2[1] + n2 * a1[1] + m1 * b2[1] + m2 * b1[1],
+        n1 * a2[2] + n2 * a1[2] + m1 * b2[2] + m2 * b1[2],
+    )
     q1 = _lin2(m0, a1, m2, a2)
     q2 = _lin2(m1, a2, m2, a1)
     return _acc2(fo, d1, p1, d2, p2), _acc2(fn, d1, q1, d2, q2), w
@@ -201,8 +248,11 @@ def _tying(al, be, x, n, u, v):
     d = _comb(be, n)
     au = _comb(al, u)
     du = _comb(be, v)
-    g = (au[0] * (d[0] - du[0]) + a[0] * du[0]) + (au[1] * (d[1] - du[1]) + a[1] * du[1]) \
+    g = (
+        (au[0] * (d[0] - du[0]) + a[0] * du[0])
+        + (au[1] * (d[1] - du[1]) + a[1] * du[1])
         + (au[2] * (d[2] - du[2]) + a[2] * du[2])
+    )
     return a, d, g
 
 

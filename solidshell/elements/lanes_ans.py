@@ -32,8 +32,25 @@ from numba import njit, prange
 
 from . import lanes, quad4
 from .core import _FM
-from .lanes import (LANES, _D0, _D1, _D2, _D3, _acc1, _acc2, _comb, _dot, _forces_of, _gather, _lin2,
-                    _nodes, curvatures, gradients, stages_rest, store_forces)
+from .lanes import (
+    _D0,
+    _D1,
+    _D2,
+    _D3,
+    LANES,
+    _acc1,
+    _acc2,
+    _comb,
+    _dot,
+    _forces_of,
+    _gather,
+    _lin2,
+    _nodes,
+    curvatures,
+    gradients,
+    stages_rest,
+    store_forces,
+)
 
 # the basis of the six products: dN_i/dxi, dN_i/deta at the centre and the hourglass weights
 # xi_i eta_i / 4 (quad4.P_ALPHA rows 0, 1 and 3: the products (0,0), (1,1), (0,1), (2,2), (0,2),
@@ -43,8 +60,8 @@ _C2 = tuple(float(v) for v in quad4.P_ALPHA[1])
 _H = tuple(float(v) for v in quad4.P_ALPHA[3])
 assert quad4._PAIRS == ((0, 0, 0.5), (1, 1, 0.5), (0, 1, 1.0), (2, 2, 0.5), (0, 2, 1.0), (1, 2, 1.0))
 
-N_BEND = 36            # bending rows: Gauss point g, 3x3 Cb at 9 g + 3 r + s
-N_K = 21               # membrane rows after them: K's upper triangle, row by row
+N_BEND = 36  # bending rows: Gauss point g, 3x3 Cb at 9 g + 3 r + s
+N_K = 21  # membrane rows after them: K's upper triangle, row by row
 N_ROWS = N_BEND + N_K
 
 FLOPS_PER_ELEMENT = 2458
@@ -59,10 +76,13 @@ def covers(c) -> bool:
     """Whether quad constants ``c`` (quad4.precompute) are the assumed-membrane form this kernel
     evaluates: no membrane at the Gauss points, the 4 shear ties then the six membrane products."""
     a = c["alpha"]
-    return (a.shape == (4 + quad4.N_PROD, 4) and np.array_equal(a, np.vstack([quad4.ALPHA, quad4.P_ALPHA]))
-            and np.array_equal(c["beta"], np.vstack([quad4.BETA, quad4.P_BETA]))
-            and np.array_equal(c["tie"], np.vstack([quad4.TIE, quad4.P_TIE]))
-            and not np.any(c["Cmb"][:, :, 0]))
+    return (
+        a.shape == (4 + quad4.N_PROD, 4)
+        and np.array_equal(a, np.vstack([quad4.ALPHA, quad4.P_ALPHA]))
+        and np.array_equal(c["beta"], np.vstack([quad4.BETA, quad4.P_BETA]))
+        and np.array_equal(c["tie"], np.vstack([quad4.TIE, quad4.P_TIE]))
+        and not np.any(c["Cmb"][:, :, 0])
+    )
 
 
 def pack(conn, c, quasi_rz):
@@ -125,11 +145,26 @@ def _stage_membrane(b, s, k, C, xs, fe, we):
     y4 = U1[0] * (H[0] - UH[0]) + U1[1] * (H[1] - UH[1]) + U1[2] * (H[2] - UH[2]) + _dot(A1, UH)
     y5 = U2[0] * (H[0] - UH[0]) + U2[1] * (H[1] - UH[1]) + U2[2] * (H[2] - UH[2]) + _dot(A2, UH)
     r = N_BEND
-    k00 = C[b, r, k]; k01 = C[b, r + 1, k]; k02 = C[b, r + 2, k]; k03 = C[b, r + 3, k]
-    k04 = C[b, r + 4, k]; k05 = C[b, r + 5, k]; k11 = C[b, r + 6, k]; k12 = C[b, r + 7, k]
-    k13 = C[b, r + 8, k]; k14 = C[b, r + 9, k]; k15 = C[b, r + 10, k]; k22 = C[b, r + 11, k]
-    k23 = C[b, r + 12, k]; k24 = C[b, r + 13, k]; k25 = C[b, r + 14, k]; k33 = C[b, r + 15, k]
-    k34 = C[b, r + 16, k]; k35 = C[b, r + 17, k]; k44 = C[b, r + 18, k]; k45 = C[b, r + 19, k]
+    k00 = C[b, r, k]
+    k01 = C[b, r + 1, k]
+    k02 = C[b, r + 2, k]
+    k03 = C[b, r + 3, k]
+    k04 = C[b, r + 4, k]
+    k05 = C[b, r + 5, k]
+    k11 = C[b, r + 6, k]
+    k12 = C[b, r + 7, k]
+    k13 = C[b, r + 8, k]
+    k14 = C[b, r + 9, k]
+    k15 = C[b, r + 10, k]
+    k22 = C[b, r + 11, k]
+    k23 = C[b, r + 12, k]
+    k24 = C[b, r + 13, k]
+    k25 = C[b, r + 14, k]
+    k33 = C[b, r + 15, k]
+    k34 = C[b, r + 16, k]
+    k35 = C[b, r + 17, k]
+    k44 = C[b, r + 18, k]
+    k45 = C[b, r + 19, k]
     k55 = C[b, r + 20, k]
     s0 = k00 * y0 + k01 * y1 + k02 * y2 + k03 * y3 + k04 * y4 + k05 * y5
     s1 = k01 * y0 + k11 * y1 + k12 * y2 + k13 * y3 + k14 * y4 + k15 * y5
@@ -139,12 +174,9 @@ def _stage_membrane(b, s, k, C, xs, fe, we):
     s5 = k05 * y0 + k15 * y1 + k25 * y2 + k35 * y3 + k45 * y4 + k55 * y5
     w = 0.5 * (s0 * y0 + s1 * y1 + s2 * y2 + s3 * y3 + s4 * y4 + s5 * y5)
     # forces on a_xi, a_eta, h (the products' derivatives), then on the nodes
-    p1 = (s0 * A1[0] + s2 * A2[0] + s4 * H[0], s0 * A1[1] + s2 * A2[1] + s4 * H[1],
-          s0 * A1[2] + s2 * A2[2] + s4 * H[2])
-    p2 = (s1 * A2[0] + s2 * A1[0] + s5 * H[0], s1 * A2[1] + s2 * A1[1] + s5 * H[1],
-          s1 * A2[2] + s2 * A1[2] + s5 * H[2])
-    ph = (s3 * H[0] + s4 * A1[0] + s5 * A2[0], s3 * H[1] + s4 * A1[1] + s5 * A2[1],
-          s3 * H[2] + s4 * A1[2] + s5 * A2[2])
+    p1 = (s0 * A1[0] + s2 * A2[0] + s4 * H[0], s0 * A1[1] + s2 * A2[1] + s4 * H[1], s0 * A1[2] + s2 * A2[2] + s4 * H[2])
+    p2 = (s1 * A2[0] + s2 * A1[0] + s5 * H[0], s1 * A2[1] + s2 * A1[1] + s5 * H[1], s1 * A2[2] + s2 * A1[2] + s5 * H[2])
+    ph = (s3 * H[0] + s4 * A1[0] + s5 * A2[0], s3 * H[1] + s4 * A1[1] + s5 * A2[1], s3 * H[2] + s4 * A1[2] + s5 * A2[2])
     z3 = (0.0, 0.0, 0.0)
     fo = _acc2((z3, z3, z3, z3), _C1, p1, _C2, p2)
     fo = _acc1(fo, 1.0, _H, ph)

@@ -40,11 +40,11 @@ assert np.array_equal(tri3.BETA, [[0.5, 0.0, 0.5], [0.5, 0.5, 0.0], [0.0, 0.5, 0
 assert np.array_equal(tri3.TIE, [[0.0, 3.0, 1.0]] * 3)
 
 NN = 3
-N_CMB = 18             # Cmb rows per element: membrane 3x3 then bending 3x3 (row-major)
-N_CS = 9               # Cs rows (3x3 shear tying)
-N_CZ = 9               # Cz rows (3x3 nodal thickness)
-N_XS = 12 * NN         # scratch rows: x_o | x_n | U_o | U_n per node
-N_FE = 6 * NN          # force rows: U_o, U_n per node
+N_CMB = 18  # Cmb rows per element: membrane 3x3 then bending 3x3 (row-major)
+N_CS = 9  # Cs rows (3x3 shear tying)
+N_CZ = 9  # Cz rows (3x3 nodal thickness)
+N_XS = 12 * NN  # scratch rows: x_o | x_n | U_o | U_n per node
+N_FE = 6 * NN  # force rows: U_o, U_n per node
 
 FLOPS_PER_ELEMENT = 518
 """Floating-point operations of one element (Green thickness strain), counted from this source as
@@ -59,9 +59,14 @@ forces 36, U_n forces 3 + 36); thickness 76 (strains 33, stresses 15, energy 7, 
 def covers(c) -> bool:
     """Whether constants ``c`` are tri3.precompute's: one membrane/bending point and the three
     shear ties of Eq. (12) (the form this kernel evaluates)."""
-    return (c["Cmb"].shape[1:] == (1, 2, 3, 3) and c["Cs"].shape[1:] == (3, 3) and c["Cz"].shape[1:] == (3, 3)
-            and np.array_equal(c["alpha"], tri3.ALPHA) and np.array_equal(c["beta"], tri3.BETA)
-            and np.array_equal(c["tie"], tri3.TIE))
+    return (
+        c["Cmb"].shape[1:] == (1, 2, 3, 3)
+        and c["Cs"].shape[1:] == (3, 3)
+        and c["Cz"].shape[1:] == (3, 3)
+        and np.array_equal(c["alpha"], tri3.ALPHA)
+        and np.array_equal(c["beta"], tri3.BETA)
+        and np.array_equal(c["tie"], tri3.TIE)
+    )
 
 
 def pack(conn, c, quasi_rz):
@@ -95,8 +100,11 @@ def _half(a, b):
 def _tie(a, d, au, du):
     """The shear tying strain of Eq. (12) in displacement form: au.(d - du) + a.du, with a the
     current tangent (its displacement part au) and d the current director (du)."""
-    return (au[0] * (d[0] - du[0]) + a[0] * du[0]) + (au[1] * (d[1] - du[1]) + a[1] * du[1]) \
+    return (
+        (au[0] * (d[0] - du[0]) + a[0] * du[0])
+        + (au[1] * (d[1] - du[1]) + a[1] * du[1])
         + (au[2] * (d[2] - du[2]) + a[2] * du[2])
+    )
 
 
 @njit(forceinline=True, error_model="numpy")
@@ -124,9 +132,9 @@ def _stage_mb(b, s, k, C, xs, fe, we):
     u2 = _sub(u[2], u[0])
     v1 = _sub(v[1], v[0])
     v2 = _sub(v[2], v[0])
-    e0 = (u1[0] * (a1[0] - 0.5 * u1[0]) + u1[1] * (a1[1] - 0.5 * u1[1]) + u1[2] * (a1[2] - 0.5 * u1[2]))
-    e1 = (u2[0] * (a2[0] - 0.5 * u2[0]) + u2[1] * (a2[1] - 0.5 * u2[1]) + u2[2] * (a2[2] - 0.5 * u2[2]))
-    e2 = (u1[0] * (a2[0] - u2[0]) + u1[1] * (a2[1] - u2[1]) + u1[2] * (a2[2] - u2[2]) + _dot(a1, u2))
+    e0 = u1[0] * (a1[0] - 0.5 * u1[0]) + u1[1] * (a1[1] - 0.5 * u1[1]) + u1[2] * (a1[2] - 0.5 * u1[2])
+    e1 = u2[0] * (a2[0] - 0.5 * u2[0]) + u2[1] * (a2[1] - 0.5 * u2[1]) + u2[2] * (a2[2] - 0.5 * u2[2])
+    e2 = u1[0] * (a2[0] - u2[0]) + u1[1] * (a2[1] - u2[1]) + u1[2] * (a2[2] - u2[2]) + _dot(a1, u2)
     k0, k1, k2 = curvatures(a1, a2, b1, b2, u1, u2, v1, v2)
     n0 = C[b, 0, k] * e0 + C[b, 1, k] * e1 + C[b, 2, k] * e2
     n1 = C[b, 3, k] * e0 + C[b, 4, k] * e1 + C[b, 5, k] * e2
@@ -136,10 +144,16 @@ def _stage_mb(b, s, k, C, xs, fe, we):
     m2 = C[b, 15, k] * k0 + C[b, 16, k] * k1 + C[b, 17, k] * k2
     we[b, k] = 0.5 * (n0 * e0 + n1 * e1 + n2 * e2 + m0 * k0 + m1 * k1 + m2 * k2)
     # generalised forces on a1, a2 (p) and b1, b2 (q); node 0 gets -(p1 + p2), 1 p1, 2 p2
-    p1 = (n0 * a1[0] + n2 * a2[0] + m0 * b1[0] + m2 * b2[0], n0 * a1[1] + n2 * a2[1] + m0 * b1[1] + m2 * b2[1],
-          n0 * a1[2] + n2 * a2[2] + m0 * b1[2] + m2 * b2[2])
-    p2 = (n1 * a2[0] + n2 * a1[0] + m1 * b2[0] + m2 * b1[0], n1 * a2[1] + n2 * a1[1] + m1 * b2[1] + m2 * b1[1],
-          n1 * a2[2] + n2 * a1[2] + m1 * b2[2] + m2 * b1[2])
+    p1 = (
+        n0 * a1[0] + n2 * a2[0] + m0 * b1[0] + m2 * b2[0],
+        n0 * a1[1] + n2 * a2[1] + m0 * b1[1] + m2 * b2[1],
+        n0 * a1[2] + n2 * a2[2] + m0 * b1[2] + m2 * b2[2],
+    )
+    p2 = (
+        n1 * a2[0] + n2 * a1[0] + m1 * b2[0] + m2 * b1[0],
+        n1 * a2[1] + n2 * a1[1] + m1 * b2[1] + m2 * b1[1],
+        n1 * a2[2] + n2 * a1[2] + m1 * b2[2] + m2 * b1[2],
+    )
     q1 = _lin2(m0, a1, m2, a2)
     q2 = _lin2(m1, a2, m2, a1)
     p0 = (-(p1[0] + p2[0]), -(p1[1] + p2[1]), -(p1[2] + p2[2]))
@@ -173,24 +187,42 @@ def _stage_rest(b, s, k, Cs, Cz, rz, quasi, mu, xs, fe, we):
     fo0 = _row3(fe, s, 0, k)
     fo1 = _row3(fe, s, 6, k)
     fo2 = _row3(fe, s, 12, k)
-    fo0 = (fo0[0] + (s0 * td0[0] - s1 * td1[0]), fo0[1] + (s0 * td0[1] - s1 * td1[1]),
-           fo0[2] + (s0 * td0[2] - s1 * td1[2]))
-    fo1 = (fo1[0] + (s1 * td1[0] - s2 * td2[0]), fo1[1] + (s1 * td1[1] - s2 * td2[1]),
-           fo1[2] + (s1 * td1[2] - s2 * td2[2]))
-    fo2 = (fo2[0] + (s2 * td2[0] - s0 * td0[0]), fo2[1] + (s2 * td2[1] - s0 * td0[1]),
-           fo2[2] + (s2 * td2[2] - s0 * td0[2]))
+    fo0 = (
+        fo0[0] + (s0 * td0[0] - s1 * td1[0]),
+        fo0[1] + (s0 * td0[1] - s1 * td1[1]),
+        fo0[2] + (s0 * td0[2] - s1 * td1[2]),
+    )
+    fo1 = (
+        fo1[0] + (s1 * td1[0] - s2 * td2[0]),
+        fo1[1] + (s1 * td1[1] - s2 * td2[1]),
+        fo1[2] + (s1 * td1[2] - s2 * td2[2]),
+    )
+    fo2 = (
+        fo2[0] + (s2 * td2[0] - s0 * td0[0]),
+        fo2[1] + (s2 * td2[1] - s0 * td0[1]),
+        fo2[2] + (s2 * td2[2] - s0 * td0[2]),
+    )
     h0 = 0.5 * s0
     h1 = 0.5 * s1
     h2 = 0.5 * s2
     fn0 = _row3(fe, s, 3, k)
     fn1 = _row3(fe, s, 9, k)
     fn2 = _row3(fe, s, 15, k)
-    fn0 = (fn0[0] + (h0 * ta0[0] + h1 * ta1[0]), fn0[1] + (h0 * ta0[1] + h1 * ta1[1]),
-           fn0[2] + (h0 * ta0[2] + h1 * ta1[2]))
-    fn1 = (fn1[0] + (h1 * ta1[0] + h2 * ta2[0]), fn1[1] + (h1 * ta1[1] + h2 * ta2[1]),
-           fn1[2] + (h1 * ta1[2] + h2 * ta2[2]))
-    fn2 = (fn2[0] + (h0 * ta0[0] + h2 * ta2[0]), fn2[1] + (h0 * ta0[1] + h2 * ta2[1]),
-           fn2[2] + (h0 * ta0[2] + h2 * ta2[2]))
+    fn0 = (
+        fn0[0] + (h0 * ta0[0] + h1 * ta1[0]),
+        fn0[1] + (h0 * ta0[1] + h1 * ta1[1]),
+        fn0[2] + (h0 * ta0[2] + h1 * ta1[2]),
+    )
+    fn1 = (
+        fn1[0] + (h1 * ta1[0] + h2 * ta2[0]),
+        fn1[1] + (h1 * ta1[1] + h2 * ta2[1]),
+        fn1[2] + (h1 * ta1[2] + h2 * ta2[2]),
+    )
+    fn2 = (
+        fn2[0] + (h0 * ta0[0] + h2 * ta2[0]),
+        fn2[1] + (h0 * ta0[1] + h2 * ta2[1]),
+        fn2[2] + (h0 * ta0[2] + h2 * ta2[2]),
+    )
     # thickness strain at the nodes (Eq. 15 with Eq. 5 / Eq. 24); Eq. 24's corner normal at node i
     # from its neighbours i+1, i-1 as core takes them
     z0 = z1 = z2 = 1.0

@@ -64,59 +64,71 @@ def shape(xi, eta):
     return N, dN
 
 
-N_GP = np.array([shape(*p)[0] for p in GAUSS])          # (4 gp, 4 nodes)
-DN_GP = np.array([shape(*p)[1] for p in GAUSS])         # (4 gp, 4 nodes, 2)
+N_GP = np.array([shape(*p)[0] for p in GAUSS])  # (4 gp, 4 nodes)
+DN_GP = np.array([shape(*p)[1] for p in GAUSS])  # (4 gp, 4 nodes, 2)
 # tying points A (0,-1), C (0,+1) for gamma_z,xi;  B (-1,0), D (+1,0) for gamma_z,eta
 _TY = [((0.0, -1.0), 0), ((0.0, 1.0), 0), ((-1.0, 0.0), 1), ((1.0, 0.0), 1)]
 ALPHA = np.array([shape(*p)[1][:, k] for p, k in _TY])  # d/d(xi or eta) of x_o at the tying point
-BETA = np.array([shape(*p)[0] for p, _ in _TY])         # x_n interpolated at the tying point
+BETA = np.array([shape(*p)[0] for p, _ in _TY])  # x_n interpolated at the tying point
 
 
 def _shear_interp(xi, eta):
     """(2,4): natural (gamma_z,xi, gamma_z,eta) at (xi, eta) from the 4 tying values (Eq. 4)."""
-    return np.array([[0.5 * (1 - eta), 0.5 * (1 + eta), 0.0, 0.0],
-                     [0.0, 0.0, 0.5 * (1 - xi), 0.5 * (1 + xi)]])
+    return np.array([[0.5 * (1 - eta), 0.5 * (1 + eta), 0.0, 0.0], [0.0, 0.0, 0.5 * (1 - xi), 0.5 * (1 + xi)]])
 
 
-S_GP = np.array([_shear_interp(*p) for p in GAUSS])     # (4 gp, 2, 4)
-TIE = np.array([[0.0, 3.0, 1.0]] * 4)                  # shear: (x_o, x_n) products, c_t = 1 (core.py)
+S_GP = np.array([_shear_interp(*p) for p in GAUSS])  # (4 gp, 2, 4)
+TIE = np.array([[0.0, 3.0, 1.0]] * 4)  # shear: (x_o, x_n) products, c_t = 1 (core.py)
 
 # the five tying strains of the assumed membrane field: (point, derivative of the first factor, of
 # the second, c_t, natural strain row): stretches of the xi-edges, of the eta-edges, centre shear
-_MTY = [((0.0, -1.0), 0, 0, 0.5, 0), ((0.0, 1.0), 0, 0, 0.5, 0),
-        ((-1.0, 0.0), 1, 1, 0.5, 1), ((1.0, 0.0), 1, 1, 0.5, 1), ((0.0, 0.0), 0, 1, 1.0, 2)]
+_MTY = [
+    ((0.0, -1.0), 0, 0, 0.5, 0),
+    ((0.0, 1.0), 0, 0, 0.5, 0),
+    ((-1.0, 0.0), 1, 1, 0.5, 1),
+    ((1.0, 0.0), 1, 1, 0.5, 1),
+    ((0.0, 0.0), 0, 1, 1.0, 2),
+]
 # the compatible membrane strains at the Gauss points as tying terms: a1.a1/2, a2.a2/2, a1.a2
 _GPM = [(g, k, l, c) for g in range(4) for k, l, c in ((0, 0, 0.5), (1, 1, 0.5), (0, 1, 1.0))]
 # the twist terms: products of the hourglass vector h = sum_i xi_i eta_i x_i / 4 and the centre
 # tangents a_xi, a_eta (with the centre shear, tying strain 16, they make |h - alpha a_xi - beta a_eta|^2)
 _HG = XI[:, 0] * XI[:, 1] / 4.0
 _DC = shape(0.0, 0.0)[1]
-_TW = [(_HG, _HG, 1.0), (_HG, _DC[:, 0], 1.0), (_HG, _DC[:, 1], 1.0),
-       (_DC[:, 0], _DC[:, 0], 0.5), (_DC[:, 1], _DC[:, 1], 0.5)]
-M_ALPHA = np.array([DN_GP[g, :, k] for g, k, _, _ in _GPM] + [shape(*p)[1][:, k] for p, k, _, _, _ in _MTY]
-                   + [u for u, _, _ in _TW])
-M_BETA = np.array([DN_GP[g, :, l] for g, _, l, _ in _GPM] + [shape(*p)[1][:, l] for p, _, l, _, _ in _MTY]
-                  + [v for _, v, _ in _TW])
-M_TIE = np.array([[0.0, 0.0, c] for *_, c in _GPM] + [[0.0, 0.0, c] for _, _, _, c, _ in _MTY]
-                 + [[0.0, 0.0, c] for *_, c in _TW])
-N_MEM = len(M_TIE)                                      # 22 raw membrane strains
+_TW = [
+    (_HG, _HG, 1.0),
+    (_HG, _DC[:, 0], 1.0),
+    (_HG, _DC[:, 1], 1.0),
+    (_DC[:, 0], _DC[:, 0], 0.5),
+    (_DC[:, 1], _DC[:, 1], 0.5),
+]
+M_ALPHA = np.array(
+    [DN_GP[g, :, k] for g, k, _, _ in _GPM] + [shape(*p)[1][:, k] for p, k, _, _, _ in _MTY] + [u for u, _, _ in _TW]
+)
+M_BETA = np.array(
+    [DN_GP[g, :, l] for g, _, l, _ in _GPM] + [shape(*p)[1][:, l] for p, _, l, _, _ in _MTY] + [v for _, v, _ in _TW]
+)
+M_TIE = np.array(
+    [[0.0, 0.0, c] for *_, c in _GPM] + [[0.0, 0.0, c] for _, _, _, c, _ in _MTY] + [[0.0, 0.0, c] for *_, c in _TW]
+)
+N_MEM = len(M_TIE)  # 22 raw membrane strains
 # On a bilinear quadrilateral x = x_c + xi a_xi + eta a_eta + xi eta h, so every tangent is
 # a_xi + eta h or a_eta + xi h, and each of the 22 products above is a fixed combination of the six
 # products y = (a_xi.a_xi/2, a_eta.a_eta/2, a_xi.a_eta, h.h/2, a_xi.h, a_eta.h) of the centre
 # tangents and the hourglass vector: raw = R_MEM y.  The membrane rigidity therefore acts on y as
 # the 6x6 R^T P^T C5 P R (rank 5), and the kernels form six products instead of 22.
-_V = np.stack([_DC[:, 0], _DC[:, 1], _HG], 1)          # (4,3): orthogonal columns, |column|^2 = 1/4
+_V = np.stack([_DC[:, 0], _DC[:, 1], _HG], 1)  # (4,3): orthogonal columns, |column|^2 = 1/4
 _PAIRS = ((0, 0, 0.5), (1, 1, 0.5), (0, 1, 1.0), (2, 2, 0.5), (0, 2, 1.0), (1, 2, 1.0))
 P_ALPHA = np.array([_V[:, k] for k, _, _ in _PAIRS])
 P_BETA = np.array([_V[:, l] for _, l, _ in _PAIRS])
 P_TIE = np.array([[0.0, 0.0, c] for *_, c in _PAIRS])
-N_PROD = len(P_TIE)                                    # the six membrane products
+N_PROD = len(P_TIE)  # the six membrane products
 
 
 def products_map(alpha, beta, tie):
     """(nt,6) R with c_t (alpha_t . x)(beta_t . x) = R_t . y for any nodal x (y: the six products
     P_ALPHA/P_BETA/P_TIE), for x_o.x_o tying rows alpha, beta (nt,4) whose weights sum to zero."""
-    a = 4.0 * alpha @ _V                                   # coordinates on the basis _V
+    a = 4.0 * alpha @ _V  # coordinates on the basis _V
     b = 4.0 * beta @ _V
     R = np.zeros((len(alpha), N_PROD))
     for p, (k, l, c) in enumerate(_PAIRS):
@@ -125,7 +137,7 @@ def products_map(alpha, beta, tie):
     return R
 
 
-R_MEM = products_map(M_ALPHA, M_BETA, M_TIE)           # (22,6)
+R_MEM = products_map(M_ALPHA, M_BETA, M_TIE)  # (22,6)
 MEMBRANES = ("full", "ans")
 
 
@@ -139,16 +151,21 @@ def _cartesian_to_natural(Xo, p, ex, ey):
     p = (xi, eta) of a Cartesian strain (eps_xx, eps_yy, gamma_xy) in the frame (ex, ey) (M,3)."""
     dN = shape(*p)[1]
     A = [np.einsum("i,mic->mc", dN[:, k], Xo) for k in (0, 1)]
-    g = [np.stack([np.sum(a * ex, -1), np.sum(a * ey, -1)], -1) for a in A]     # (M,2) each
+    g = [np.stack([np.sum(a * ex, -1), np.sum(a * ey, -1)], -1) for a in A]  # (M,2) each
     (g1x, g1y), (g2x, g2y) = (g[0][:, 0], g[0][:, 1]), (g[1][:, 0], g[1][:, 1])
-    return np.stack([np.stack([g1x * g1x, g1y * g1y, g1x * g1y], -1),
-                     np.stack([g2x * g2x, g2y * g2y, g2x * g2y], -1),
-                     np.stack([2 * g1x * g2x, 2 * g1y * g2y, g1x * g2y + g1y * g2x], -1)], -2)
+    return np.stack(
+        [
+            np.stack([g1x * g1x, g1y * g1y, g1x * g1y], -1),
+            np.stack([g2x * g2x, g2y * g2y, g2x * g2y], -1),
+            np.stack([2 * g1x * g2x, 2 * g1y * g2y, g1x * g2y + g1y * g2x], -1),
+        ],
+        -2,
+    )
 
 
 def tying_raw(alpha, beta, tie, xo, xn):
     """(M,nt) raw tying strains c_t (alpha_t . y)(beta_t . z) of (M,4,3) positions/directors."""
-    y = np.stack([xo, xn])                                   # offset 0 -> x_o, 3 -> x_n
+    y = np.stack([xo, xn])  # offset 0 -> x_o, 3 -> x_n
     ia = (tie[:, 0] // 3).astype(int)
     ib = (tie[:, 1] // 3).astype(int)
     a = np.einsum("ti,tmic->mtc", alpha, y[ia])
@@ -163,15 +180,21 @@ _DN_ROWS = np.ascontiguousarray(DN_GP.transpose(0, 2, 1).reshape(-1, DN_GP.shape
 def _tangents(xo, xn):
     """(M,4,2,3) natural tangents of the positions and of the directors at the Gauss points."""
     M = len(xo)
-    a = (_DN_ROWS @ xo).reshape(M, len(DN_GP), 2, 3)      # batched products: einsum took 10x as long
+    a = (_DN_ROWS @ xo).reshape(M, len(DN_GP), 2, 3)  # batched products: einsum took 10x as long
     b = (_DN_ROWS @ xn).reshape(M, len(DN_GP), 2, 3)
     return a, b
 
 
 def _bending_raw(a, b):
     """(M,4,3) raw natural bending strains (columns 3-5 of raw_strains' mb) from the tangents."""
-    return np.stack([_dot(a[:, :, 0], b[:, :, 0]), _dot(a[:, :, 1], b[:, :, 1]),
-                     _dot(a[:, :, 0], b[:, :, 1]) + _dot(a[:, :, 1], b[:, :, 0])], -1)
+    return np.stack(
+        [
+            _dot(a[:, :, 0], b[:, :, 0]),
+            _dot(a[:, :, 1], b[:, :, 1]),
+            _dot(a[:, :, 0], b[:, :, 1]) + _dot(a[:, :, 1], b[:, :, 0]),
+        ],
+        -1,
+    )
 
 
 def _dot(u, v):
@@ -182,8 +205,16 @@ def raw_strains(xo, xn):
     """Raw natural strains of elements with nodal (M,4,3) positions/directors: (M,4,6), (M,4), (M,4).
     The same products the kernel forms (core.py); used here for the reference state."""
     a, b = _tangents(xo, xn)
-    mb = np.concatenate([np.stack([0.5 * _dot(a[:, :, 0], a[:, :, 0]), 0.5 * _dot(a[:, :, 1], a[:, :, 1]),
-                                   _dot(a[:, :, 0], a[:, :, 1])], -1), _bending_raw(a, b)], -1)
+    mb = np.concatenate(
+        [
+            np.stack(
+                [0.5 * _dot(a[:, :, 0], a[:, :, 0]), 0.5 * _dot(a[:, :, 1], a[:, :, 1]), _dot(a[:, :, 0], a[:, :, 1])],
+                -1,
+            ),
+            _bending_raw(a, b),
+        ],
+        -1,
+    )
     s = _dot(ALPHA @ xo, BETA @ xn)
     z = 0.5 * _dot(xn, xn)
     return mb, s, z
@@ -203,32 +234,46 @@ def _assumed_membrane(Xo, Cm_gp, Jw):
     strains there), from the natural-strain rigidities Cm_gp (M,4,3,3) = T^T C_m T J_o w at the
     Gauss points.  The rigidity on the 22 raw strains is P^T C5 P: of rank 5."""
     M = len(Xo)
-    A1c = np.einsum("i,mic->mc", _DC[:, 0], Xo)                 # centre tangents
+    A1c = np.einsum("i,mic->mc", _DC[:, 0], Xo)  # centre tangents
     A2c = np.einsum("i,mic->mc", _DC[:, 1], Xo)
     ex0 = A1c / np.linalg.norm(A1c, axis=-1, keepdims=True)
     ez0 = np.cross(A1c, A2c)
     ey0 = np.cross(ez0 / np.linalg.norm(ez0, axis=-1, keepdims=True), ex0)
-    W = np.stack([_cartesian_to_natural(Xo, p, ex0, ey0) for p in GAUSS], 1)     # (M,4,3,3)
+    W = np.stack([_cartesian_to_natural(Xo, p, ex0, ey0) for p in GAUSS], 1)  # (M,4,3,3)
     area = Jw.sum(1)
     xi_c = Jw @ GAUSS[:, 0] / area
     eta_c = Jw @ GAUSS[:, 1] / area
     # tying strain t of a field (e, b4, b5): row r_t of the natural strains at its point
-    Mt = np.stack([np.einsum("ma,ab->mb", _cartesian_to_natural(Xo, p, ex0, ey0)[:, r],
-                             _assumed_field(*p)) for p, _, _, _, r in _MTY], 1)      # (M,5,5)
-    b45 = np.linalg.inv(Mt)[:, 3:]                               # (M,2,5): b4, b5 from the tying
-    mean = np.zeros((M, 3, N_MEM))                               # (e1, e2, e3) from the 12 gp strains
+    Mt = np.stack(
+        [
+            np.einsum("ma,ab->mb", _cartesian_to_natural(Xo, p, ex0, ey0)[:, r], _assumed_field(*p))
+            for p, _, _, _, r in _MTY
+        ],
+        1,
+    )  # (M,5,5)
+    b45 = np.linalg.inv(Mt)[:, 3:]  # (M,2,5): b4, b5 from the tying
+    mean = np.zeros((M, 3, N_MEM))  # (e1, e2, e3) from the 12 gp strains
     Winv = np.linalg.inv(W)
-    for g in range(4):                                           # the four Gauss points
-        mean[:, :, 3 * g:3 * g + 3] = (Jw[:, g] / area)[:, None, None] * Winv[:, g]
+    for g in range(4):  # the four Gauss points
+        mean[:, :, 3 * g : 3 * g + 3] = (Jw[:, g] / area)[:, None, None] * Winv[:, g]
     # twist correction: the mean of a_xi.a_xi/2 over the Gauss points carries |h|^2/6 where the
     # edges carry |h|^2/2, so a flat element twisted with its edge lengths kept (a fold across it)
     # shows a parasitic mean stretch -|h|^2/3 in xi and eta: add c/3, c = |h - alpha a_xi -
     # beta a_eta|^2 (alpha, beta: the reference hourglass H in the centre tangents), which is zero
     # with zero slope for every affine motion of a flat element, so the patch test is unaffected
     H = np.einsum("i,mic->mc", _HG, Xo)
-    G = np.stack([np.einsum("mc,mc->m", A1c, A1c), np.einsum("mc,mc->m", A1c, A2c),
-                  np.einsum("mc,mc->m", A1c, A2c), np.einsum("mc,mc->m", A2c, A2c)], -1).reshape(M, 2, 2)
-    ab = np.linalg.solve(G, np.stack([np.einsum("mc,mc->m", H, A1c), np.einsum("mc,mc->m", H, A2c)], -1)[..., None])[..., 0]
+    G = np.stack(
+        [
+            np.einsum("mc,mc->m", A1c, A1c),
+            np.einsum("mc,mc->m", A1c, A2c),
+            np.einsum("mc,mc->m", A1c, A2c),
+            np.einsum("mc,mc->m", A2c, A2c),
+        ],
+        -1,
+    ).reshape(M, 2, 2)
+    ab = np.linalg.solve(G, np.stack([np.einsum("mc,mc->m", H, A1c), np.einsum("mc,mc->m", H, A2c)], -1)[..., None])[
+        ..., 0
+    ]
     a_, b_ = ab[:, 0], ab[:, 1]
     # c = t17 - 2 alpha t18 - 2 beta t19 + 2 alpha^2 t20 + 2 beta^2 t21 + 2 alpha beta t16
     coef = np.zeros((M, N_MEM))
@@ -239,7 +284,7 @@ def _assumed_membrane(Xo, Cm_gp, Jw):
     P = np.zeros((M, 5, N_MEM))
     P[:, :3] = mean
     P[:, 3:, 12:17] = b45
-    F = np.zeros((M, 4, 3, 5))                                   # the field at gp g (_assumed_field)
+    F = np.zeros((M, 4, 3, 5))  # the field at gp g (_assumed_field)
     F[:, :, 0, 0] = F[:, :, 1, 1] = F[:, :, 2, 2] = 1.0
     F[:, :, 0, 3] = GAUSS[None, :, 1] - eta_c[:, None]
     F[:, :, 1, 4] = GAUSS[None, :, 0] - xi_c[:, None]
@@ -277,14 +322,14 @@ def precompute(Xo, Xn, C_m, C_b, C_t, E_z, warp_angle, membrane="full"):
     A1 = np.einsum("gi,mic->mgc", DN_GP[:, :, 0], Xo)
     A2 = np.einsum("gi,mic->mgc", DN_GP[:, :, 1], Xo)
     Xn_g = np.einsum("gi,mic->mgc", N_GP, Xn)
-    J = np.einsum("mgc,mgc->mg", np.cross(A1, A2), Xn_g)        # Eq. (8)
+    J = np.einsum("mgc,mgc->mg", np.cross(A1, A2), Xn_g)  # Eq. (8)
     if np.any(J <= 0):
         raise ValueError("a quadrilateral has a non-positive Jacobian J_o (inverted or director flipped)")
     ex, ey, _ = local_frame(A1, A2, warp_angle)
     Q, T = covariant_maps(A1, A2, ex, ey)
     Jw = J * GAUSS_W
     Cmb = np.stack([fold(T, C_m, Jw), fold(T, C_b, Jw)], axis=2)
-    QS = np.einsum("mgab,gbt->mgat", Q, S_GP)                  # local shear from tying values
+    QS = np.einsum("mgab,gbt->mgat", Q, S_GP)  # local shear from tying values
     Cs = _sum_gauss_quadratic(QS, C_t * Jw[:, :, None, None])
     # per element, not a matrix product over the elements: BLAS sums differently for one row, and
     # an element's constants must not depend on the others it is computed with (model.ElementConstants)
@@ -292,27 +337,37 @@ def precompute(Xo, Xn, C_m, C_b, C_t, E_z, warp_angle, membrane="full"):
     r_mb, r_s, r_z = raw_strains(Xo, Xn)
     alpha, beta, tie = ALPHA, BETA, TIE
     if membrane == "ans":
-        Cmb[:, :, 0] = 0.0                       # the membrane moves into the tying block
+        Cmb[:, :, 0] = 0.0  # the membrane moves into the tying block
         P, C5 = _assumed_membrane(Xo, fold(T, C_m, Jw), Jw)
-        Q = P @ R_MEM                            # (M,5,6): the field's parameters from y
+        Q = P @ R_MEM  # (M,5,6): the field's parameters from y
         Cm = np.swapaxes(Q, 1, 2) @ C5 @ Q
         nts = Cs.shape[1]
         Cs_all = np.zeros((len(Xo), nts + N_PROD, nts + N_PROD))
         Cs_all[:, :nts, :nts] = Cs
-        Cs_all[:, nts:, nts:] = 0.5 * (Cm + np.swapaxes(Cm, 1, 2))   # exactly symmetric
+        Cs_all[:, nts:, nts:] = 0.5 * (Cm + np.swapaxes(Cm, 1, 2))  # exactly symmetric
         Cs = Cs_all
         alpha = np.vstack([ALPHA, P_ALPHA])
         beta = np.vstack([BETA, P_BETA])
         tie = np.vstack([TIE, P_TIE])
         r_s = tying_raw(alpha, beta, tie, Xo, Xn)
-    return dict(Cmb=np.ascontiguousarray(Cmb), Cs=np.ascontiguousarray(Cs), Cz=Cz, r_mb=r_mb,
-                r_s=np.ascontiguousarray(r_s), r_z=r_z, T=T, J=J, alpha=np.ascontiguousarray(alpha),
-                beta=np.ascontiguousarray(beta), tie=np.ascontiguousarray(tie))
+    return dict(
+        Cmb=np.ascontiguousarray(Cmb),
+        Cs=np.ascontiguousarray(Cs),
+        Cz=Cz,
+        r_mb=r_mb,
+        r_s=np.ascontiguousarray(r_s),
+        r_z=r_z,
+        T=T,
+        J=J,
+        alpha=np.ascontiguousarray(alpha),
+        beta=np.ascontiguousarray(beta),
+        tie=np.ascontiguousarray(tie),
+    )
 
 
 def nodal_areas(Xo, Xn):
     """(M,4) area shares of the nodes by the trapezoidal (nodal) rule, J_o(node) x weight 1 (Section 4)."""
-    dN = np.array([shape(*p)[1] for p in XI])                     # (4 nodes as points, 4, 2)
+    dN = np.array([shape(*p)[1] for p in XI])  # (4 nodes as points, 4, 2)
     A1 = np.einsum("pi,mic->mpc", dN[:, :, 0], Xo)
     A2 = np.einsum("pi,mic->mpc", dN[:, :, 1], Xo)
     return np.einsum("mpc,mpc->mp", np.cross(A1, A2), Xn)

@@ -78,10 +78,10 @@ def oblique(elev_deg: float, azim_deg: float) -> Camera:
 
 # One camera per view name: the same picture of a figure looks the same in every run.
 CAMERAS = {
-    "top": Camera((0.0, 0.0, -1.0), (0.0, 1.0, 0.0)),       # x right, y up
+    "top": Camera((0.0, 0.0, -1.0), (0.0, 1.0, 0.0)),  # x right, y up
     "iso": oblique(30.0, -60.0),
-    "side": Camera((0.0, 1.0, 0.0), (0.0, 0.0, 1.0)),       # looking along +y: x right, z up
-    "side_yz": Camera((-1.0, 0.0, 0.0), (0.0, 0.0, 1.0)),   # looking along -x: y right, z up
+    "side": Camera((0.0, 1.0, 0.0), (0.0, 0.0, 1.0)),  # looking along +y: x right, z up
+    "side_yz": Camera((-1.0, 0.0, 0.0), (0.0, 0.0, 1.0)),  # looking along -x: y right, z up
     "bottom": Camera((0.0, 0.0, 1.0), (0.0, 1.0, 0.0)),
 }
 
@@ -106,7 +106,7 @@ def _grid_quads(nu: int, nv: int, closed_u: bool = False) -> np.ndarray:
 def sphere_surface(centre, radius, n_around: int = 72, n_up: int = 36) -> Surface:
     """A UV sphere; quads outward (counter-clockwise seen from outside)."""
     c = np.asarray(centre, float)
-    th = np.linspace(0.0, np.pi, n_up + 1)               # from the south pole up
+    th = np.linspace(0.0, np.pi, n_up + 1)  # from the south pole up
     ph = np.linspace(0.0, 2 * np.pi, n_around, endpoint=False)
     T, P = np.meshgrid(th, ph, indexing="ij")
     pts = np.stack([np.sin(T) * np.cos(P), np.sin(T) * np.sin(P), -np.cos(T)], -1).reshape(-1, 3)
@@ -122,8 +122,14 @@ def _outline(shape: str, size: float, n: int):
     a = 0.5 * size
     k = max(n // 4, 1)
     s = np.linspace(-a, a, k, endpoint=False)
-    return np.concatenate([np.stack([s, np.full(k, -a)], -1), np.stack([np.full(k, a), s], -1),
-                           np.stack([-s, np.full(k, a)], -1), np.stack([np.full(k, -a), -s], -1)])
+    return np.concatenate(
+        [
+            np.stack([s, np.full(k, -a)], -1),
+            np.stack([np.full(k, a), s], -1),
+            np.stack([-s, np.full(k, a)], -1),
+            np.stack([np.full(k, -a), -s], -1),
+        ]
+    )
 
 
 def pedestal_surfaces(body: dict, bottom: float, cap_gap: float = 0.0):
@@ -139,12 +145,12 @@ def pedestal_surfaces(body: dict, bottom: float, cap_gap: float = 0.0):
     nz = max(4, int(np.ceil((top - bottom) / (size / 12.0))))
     zs = np.linspace(top, bottom, nz + 1)
     wall = np.concatenate([np.column_stack([ring + c[:2], np.full(n, z)]) for z in zs])
-    wq = _grid_quads(n, nz, closed_u=True)[:, ::-1]       # outward
+    wq = _grid_quads(n, nz, closed_u=True)[:, ::-1]  # outward
     side = Surface(wall, wq, np.zeros((0, 3), int), solid=True)
     # top: concentric rings (disc) / a grid clipped to the square; a fan of rings works for both
     rings = [c[:2] + f * ring for f in np.linspace(1.0, 0.0, 9)[:-1]]
     pts = np.concatenate([np.column_stack([r_, np.full(n, top)]) for r_ in rings] + [[[c[0], c[1], top]]])
-    tq = _grid_quads(n, len(rings) - 1, closed_u=True)          # rings inwards: normals up
+    tq = _grid_quads(n, len(rings) - 1, closed_u=True)  # rings inwards: normals up
     centre_idx = len(pts) - 1
     inner = (len(rings) - 1) * n + np.arange(n)
     tt = np.stack([inner, (inner - inner[0] + 1) % n + inner[0], np.full(n, centre_idx)], -1)
@@ -185,7 +191,7 @@ def scene_surfaces(mesh, X, bodies, mesh_lines: bool = True, cover_pedestal: boo
         elif b["type"] == "pedestal":
             top = float(b.get("centre", (0, 0, 0))[2])
             size = b["diameter"] if b.get("shape") == "disc" else b["size"]
-            bottom = min(zmin - 0.1 * size, top - 0.6 * size)      # a column standing below the sheet
+            bottom = min(zmin - 0.1 * size, top - 0.6 * size)  # a column standing below the sheet
             # a pedestal scene meshes only the hanging part; the sheet lies flat on the top, which
             # hides the pedestal's own top
             if cover_pedestal and _sheet_around(mesh, X, b):
@@ -216,8 +222,11 @@ def _sheet_around(mesh, X, body) -> bool:
     """True when the undeformed sheet has a hole over the pedestal's top (the pedestal recipes)."""
     c = np.asarray(body.get("centre", (0.0, 0.0, 0.0)), float)
     X0 = np.asarray(mesh.nodes, float)
-    r = np.linalg.norm(X0[:, :2] - c[:2], axis=1) if body.get("shape") == "disc" \
+    r = (
+        np.linalg.norm(X0[:, :2] - c[:2], axis=1)
+        if body.get("shape") == "disc"
         else np.max(np.abs(X0[:, :2] - c[:2]), axis=1)
+    )
     half = 0.5 * (body["diameter"] if body.get("shape") == "disc" else body["size"])
     return bool(len(r)) and float(r.min()) >= half * (1.0 - 1e-6)
 

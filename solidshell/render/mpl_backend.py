@@ -56,7 +56,7 @@ def draw(ax, surfaces, camera: Camera, norm, cmap, edge_width: float = 0.3, zord
             n = _normals(P)
             keep = np.ones(len(P), bool)
             if s.solid:
-                keep = (n @ d) < 1e-9          # outward normal towards the eye
+                keep = (n @ d) < 1e-9  # outward normal towards the eye
             P, n, cells_k = P[keep], n[keep], cells[keep]
             if not len(P):
                 continue
@@ -69,7 +69,7 @@ def draw(ax, surfaces, camera: Camera, norm, cmap, edge_width: float = 0.3, zord
             if s.edges:
                 e = np.tile([0.0, 0.0, 0.0, 0.45], (len(P), 1))
                 w = np.full(len(P), edge_width)
-            else:                               # seal the seams between neighbouring polygons
+            else:  # seal the seams between neighbouring polygons
                 e = rgba.copy()
                 w = np.full(len(P), 0.25)
             polys.extend(np.stack([P @ r, P @ u], axis=-1))
@@ -79,11 +79,12 @@ def draw(ax, surfaces, camera: Camera, norm, cmap, edge_width: float = 0.3, zord
             widths.append(w)
     if not polys:
         return None
-    order = np.argsort(-np.concatenate(depth), kind="stable")      # farthest first
+    order = np.argsort(-np.concatenate(depth), kind="stable")  # farthest first
     fc = np.concatenate(faces)[order]
     ec = np.concatenate(edges)[order]
     lw = np.concatenate(widths)[order]
-    pc = PolyCollection([polys[i] for i in order], facecolors=fc, edgecolors=ec, linewidths=lw,
-                        zorder=zorder, antialiaseds=True)
+    pc = PolyCollection(
+        [polys[i] for i in order], facecolors=fc, edgecolors=ec, linewidths=lw, zorder=zorder, antialiaseds=True
+    )
     ax.add_collection(pc)
     return pc

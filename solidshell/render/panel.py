@@ -27,7 +27,7 @@ _SAID: dict = {}
 
 
 def renderer() -> str:
-    """"vtk" or "matplotlib": the one pictures are drawn with in this process."""
+    """ "vtk" or "matplotlib": the one pictures are drawn with in this process."""
     want = os.environ.get("SOLIDSHELL_RENDERER", "auto").strip().lower()
     if want in ("matplotlib", "mpl"):
         return "matplotlib"
@@ -98,8 +98,9 @@ class ViewStyle:
     cover_pedestal: bool = True
 
 
-def draw_view(ax, mesh, X, view="iso", bodies=(), norm=None, warp_deg=None, zoom=None, extent=None,
-              style: ViewStyle = ViewStyle()):
+def draw_view(
+    ax, mesh, X, view="iso", bodies=(), norm=None, warp_deg=None, zoom=None, extent=None, style: ViewStyle = ViewStyle()
+):
     """Draw the sheet at positions X (N,3) [cm] with the bodies into ``ax``; returns a
     ScalarMappable for a colour bar of height z [cm].
 
@@ -137,8 +138,12 @@ def draw_view(ax, mesh, X, view="iso", bodies=(), norm=None, warp_deg=None, zoom
         if labels:
             triad(ax, cam, lab)
     elif labels:
-        xl, yl = {"top": (lab["x"], lab["y"]), "bottom": (lab["x"], lab["y"]), "side": (lab["x"], lab["z"]),
-                  "side_yz": (lab["y"], lab["z"])}[name]
+        xl, yl = {
+            "top": (lab["x"], lab["y"]),
+            "bottom": (lab["x"], lab["y"]),
+            "side": (lab["x"], lab["z"]),
+            "side_yz": (lab["y"], lab["z"]),
+        }[name]
         ax.set_xlabel(xl)
         ax.set_ylabel(yl)
         ax.tick_params(labelsize=8)
@@ -155,13 +160,26 @@ def triad(ax, cam: Camera, lab: dict, at=(0.1, 0.12), size=0.08):
     names = {"x": lab["x"].replace(" [cm]", ""), "y": lab["y"].replace(" [cm]", ""), "z": "z"}
     for k, e in zip("xyz", np.eye(3)):
         v = np.array([e @ r, e @ u]) * size
-        ax.annotate("", xy=(at[0] + v[0], at[1] + v[1]), xytext=at, xycoords="axes fraction",
-                    arrowprops=dict(arrowstyle="-|>", lw=0.9, color="0.15", shrinkA=0, shrinkB=0))
+        ax.annotate(
+            "",
+            xy=(at[0] + v[0], at[1] + v[1]),
+            xytext=at,
+            xycoords="axes fraction",
+            arrowprops=dict(arrowstyle="-|>", lw=0.9, color="0.15", shrinkA=0, shrinkB=0),
+        )
         t = v / max(np.linalg.norm(v), 1e-12)
         ha = "left" if t[0] > 0.4 else "right" if t[0] < -0.4 else "center"
         va = "bottom" if t[1] > 0.4 else "top" if t[1] < -0.4 else "center"
-        ax.text(at[0] + v[0] + 0.01 * t[0], at[1] + v[1] + 0.01 * t[1], " ".join(names[k].split()),
-                transform=ax.transAxes, fontsize=7, ha=ha, va=va, color="0.15")
+        ax.text(
+            at[0] + v[0] + 0.01 * t[0],
+            at[1] + v[1] + 0.01 * t[1],
+            " ".join(names[k].split()),
+            transform=ax.transAxes,
+            fontsize=7,
+            ha=ha,
+            va=va,
+            color="0.15",
+        )
 
 
 def colorbar(fig, ax, sm, label="height z [cm]"):

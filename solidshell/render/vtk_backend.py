@@ -19,7 +19,7 @@ import numpy as np
 
 from .geometry import Camera
 
-_STATE: dict = {}            # {"ok": bool, "why": str}: the probe's answer for this process
+_STATE: dict = {}  # {"ok": bool, "why": str}: the probe's answer for this process
 
 _PROBE = r"""
 import numpy as np, pyvista as pv
@@ -49,8 +49,9 @@ def _launch(win):
     env = dict(os.environ)
     if win:
         env["VTK_DEFAULT_OPENGL_WINDOW"] = win
-    return subprocess.Popen([sys.executable, "-c", _PROBE], env=env, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
+    return subprocess.Popen(
+        [sys.executable, "-c", _PROBE], env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
 
 
 def _pyvista_missing() -> bool:
@@ -123,8 +124,9 @@ def _polydata(s):
     return pv.PolyData(np.asarray(s.points, float), faces=faces)
 
 
-def render_image(surfaces, camera: Camera, extent, norm, cmap, height_px: int = 900,
-                 edge_width: float = 0.6) -> np.ndarray:
+def render_image(
+    surfaces, camera: Camera, extent, norm, cmap, height_px: int = 900, edge_width: float = 0.6
+) -> np.ndarray:
     """RGB image (H,W,3) uint8 of the surfaces seen by ``camera``, framing exactly the screen
     rectangle ``extent`` = (xmin, xmax, ymin, ymax) [cm] (orthographic), white background."""
     import pyvista as pv
@@ -134,7 +136,7 @@ def render_image(surfaces, camera: Camera, extent, norm, cmap, height_px: int = 
     aspect = (x1 - x0) / (y1 - y0)
     H = int(height_px)
     W = int(round(H * aspect))
-    if W > 2400:                                  # very wide views: cap the width instead
+    if W > 2400:  # very wide views: cap the width instead
         W, H = 2400, int(round(2400 / aspect))
     from vtkmodules.vtkRenderingCore import vtkMapper
 
@@ -150,17 +152,24 @@ def render_image(surfaces, camera: Camera, extent, norm, cmap, height_px: int = 
             kw = dict(show_edges=False, smooth_shading=False, ambient=0.18, diffuse=0.85)
             if s.scalars is not None:
                 poly.point_data["z"] = np.asarray(s.scalars, float)
-                p.add_mesh(poly, scalars="z", cmap=cmap, clim=(norm.vmin, norm.vmax), show_scalar_bar=False,
-                           specular=0.1, **kw)
+                p.add_mesh(
+                    poly, scalars="z", cmap=cmap, clim=(norm.vmin, norm.vmax), show_scalar_bar=False, specular=0.1, **kw
+                )
             else:
                 p.add_mesh(poly, color=s.color, specular=0.25, specular_power=20.0, **kw)
             if s.edges:
-                p.add_mesh(poly.extract_all_edges(), color=(0.05, 0.05, 0.05), line_width=edge_width,
-                           lighting=False, opacity=0.75)
+                p.add_mesh(
+                    poly.extract_all_edges(),
+                    color=(0.05, 0.05, 0.05),
+                    line_width=edge_width,
+                    lighting=False,
+                    opacity=0.75,
+                )
             if s.scalars is not None and s.edges:
                 # the sheet's rim, a thicker dark line: a sheet seen edge-on still reads as a curve
-                rim = poly.extract_feature_edges(boundary_edges=True, feature_edges=False,
-                                                 manifold_edges=False, non_manifold_edges=False)
+                rim = poly.extract_feature_edges(
+                    boundary_edges=True, feature_edges=False, manifold_edges=False, non_manifold_edges=False
+                )
                 if rim.n_points:
                     p.add_mesh(rim, color=(0.05, 0.05, 0.05), line_width=max(1.6, 2.0 * edge_width), lighting=False)
         r, u, d = camera.frame()

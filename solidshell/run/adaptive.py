@@ -20,8 +20,10 @@ def adapt_settings(scene: Scene, kind: str):
 
     adapt = parse_adapt(scene.adapt, f"{scene.source}: adapt")
     if kind not in ("explicit", "relax"):
-        raise InputError(f"adaptive subdivision runs inside a dynamic run (--solver explicit or relax, "
-                         f"paper §5.5); the {kind} solver is not adaptive")
+        raise InputError(
+            f"adaptive subdivision runs inside a dynamic run (--solver explicit or relax, "
+            f"paper §5.5); the {kind} solver is not adaptive"
+        )
     return adapt
 
 
@@ -61,14 +63,23 @@ def _adaptive_run(sc: Scene, level0, settings: dict, adapt, kind: str, cb):
 
     s = dict(settings)
     restart = s.pop("restart", None)
-    constants = ElementConstants()        # most elements survive a remesh: fold each one once
+    constants = ElementConstants()  # most elements survive a remesh: fold each one once
 
     def make_problem(mesh, coarse_quads=None):
         # coarse_quads: quads below the finest level, given "ans" membranes (adapt.coarse_membrane)
-        membrane = None if coarse_quads is None else \
-            np.where(coarse_quads, "ans", sc.model.get("membrane", "full")).tolist()
+        membrane = (
+            None if coarse_quads is None else np.where(coarse_quads, "ans", sc.model.get("membrane", "full")).tolist()
+        )
         return build_problem(sc, mesh, membrane=membrane, constants=constants)
 
-    return AdaptiveRun(level0, make_problem, Integrator, parse_settings(s, kind == "relax"),
-                       adapt, relax=kind == "relax", curves=boundary_curves(sc), progress=_phase(cb, 0.08, 0.9),
-                       restart=restart)
+    return AdaptiveRun(
+        level0,
+        make_problem,
+        Integrator,
+        parse_settings(s, kind == "relax"),
+        adapt,
+        relax=kind == "relax",
+        curves=boundary_curves(sc),
+        progress=_phase(cb, 0.08, 0.9),
+        restart=restart,
+    )

@@ -44,13 +44,13 @@ class RunOutput:
     mesh: Any
     out_dir: Path | None
     scene: Scene | None = None
-    result: Any = None                      # the solver's SolveResult (None for a mesh-only run)
+    result: Any = None  # the solver's SolveResult (None for a mesh-only run)
     files: list = field(default_factory=list)
-    run_id: str = ""                        # uuid4 hex, also in summary.json and every file
-    series: list | None = None              # adaptive runs: [(t, ShellMesh, U)], each frame on its own mesh
-    projected_boundary: np.ndarray | None = None   # the analysed drape's outline (analysis.projected_boundary)
-    problem: Any = None                     # the Problem the solver ran (adaptive: on the final mesh, with its
-                                            # per-quad membranes); None for a mesh-only run
+    run_id: str = ""  # uuid4 hex, also in summary.json and every file
+    series: list | None = None  # adaptive runs: [(t, ShellMesh, U)], each frame on its own mesh
+    projected_boundary: np.ndarray | None = None  # the analysed drape's outline (analysis.projected_boundary)
+    problem: Any = None  # the Problem the solver ran (adaptive: on the final mesh, with its
+    # per-quad membranes); None for a mesh-only run
 
     @property
     def converged(self):
@@ -70,10 +70,10 @@ class RunPlan:
     """What a run was asked: the scene (overrides applied), the solver kind and the call's options."""
 
     scene: Scene
-    kind: str                               # a solver kind of solidshell.solvers.KINDS, or "none"
-    mesh: Any = None                        # run_scene's ``mesh`` argument
+    kind: str  # a solver kind of solidshell.solvers.KINDS, or "none"
+    mesh: Any = None  # run_scene's ``mesh`` argument
     out_dir: Any = None
-    settings: dict = field(default_factory=dict)    # the call's solver settings
+    settings: dict = field(default_factory=dict)  # the call's solver settings
     overrides: dict | None = None
     force: bool = False
     allow_large: bool = False
@@ -89,12 +89,23 @@ class Solved:
     U: np.ndarray
     result: Any = None
     problem: Any = None
-    series: list | None = None              # adaptive: [(t, mesh, U)] on each frame's own mesh
+    series: list | None = None  # adaptive: [(t, mesh, U)] on each frame's own mesh
 
 
 # --------------------------------------------------------------------------- the run
-def run_scene(scene, mesh=None, solver=None, out_dir=None, progress=True, overrides=None, *,
-              force=False, allow_large=False, adaptive=None, **settings) -> RunOutput:
+def run_scene(
+    scene,
+    mesh=None,
+    solver=None,
+    out_dir=None,
+    progress=True,
+    overrides=None,
+    *,
+    force=False,
+    allow_large=False,
+    adaptive=None,
+    **settings,
+) -> RunOutput:
     """Run a scene (a name, a .toml path or a Scene).
 
     mesh        : None (the scene's density), a density like "24x8x4", a mesh file, or a ShellMesh
@@ -126,11 +137,11 @@ def run_scene(scene, mesh=None, solver=None, out_dir=None, progress=True, overri
     sc = sc.with_overrides(overrides)
     kind = sc.solver["kind"] if solver is None else str(solver)
     if kind != "none":
-        solvers.kind(kind)          # the registry's one-line error for an unknown kind
+        solvers.kind(kind)  # the registry's one-line error for an unknown kind
     plan = RunPlan(sc, kind, mesh, out_dir, settings, overrides, force, allow_large)
     with reporting(progress, sc.name) as cb:
         out = _run(plan, cb, t_start)
-    for w in out.summary["warnings"]:      # after the bar is gone: one clean line each
+    for w in out.summary["warnings"]:  # after the bar is gone: one clean line each
         log.warning(w)
     return out
 
@@ -155,7 +166,7 @@ def _run(plan: RunPlan, cb, t_start: float) -> RunOutput:
     warnings = folder_warnings(folder)
     summary = describe_run(run_id, sc, kind, settings, setup, mesh_name, plan.overrides)
     if folder is not None:
-        folder.open()                              # the folder and its RUNNING marker
+        folder.open()  # the folder and its RUNNING marker
 
     # solve, then summarise the state
     solved = Solved(setup.mesh, setup.fixed, np.zeros((setup.mesh.n_nodes, 6)))
@@ -181,10 +192,19 @@ def _run(plan: RunPlan, cb, t_start: float) -> RunOutput:
         summary["files"] = sorted({Path(f).name for f in files} | {"summary.json"})
         files.append(folder.finish(summary))
     cb(1.0, "interrupted" if summary["interrupted"] else "done")
-    return RunOutput(summary=sio.to_jsonable(summary), U=solved.U, mesh=solved.mesh,
-                     out_dir=folder.path if folder else None, scene=sc, result=solved.result,
-                     files=[Path(f) for f in files], run_id=run_id, series=solved.series,
-                     projected_boundary=boundary, problem=solved.problem)
+    return RunOutput(
+        summary=sio.to_jsonable(summary),
+        U=solved.U,
+        mesh=solved.mesh,
+        out_dir=folder.path if folder else None,
+        scene=sc,
+        result=solved.result,
+        files=[Path(f) for f in files],
+        run_id=run_id,
+        series=solved.series,
+        projected_boundary=boundary,
+        problem=solved.problem,
+    )
 
 
 def _solve(plan: RunPlan, setup, arun, cb, timings: dict) -> Solved:
@@ -203,8 +223,14 @@ def _solve(plan: RunPlan, setup, arun, cb, timings: dict) -> Solved:
         t = time.perf_counter()
         out = arun.run()
         timings["solve"] = time.perf_counter() - t
-        return Solved(out.mesh, support_mask(sc, out.mesh), _state(out.result, out.mesh), out.result,
-                      arun.integ.problem, out.series)
+        return Solved(
+            out.mesh,
+            support_mask(sc, out.mesh),
+            _state(out.result, out.mesh),
+            out.result,
+            arun.integ.problem,
+            out.series,
+        )
     problem = build_problem(sc, setup.mesh, setup.fixed)
     timings["setup"] = time.perf_counter() - t
     t = time.perf_counter()
@@ -213,8 +239,14 @@ def _solve(plan: RunPlan, setup, arun, cb, timings: dict) -> Solved:
         from ..solvers.sequence import solve_sequenced
 
         result = solve_sequenced(
-            fn, problem, dict(setup.solver_settings), progress, sc, setup.mesh_name,
-            lambda d: build_problem(sc, build_scene_mesh(sc, d, kind, plan.allow_large)[0]))
+            fn,
+            problem,
+            dict(setup.solver_settings),
+            progress,
+            sc,
+            setup.mesh_name,
+            lambda d: build_problem(sc, build_scene_mesh(sc, d, kind, plan.allow_large)[0]),
+        )
     else:
         result = fn(problem, dict(setup.solver_settings), progress)
     timings["solve"] = time.perf_counter() - t

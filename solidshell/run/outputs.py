@@ -16,8 +16,9 @@ def prepare_folder(out_dir, run_id: str, force: bool, settings: dict | None, out
     VTK can render is asked in a child process now, while the run meshes."""
     if out_dir is None:
         return None
-    folder = RunFolder(out_dir, run_id, force=force,
-                       keep=[settings.get(k) for k in ("checkpoint", "restart")] if settings else ())
+    folder = RunFolder(
+        out_dir, run_id, force=force, keep=[settings.get(k) for k in ("checkpoint", "restart")] if settings else ()
+    )
     folder.check()
     if output["pictures"] or output["snapshots"]:
         # whether VTK can render is asked in a child process (~2 s): it runs while we mesh
@@ -31,8 +32,10 @@ def folder_warnings(folder) -> list[str]:
     """A warning for files in the folder that solidshell did not write (kept with --force)."""
     if folder is None or not folder.foreign:
         return []
-    return [f"output folder {folder.path} holds {len(folder.foreign)} file(s) solidshell did "
-            f"not write, left untouched (--force): {', '.join(folder.foreign[:5])}"]
+    return [
+        f"output folder {folder.path} holds {len(folder.foreign)} file(s) solidshell did "
+        f"not write, left untouched (--force): {', '.join(folder.foreign[:5])}"
+    ]
 
 
 def _snapshot_plan(sc, kind, result) -> list:
@@ -48,7 +51,7 @@ def _snapshot_plan(sc, kind, result) -> list:
     times = np.array([float(tf) for tf, _ in frames]) if frames else np.zeros(0)
     info = result.info or {}
     t_final = info.get("t_final")
-    said = {float(x) for x in (info.get("snapshots_after_t_end_dropped") or [])}   # the solver's warning
+    said = {float(x) for x in (info.get("snapshots_after_t_end_dropped") or [])}  # the solver's warning
     out = []
     for ts in snaps:
         j = int(np.argmin(np.abs(times - ts))) if len(times) else -1
@@ -57,8 +60,11 @@ def _snapshot_plan(sc, kind, result) -> list:
         elif ts in said:
             out.append((ts, None, None))
         else:
-            why = (f"after the run's end t = {t_final:.6g} s" if isinstance(t_final, (int, float)) and ts > t_final
-                   else "no frame kept at that time")
+            why = (
+                f"after the run's end t = {t_final:.6g} s"
+                if isinstance(t_final, (int, float)) and ts > t_final
+                else "no frame kept at that time"
+            )
             out.append((ts, None, f"snapshot t = {ts:g} s dropped: {why}"))
     return out
 
@@ -75,16 +81,19 @@ def _write_outputs(folder, sc: Scene, kind: str, mesh_name: str, solved, summary
         files += _state_files(folder, kind, solved, summary, finite)
     boundary = summary.get("projected_boundary")
     if boundary is not None:
+
         def csv(p):
             with sio.atomic_write(p) as f:
-                f.write(f"# projected boundary of the draped sheet on the X-Y plane [cm]\n"
-                        f"# solidshell run_id={rid}\nx,y\n")
+                f.write(
+                    f"# projected boundary of the draped sheet on the X-Y plane [cm]\n# solidshell run_id={rid}\nx,y\n"
+                )
                 f.writelines(f"{x:.6g},{y:.6g}\n" for x, y in boundary)
             return p
+
         files.append(folder.write("projected_boundary.csv", csv))
 
     def picture(p, *a, **kw):
-        from ..plotting import render      # matplotlib only when a picture is drawn
+        from ..plotting import render  # matplotlib only when a picture is drawn
 
         return sio.stamp_png(render(p, *a, **kw), rid)
 
@@ -93,16 +102,27 @@ def _write_outputs(folder, sc: Scene, kind: str, mesh_name: str, solved, summary
     views = sc.output["pictures"]
     for i, view in enumerate(views):
         cb(0.92 + 0.08 * i / max(1, len(views)), f"{view} picture")
-        files.append(folder.write(f"{view}.png", picture, mesh, state, view=view, title=sc.title, scene=sc,
-                                  subtitle=sub))
+        files.append(
+            folder.write(f"{view}.png", picture, mesh, state, view=view, title=sc.title, scene=sc, subtitle=sub)
+        )
     for ts, j, _ in snaps:
         if j is not None:
             tj = float(result.frames[j][0])
             mj = mesh if series is None else series[j][1]
             sub_j = f"t = {tj:.3f} s" + ("" if series is None else f", {mj.n_nodes} active nodes")
             for view in ("iso", "top") if series is not None else ("iso",):
-                files.append(folder.write(f"{view}_t{ts:.3f}.png", picture, mj, result.frames[j][1], view=view,
-                                          title=sc.title, scene=sc, subtitle=sub_j))
+                files.append(
+                    folder.write(
+                        f"{view}_t{ts:.3f}.png",
+                        picture,
+                        mj,
+                        result.frames[j][1],
+                        view=view,
+                        title=sc.title,
+                        scene=sc,
+                        subtitle=sub_j,
+                    )
+                )
     return files
 
 
@@ -110,8 +130,10 @@ def _state_files(folder, kind: str, solved, summary: dict, finite: bool) -> list
     """The solved state's files: result (and deformed) mesh files and the run's series."""
     rid = folder.run_id
     mesh, U, result, series = solved.mesh, solved.U, solved.result, solved.series
-    files = [folder.write("result.xdmf", sio.write_mesh_file, mesh, U, run_id=rid),
-             folder.write("result.vtu", sio.write_mesh_file, mesh, U, run_id=rid)]
+    files = [
+        folder.write("result.xdmf", sio.write_mesh_file, mesh, U, run_id=rid),
+        folder.write("result.vtu", sio.write_mesh_file, mesh, U, run_id=rid),
+    ]
     if finite:
         files.append(folder.write("deformed.vtu", sio.write_mesh_file, mesh, U, deformed=True, run_id=rid))
     frames = [(float(tf), Uf) for tf, Uf in (result.frames or [])]

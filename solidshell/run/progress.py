@@ -1,7 +1,7 @@
 """A run's progress: a callback(fraction, text) -- the caller's, a tqdm bar on a terminal, or none.
 
-    with reporting(progress, "square-pedestal") as cb:
-        cb(0.5, "solving")
+with reporting(progress, "square-pedestal") as cb:
+    cb(0.5, "solving")
 """
 
 from __future__ import annotations
@@ -17,8 +17,8 @@ class _Bar:
     half a second after the start and its elapsed time and ETA keep moving even while a solver is
     busy between two progress calls (a numba compile, a factorisation)."""
 
-    SHOW_AFTER = 0.5    # s: short runs finish without a bar flashing by
-    TICK = 0.25         # s between redraws
+    SHOW_AFTER = 0.5  # s: short runs finish without a bar flashing by
+    TICK = 0.25  # s between redraws
 
     def __init__(self, label: str):
         self.bar = None
@@ -27,9 +27,16 @@ class _Bar:
         from tqdm import tqdm
 
         # ETA from the average rate since the start (smoothing 0): solver fractions are uneven
-        self.bar = tqdm(total=1000, desc=label, file=sys.stderr, delay=self.SHOW_AFTER, leave=False,
-                        smoothing=0.0, mininterval=self.TICK,
-                        bar_format="{desc}: {percentage:3.0f}%|{bar}| {elapsed}<{remaining}{postfix}")
+        self.bar = tqdm(
+            total=1000,
+            desc=label,
+            file=sys.stderr,
+            delay=self.SHOW_AFTER,
+            leave=False,
+            smoothing=0.0,
+            mininterval=self.TICK,
+            bar_format="{desc}: {percentage:3.0f}%|{bar}| {elapsed}<{remaining}{postfix}",
+        )
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._tick, name="solidshell-progress", daemon=True)
         self._thread.start()
@@ -64,7 +71,7 @@ def _is_terminal(stream) -> bool:
     """Whether ``stream`` is an open terminal (a replaced sys.stderr may have no isatty)."""
     try:
         return bool(stream.isatty())
-    except (AttributeError, ValueError):       # no isatty, or a closed file
+    except (AttributeError, ValueError):  # no isatty, or a closed file
         return False
 
 

@@ -28,33 +28,53 @@ def _peak_memory_mb() -> float:
 
 
 def _material_summary(m) -> dict:
-    return {"type": type(m).__name__, "name": m.name,
-            "C_m": np.asarray(m.C_m).tolist(), "C_b": np.asarray(m.C_b).tolist(),
-            "C_t": np.asarray(m.C_t).tolist(), "E_z": float(m.E_z), "thickness": float(m.thickness),
-            "mass_per_area": float(m.mass_per_area), "weight_per_area": float(m.weight_per_area),
-            "warp_angle_deg": float(np.degrees(m.warp_angle_rad))}
+    return {
+        "type": type(m).__name__,
+        "name": m.name,
+        "C_m": np.asarray(m.C_m).tolist(),
+        "C_b": np.asarray(m.C_b).tolist(),
+        "C_t": np.asarray(m.C_t).tolist(),
+        "E_z": float(m.E_z),
+        "thickness": float(m.thickness),
+        "mass_per_area": float(m.mass_per_area),
+        "weight_per_area": float(m.weight_per_area),
+        "warp_angle_deg": float(np.degrees(m.warp_angle_rad)),
+    }
 
 
-def describe_run(run_id: str, sc: Scene, kind: str, settings: dict | None, setup, mesh_name: str,
-             overrides: dict | None) -> dict:
+def describe_run(
+    run_id: str, sc: Scene, kind: str, settings: dict | None, setup, mesh_name: str, overrides: dict | None
+) -> dict:
     """The summary of a run before it solves: the scene, mesh, solver settings, section, supports,
     contact, units and versions.  ``setup``: the scenes.build.SceneSetup of the run."""
     mesh = setup.mesh
     summary = {
-        "run_id": run_id, "scene": sc.name, "title": sc.title, "paper_section": sc.paper_section,
-        "scene_file": sc.source, "mesh": mesh_name, "recipe": sc.recipe,
+        "run_id": run_id,
+        "scene": sc.name,
+        "title": sc.title,
+        "paper_section": sc.paper_section,
+        "scene_file": sc.source,
+        "mesh": mesh_name,
+        "recipe": sc.recipe,
         "geometry": {k: (str(v) if isinstance(v, Path) else v) for k, v in sc.geometry.items()},
-        "solver": kind, "settings": settings, "counts": sio.mesh_counts(mesh, setup.fixed),
-        "area": float(mesh.area()), "pedestal_area": pedestal_area(sc),
-        "material": _material_summary(setup.material), "model": dict(sc.model),
+        "solver": kind,
+        "settings": settings,
+        "counts": sio.mesh_counts(mesh, setup.fixed),
+        "area": float(mesh.area()),
+        "pedestal_area": pedestal_area(sc),
+        "material": _material_summary(setup.material),
+        "model": dict(sc.model),
         "supports": {k: list(v) for k, v in sc.supports.items()},
         "contact": [dict(c) for c in sc.contact],
-        "units": dict(sio.UNITS), "versions": sio.package_versions(),
-        "converged": None, "interrupted": False, "message": "mesh only" if kind == "none" else "",
+        "units": dict(sio.UNITS),
+        "versions": sio.package_versions(),
+        "converged": None,
+        "interrupted": False,
+        "message": "mesh only" if kind == "none" else "",
     }
     summary["total_weight"] = float(setup.material.weight_per_area * summary["area"])
     summary["overrides"] = dict(overrides or {})
-    summary["scene_inputs"] = sc.summary()          # the resolved scene, to reproduce the run
+    summary["scene_inputs"] = sc.summary()  # the resolved scene, to reproduce the run
     if setup.perturbed:
         summary["perturbation"] = dict(sc.perturbation)
     for key in ("checkpoint", "restart"):
@@ -68,7 +88,7 @@ def record_state(summary: dict, sc: Scene, solved) -> list[str]:
     convergence, the state's extent, the solver's info and the drape measures.  Returns the
     warnings: the solver's, then the runner's own about the state."""
     mesh, result, U = solved.mesh, solved.result, solved.U
-    summary["counts"] = sio.mesh_counts(mesh, solved.fixed)    # an adaptive run's final mesh
+    summary["counts"] = sio.mesh_counts(mesh, solved.fixed)  # an adaptive run's final mesh
     summary["area"] = float(mesh.area())
     summary["peak_memory_mb"] = _peak_memory_mb()
     info = dict(result.info or {})
@@ -83,13 +103,13 @@ def record_state(summary: dict, sc: Scene, solved) -> list[str]:
     warnings = [str(w) for w in (info.pop("warnings", None) or [])]
     for k, v in info.items():
         if k in summary and (summary[k] == v or k in ("solver", "converged")):
-            continue                        # already said (the info repeats it)
+            continue  # already said (the info repeats it)
         summary[k if k not in summary else f"solver_{k}"] = v
     summary["frames"] = len(result.frames or [])
     if finite:
         try:
             a = analyse(sc, mesh, U, solved.problem.model)
-        except Exception as e:      # analysis must never lose a solved state
+        except Exception as e:  # analysis must never lose a solved state
             summary["analysis_error"] = f"{type(e).__name__}: {e}"
         else:
             for k, v in a.items():
@@ -117,7 +137,7 @@ def analyse(scene: Scene, mesh, U, model=None) -> dict:
     from .. import analysis
 
     kw = {"pedestal_area": ped or 0.0}
-    if ped is None:   # cloth on a sphere: the sheet is whole; measure about the sphere's axis
+    if ped is None:  # cloth on a sphere: the sheet is whole; measure about the sphere's axis
         c = next(c for c in scene.contact if c["type"] == "sphere")
         kw["center"] = (c["centre"][0], c["centre"][1])
     d = analysis.drape_summary(mesh, U, **kw)
@@ -131,8 +151,10 @@ def _state_warnings(summary: dict, info: dict) -> list[str]:
     out = []
     n_end = summary.get("interpenetrated_nodes")
     if n_end:
-        out.append(f"{n_end} node(s) interpenetrated at the end (n_p . d_p < 0, Section 4.3): the "
-                   f"sheet passes through itself there; refine the mesh or check the result")
+        out.append(
+            f"{n_end} node(s) interpenetrated at the end (n_p . d_p < 0, Section 4.3): the "
+            f"sheet passes through itself there; refine the mesh or check the result"
+        )
     n_max = info.get("max_interpenetrated_nodes")
     if n_max and not n_end:
         t = info.get("max_interpenetration_time")

@@ -107,12 +107,22 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..errors import InputError
-from . import overrides as _overrides, schema
+from . import overrides as _overrides
+from . import schema
 from .overrides import parse_overrides, parse_value
 from .schema import FABRICS, check_density, make_material
 
-__all__ = ["Scene", "load", "available", "read_toml", "check_density", "parse_overrides", "parse_value",
-           "SCENE_DIR", "FABRICS"]
+__all__ = [
+    "Scene",
+    "load",
+    "available",
+    "read_toml",
+    "check_density",
+    "parse_overrides",
+    "parse_value",
+    "SCENE_DIR",
+    "FABRICS",
+]
 
 SCENE_DIR = Path(__file__).with_name("paper")
 
@@ -125,17 +135,17 @@ class Scene:
     title: str
     paper_section: str
     description: str
-    geometry: dict            # {"recipe": str, **params} or {"file": Path}
-    mesh: dict                # {"density": str|None, "paper_meshes": [...], "adaptive_level0": str|None}
-    material: dict            # {"fabric": "wool", **overrides} or {"isotropic": {...}}
-    model: dict               # {"thickness_strain": ..., "mu": ..., "membrane": ...}
-    supports: dict            # {"clamped": (names...), "fixed_translations": (names...)}
-    loads: dict               # {"gravity": bool, "gravity_direction": (3,), "point": [...], "line": [...], "surface": [...]}
-    contact: tuple            # ({"type": ..., ...}, ...)
-    solver: dict              # {"kind": str, "static": {...}, "explicit": {...}, "relax": {...}}
-    output: dict              # {"snapshots": [...], "pictures": [...]}
-    adapt: dict = field(default_factory=dict)   # the [adapt] table (solidshell.adapt.settings.AdaptSettings)
-    perturbation: dict = field(default_factory=dict)   # [perturbation] (solidshell.perturbation), {} = none
+    geometry: dict  # {"recipe": str, **params} or {"file": Path}
+    mesh: dict  # {"density": str|None, "paper_meshes": [...], "adaptive_level0": str|None}
+    material: dict  # {"fabric": "wool", **overrides} or {"isotropic": {...}}
+    model: dict  # {"thickness_strain": ..., "mu": ..., "membrane": ...}
+    supports: dict  # {"clamped": (names...), "fixed_translations": (names...)}
+    loads: dict  # {"gravity": bool, "gravity_direction": (3,), "point": [...], "line": [...], "surface": [...]}
+    contact: tuple  # ({"type": ..., ...}, ...)
+    solver: dict  # {"kind": str, "static": {...}, "explicit": {...}, "relax": {...}}
+    output: dict  # {"snapshots": [...], "pictures": [...]}
+    adapt: dict = field(default_factory=dict)  # the [adapt] table (solidshell.adapt.settings.AdaptSettings)
+    perturbation: dict = field(default_factory=dict)  # [perturbation] (solidshell.perturbation), {} = none
     source: str = "<dict>"
     raw: dict = field(default_factory=dict, repr=False, compare=False)
 
@@ -150,7 +160,7 @@ class Scene:
             f = Path(tables["geometry"]["file"])
             f = f if f.is_absolute() else (base_dir or Path.cwd()) / f
             tables["geometry"] = {"file": f}
-            raw["geometry"]["file"] = str(f)        # absolute from now on (overrides re-parse raw)
+            raw["geometry"]["file"] = str(f)  # absolute from now on (overrides re-parse raw)
         return cls(**tables, source=source, raw=raw)
 
     def with_overrides(self, overrides: dict | None) -> "Scene":
@@ -196,14 +206,26 @@ class Scene:
                 return dict(c)
         r, g = self.recipe, self.geometry
         if r == "square_on_square":
-            return {"type": "pedestal", "shape": "square", "size": g["pedestal"], "centre": (0.0, 0.0, 0.0), "height": 10.0}
+            return {
+                "type": "pedestal",
+                "shape": "square",
+                "size": g["pedestal"],
+                "centre": (0.0, 0.0, 0.0),
+                "height": 10.0,
+            }
         if r in ("disc_on_disc", "square_on_disc"):
-            return {"type": "pedestal", "shape": "disc", "diameter": g["pedestal_diameter"],
-                    "centre": (0.0, 0.0, 0.0), "height": 10.0}
+            return {
+                "type": "pedestal",
+                "shape": "disc",
+                "diameter": g["pedestal_diameter"],
+                "centre": (0.0, 0.0, 0.0),
+                "height": 10.0,
+            }
         return None
 
     def summary(self) -> dict:
         """JSON-able description (for summary.json)."""
+
         def plain(v):
             if isinstance(v, Path):
                 return str(v)
@@ -214,13 +236,24 @@ class Scene:
             if isinstance(v, list):
                 return [plain(x) for x in v]
             return v
-        return {"name": self.name, "title": self.title, "paper_section": self.paper_section,
-                "source": self.source, "geometry": plain(self.geometry), "mesh": plain(self.mesh),
-                "material": plain(self.material), "model": plain(self.model),
-                "supports": plain(self.supports), "loads": plain(self.loads),
-                "contact": plain(list(self.contact)), "solver": plain(self.solver),
-                "output": plain(self.output), "adapt": plain(self.adapt),
-                "perturbation": plain(self.perturbation)}
+
+        return {
+            "name": self.name,
+            "title": self.title,
+            "paper_section": self.paper_section,
+            "source": self.source,
+            "geometry": plain(self.geometry),
+            "mesh": plain(self.mesh),
+            "material": plain(self.material),
+            "model": plain(self.model),
+            "supports": plain(self.supports),
+            "loads": plain(self.loads),
+            "contact": plain(list(self.contact)),
+            "solver": plain(self.solver),
+            "output": plain(self.output),
+            "adapt": plain(self.adapt),
+            "perturbation": plain(self.perturbation),
+        }
 
 
 # --------------------------------------------------------------------------- loading
@@ -252,8 +285,9 @@ def load(name_or_path) -> Scene:
     builtin = SCENE_DIR / f"{s}.toml"
     if "/" not in s and "\\" not in s and not s.endswith(".toml"):
         if not builtin.is_file():
-            raise InputError(f"unknown scene {s!r}; available: {', '.join(available())} "
-                             f"(or give the path of a .toml scene file)")
+            raise InputError(
+                f"unknown scene {s!r}; available: {', '.join(available())} (or give the path of a .toml scene file)"
+            )
         p = builtin
     elif not p.exists():
         raise InputError(f"scene file not found: {p}")

@@ -39,14 +39,15 @@ def check_restart_file(path) -> None:
     p = Path(path)
     try:
         with zipfile.ZipFile(p) as z:
-            bad = z.testzip()               # reads every member and checks its CRC
+            bad = z.testzip()  # reads every member and checks its CRC
     except FileNotFoundError:
         raise InputError(f"restart file {p} not found") from None
     except IsADirectoryError:
         raise InputError(f"restart file {p} is a directory") from None
     except (OSError, zipfile.BadZipFile, EOFError, ValueError) as e:
-        raise InputError(f"restart file {p} is not a readable checkpoint ({e}); truncated or not "
-                         f"written by solidshell") from None
+        raise InputError(
+            f"restart file {p} is not a readable checkpoint ({e}); truncated or not written by solidshell"
+        ) from None
     if bad is not None:
         raise InputError(f"restart file {p} is damaged (member {bad} fails its checksum)")
 
@@ -62,7 +63,7 @@ def run_settings(scene: Scene, kind: str, settings: dict) -> dict | None:
     s = scene.solver_settings(kind)
     s.update(settings)
     check_solver_settings(kind, s)
-    if isinstance(s.get("restart"), (str, Path)):     # (another type: the schema refuses it)
+    if isinstance(s.get("restart"), (str, Path)):  # (another type: the schema refuses it)
         check_restart_file(s["restart"])
     return s
 
@@ -93,8 +94,10 @@ def build_scene_mesh(scene: Scene, mesh=None, kind: str = "none", allow_large: b
         return read(Path(mesh))
     if "file" in scene.geometry:
         if mesh is not None:
-            raise InputError(f"scene {scene.name!r} reads its mesh from {scene.geometry['file']}; "
-                             f"a density ({mesh!r}) applies to recipe geometries only")
+            raise InputError(
+                f"scene {scene.name!r} reads its mesh from {scene.geometry['file']}; "
+                f"a density ({mesh!r}) applies to recipe geometries only"
+            )
         return read(Path(scene.geometry["file"]))
     where = "--mesh" if mesh is not None else f"{scene.source}: mesh.density"
     density = scene.density if mesh is None else check_density(str(mesh), scene.recipe, "--mesh")
@@ -201,7 +204,7 @@ def check_initial_contact(scene: Scene, mesh, fixed, bodies=None, U0=None) -> No
     x = np.asarray(mesh.nodes, float)
     if U0 is not None:
         u = np.asarray(U0, dtype=float)
-        if u.size == 6 * mesh.n_nodes:          # (a wrong shape is the solver's settings' to refuse)
+        if u.size == 6 * mesh.n_nodes:  # (a wrong shape is the solver's settings' to refuse)
             x = x + u.reshape(-1, 6)[:, :3]
     free = ~np.asarray(fixed, bool)[:, :3].all(axis=1)
     hits = initial_penetration(bodies, x, free=free)
@@ -209,9 +212,11 @@ def check_initial_contact(scene: Scene, mesh, fixed, bodies=None, U0=None) -> No
         i, body, n, depth = hits[0]
         more = f"; {len(hits) - 1} more bod{'y' if len(hits) == 2 else 'ies'} too" if len(hits) > 1 else ""
         off = f" (its offset {body.offset:g} cm included)" if body.offset else ""
-        raise InputError(f"{scene.source}: {_body_label(scene, i)}: {n} node(s) of the sheet start inside "
-                         f"the body, deepest {depth:.4g} cm{off}; move the body or the sheet so that "
-                         f"they start apart or just touching{more}")
+        raise InputError(
+            f"{scene.source}: {_body_label(scene, i)}: {n} node(s) of the sheet start inside "
+            f"the body, deepest {depth:.4g} cm{off}; move the body or the sheet so that "
+            f"they start apart or just touching{more}"
+        )
 
 
 def perturbed_start(scene: Scene, mesh, fixed, settings: dict):
@@ -220,8 +225,7 @@ def perturbed_start(scene: Scene, mesh, fixed, settings: dict):
     if not scene.perturbation or not scene.perturbation.get("amplitude"):
         return None
     if settings.get("U0") is not None:
-        raise InputError(f"{scene.source}: perturbation and solver setting U0 both give the starting state; "
-                         f"keep one")
+        raise InputError(f"{scene.source}: perturbation and solver setting U0 both give the starting state; keep one")
     from ..perturbation import initial_state
 
     centre = None
@@ -241,21 +245,22 @@ def perturbed_start(scene: Scene, mesh, fixed, settings: dict):
 class SceneSetup:
     """A scene built on its mesh, every part of it checked, before any solve."""
 
-    mesh: Any                       # the ShellMesh
-    mesh_name: str                  # the density, the file read, or "user ShellMesh"
-    fixed: np.ndarray               # (N,6) bool support mask
-    material: Any                   # the scene's section (Fabric or IsotropicShell)
-    solver_settings: dict | None    # the run's settings plus a perturbed start U0 (None: mesh only)
-    perturbed: bool = False         # the start U0 comes from the scene's [perturbation]
+    mesh: Any  # the ShellMesh
+    mesh_name: str  # the density, the file read, or "user ShellMesh"
+    fixed: np.ndarray  # (N,6) bool support mask
+    material: Any  # the scene's section (Fabric or IsotropicShell)
+    solver_settings: dict | None  # the run's settings plus a perturbed start U0 (None: mesh only)
+    perturbed: bool = False  # the start U0 comes from the scene's [perturbation]
 
 
-def setup_scene(scene: Scene, kind: str, mesh=None, settings: dict | None = None,
-                allow_large: bool = False) -> SceneSetup:
+def setup_scene(
+    scene: Scene, kind: str, mesh=None, settings: dict | None = None, allow_large: bool = False
+) -> SceneSetup:
     """The build step of a run: the mesh (size-guarded), supports, load sets, contact bodies and
     the perturbed start, each checked (InputError) before anything is solved or written.
     ``settings``: the run's checked solver settings (:func:`run_settings`), None for mesh only."""
     m, mesh_name = build_scene_mesh(scene, mesh, kind, allow_large)
-    fixed = support_mask(scene, m)            # unknown / empty node sets fail here, before solving
+    fixed = support_mask(scene, m)  # unknown / empty node sets fail here, before solving
     material = scene.material_object()
     check_load_sets(scene, m)
     bodies = contact_bodies(scene)
@@ -285,6 +290,12 @@ def build_problem(scene: Scene, mesh, fixed=None, membrane=None, constants=None)
     check_load_sets(sc, mesh)
     if membrane is None:
         membrane = sc.model.get("membrane", "full")
-    model = Model(mesh, sc.material_object(), thickness_strain=sc.model["thickness_strain"],
-                  mu=sc.model["mu"], membrane=membrane, constants=constants)
+    model = Model(
+        mesh,
+        sc.material_object(),
+        thickness_strain=sc.model["thickness_strain"],
+        mu=sc.model["mu"],
+        membrane=membrane,
+        constants=constants,
+    )
     return Problem(model, fixed, scene_loads(sc, model), contact=contact_bodies(sc), name=sc.name)

@@ -41,7 +41,7 @@ def _set(raw: dict, key: str, value) -> None:
     if isinstance(node, list):
         node[_index(node, last, key, repr(last))] = value
     elif isinstance(node, dict):
-        if parts == ["geometry", "file"]:        # a mesh file replaces the recipe and its lengths
+        if parts == ["geometry", "file"]:  # a mesh file replaces the recipe and its lengths
             node.clear()
         node[last] = value
     else:
@@ -54,7 +54,7 @@ def apply(raw: dict, overrides: dict) -> dict:
     raw = copy.deepcopy(raw)
     for key, value in overrides.items():
         _set(raw, key, value)
-    if "geometry.file" in overrides:       # a mesh file has no recipe densities
+    if "geometry.file" in overrides:  # a mesh file has no recipe densities
         for k in ("density", "paper_meshes", "adaptive_level0"):
             if f"mesh.{k}" not in overrides:
                 raw.get("mesh", {}).pop(k, None)

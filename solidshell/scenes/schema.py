@@ -17,8 +17,18 @@ import re
 from types import UnionType
 from typing import Annotated, Optional, Union, get_args, get_origin
 
-from pydantic import (AfterValidator, BaseModel, BeforeValidator, Discriminator, Field, PlainValidator, Tag,
-                      ValidationError, create_model, model_validator)
+from pydantic import (
+    AfterValidator,
+    BaseModel,
+    BeforeValidator,
+    Discriminator,
+    Field,
+    PlainValidator,
+    Tag,
+    ValidationError,
+    create_model,
+    model_validator,
+)
 
 from .. import meshing
 from ..elements import THICKNESS_STRAINS
@@ -26,14 +36,15 @@ from ..elements.quad4 import MEMBRANES
 from ..errors import InputError
 from ..material import FABRIC_FIELDS, ISOTROPIC_FIELDS, ISOTROPIC_REQUIRED, Fabric, IsotropicShell
 from ..plotting import VIEWS
-from ..settings import SettingsModel, parse as parse_model
+from ..settings import SettingsModel
+from ..settings import parse as parse_model
 from ..solvers import KINDS
 
 __all__ = ["SceneDoc", "parse", "check_density", "FABRICS", "make_material"]
 
 FABRICS = {"wool": Fabric.wool}
 """Named fabrics a scene's ``material.fabric`` may start from (Table 1)."""
-RECIPES = {k: r for k, r in meshing.RECIPES.items() if r.form is not None}    # from_file: geometry.file
+RECIPES = {k: r for k, r in meshing.RECIPES.items() if r.form is not None}  # from_file: geometry.file
 
 
 # --------------------------------------------------------------------------- one-line errors
@@ -46,8 +57,9 @@ class Bad(ValueError):
 
 
 def _typename(v) -> str:
-    return {bool: "boolean", int: "integer", float: "number", str: "string", list: "array",
-            dict: "table"}.get(type(v), type(v).__name__)
+    return {bool: "boolean", int: "integer", float: "number", str: "string", list: "array", dict: "table"}.get(
+        type(v), type(v).__name__
+    )
 
 
 def _got(v) -> str:
@@ -88,7 +100,7 @@ def _key(loc, model) -> str:
         if isinstance(p, int):
             key = _join(key, p)
             t = get_args(t)[0] if get_origin(t) in (list, tuple) and get_args(t) else None
-        elif get_origin(t) in (Union, UnionType):          # a tagged union: p is the member's tag
+        elif get_origin(t) in (Union, UnionType):  # a tagged union: p is the member's tag
             t = next((m for m in get_args(t) if _tag(m) == p), None)
         else:
             key = _join(key, p)
@@ -106,7 +118,7 @@ def _explain(e: dict, model) -> tuple[str, str]:
         return key, str(err)
     if kind == "missing":
         return key, "required key is missing"
-    if kind == "scene_tag":                                # a discriminated union's tag
+    if kind == "scene_tag":  # a discriminated union's tag
         c = e["ctx"]
         if not isinstance(v, dict):
             return key, f"must be a table, got {_got(v)}"
@@ -125,9 +137,12 @@ def _explain(e: dict, model) -> tuple[str, str]:
 
 def _one_line(exc: ValidationError, source: str, model) -> str:
     errors = exc.errors()
-    unknown = [e for e in errors if isinstance((e.get("ctx") or {}).get("error"), Bad)
-               and e["ctx"]["error"].msg.startswith("unknown key")]
-    key, msg = _explain((unknown or errors)[0], model)       # a typo first: it explains the rest
+    unknown = [
+        e
+        for e in errors
+        if isinstance((e.get("ctx") or {}).get("error"), Bad) and e["ctx"]["error"].msg.startswith("unknown key")
+    ]
+    key, msg = _explain((unknown or errors)[0], model)  # a typo first: it explains the rest
     return f"{source}: {key or '(top level)'}: {msg}"
 
 
@@ -143,10 +158,12 @@ def _number(v) -> float:
 
 def _rule(ok, msg: str) -> AfterValidator:
     """A check after the type's: ``ok(v)`` or ValueError ``msg`` ({v!r}: the value)."""
+
     def check(v):
         if not ok(v):
             raise ValueError(msg.format(v=v))
         return v
+
     return AfterValidator(check)
 
 
@@ -205,23 +222,27 @@ def _settings_table(v) -> dict:
 def choice(choices, what: str | None = None):
     """A string out of ``choices``: "must be 'a' or 'b', got 'x'" or, naming ``what``,
     "unknown what 'x' (known: a, b, c)"."""
+
     def check(v):
         if _string(v) not in choices:
             if what:
                 raise ValueError(f"unknown {what} {v!r} (known: {', '.join(choices)})")
             raise ValueError(f"must be {' or '.join(map(repr, choices))}, got {v!r}")
         return v
+
     return Annotated[str, PlainValidator(check)]
 
 
 def array(item, what: str, *, tables: bool = False):
     """An array of ``item``; with ``tables`` a single table counts as an array of one."""
+
     def check(v):
         if tables and isinstance(v, dict):
             return [v]
         if not isinstance(v, list):
             raise ValueError(f"must be {what}" + ("" if tables else f", got {v!r}"))
         return v
+
     return Annotated[list[item], BeforeValidator(check)]
 
 
@@ -239,12 +260,17 @@ SettingsTable = Annotated[dict, PlainValidator(_settings_table)]
 def _tagged(members: dict, tag_of, **ctx):
     """A union of models told apart by ``tag_of(table)``; a bad or missing tag is a ``scene_tag``
     error worded by ``ctx`` (key, what, known, missing)."""
+
     def discriminator(v):
         t = tag_of(v) if isinstance(v, dict) else None
         return t if t is None or isinstance(t, str) else "(not a string)"
-    return Annotated[Union[tuple(Annotated[m, Tag(t)] for t, m in members.items())],
-                     Discriminator(discriminator, custom_error_type="scene_tag",
-                                   custom_error_message="bad tag", custom_error_context=ctx)]
+
+    return Annotated[
+        Union[tuple(Annotated[m, Tag(t)] for t, m in members.items())],
+        Discriminator(
+            discriminator, custom_error_type="scene_tag", custom_error_message="bad tag", custom_error_context=ctx
+        ),
+    ]
 
 
 # --------------------------------------------------------------------------- the tables
@@ -291,13 +317,24 @@ def _one_geometry(v):
 
 
 Geometry = Annotated[
-    _tagged({"file": FileGeometry,
-             **{name: create_model(f"Geometry_{name}", __base__=RecipeGeometry,
-                                   **{p: (Optional[Pos], None) for p in r.geometry})
-                for name, r in RECIPES.items()}},
-            lambda d: "file" if "file" in d else d.get("recipe"),
-            key="recipe", what="recipe", known=", ".join(sorted(RECIPES)), missing="a recipe name"),
-    BeforeValidator(_one_geometry)]
+    _tagged(
+        {
+            "file": FileGeometry,
+            **{
+                name: create_model(
+                    f"Geometry_{name}", __base__=RecipeGeometry, **{p: (Optional[Pos], None) for p in r.geometry}
+                )
+                for name, r in RECIPES.items()
+            },
+        },
+        lambda d: "file" if "file" in d else d.get("recipe"),
+        key="recipe",
+        what="recipe",
+        known=", ".join(sorted(RECIPES)),
+        missing="a recipe name",
+    ),
+    BeforeValidator(_one_geometry),
+]
 
 
 class MeshTable(Table):
@@ -316,18 +353,25 @@ def make_material(material: dict):
 class _Section(Table):
     @model_validator(mode="after")
     def _build(self):
-        try:        # built once so that zero/negative rigidities are reported now, with the file
+        try:  # built once so that zero/negative rigidities are reported now, with the file
             make_material(self.given())
         except InputError as e:
             raise Bad("", str(e)) from None
         return self
 
 
-FabricMaterial = create_model("FabricMaterial", __base__=_Section, fabric=(choice(tuple(FABRICS), "fabric"), "wool"),
-                              name=(Optional[Str], None), **{k: (Optional[Num], None) for k in FABRIC_FIELDS})
-IsotropicTable = create_model("IsotropicTable", __base__=Table,
-                              **{k: (Num, ...) if k in ISOTROPIC_REQUIRED else (Optional[Num], None)
-                                 for k in ISOTROPIC_FIELDS})
+FabricMaterial = create_model(
+    "FabricMaterial",
+    __base__=_Section,
+    fabric=(choice(tuple(FABRICS), "fabric"), "wool"),
+    name=(Optional[Str], None),
+    **{k: (Optional[Num], None) for k in FABRIC_FIELDS},
+)
+IsotropicTable = create_model(
+    "IsotropicTable",
+    __base__=Table,
+    **{k: (Num, ...) if k in ISOTROPIC_REQUIRED else (Optional[Num], None) for k in ISOTROPIC_FIELDS},
+)
 
 
 class IsotropicMaterial(_Section):
@@ -337,14 +381,19 @@ class IsotropicMaterial(_Section):
         return {"isotropic": self.isotropic.given()}
 
 
-Material = _tagged({"fabric": FabricMaterial, "isotropic": IsotropicMaterial},
-                   lambda d: "isotropic" if "isotropic" in d else "fabric",
-                   key="fabric", what="material", known="fabric, isotropic", missing="")
+Material = _tagged(
+    {"fabric": FabricMaterial, "isotropic": IsotropicMaterial},
+    lambda d: "isotropic" if "isotropic" in d else "fabric",
+    key="fabric",
+    what="material",
+    known="fabric, isotropic",
+    missing="",
+)
 
 
 class ModelTable(Table):
     thickness_strain: choice(THICKNESS_STRAINS) = "green"
-    mu: Annotated[Num, _rule(lambda v: 0.0 < v < 1.0, "must lie in (0, 1), got {v!r}")] = 0.5    # Eq. (24)
+    mu: Annotated[Num, _rule(lambda v: 0.0 < v < 1.0, "must lie in (0, 1), got {v!r}")] = 0.5  # Eq. (24)
     membrane: choice(MEMBRANES) = "full"
 
 
@@ -382,9 +431,13 @@ class LoadsTable(Table):
     surface: array(SurfaceLoad, "a table or an array of tables", tables=True) = []
 
     def given(self) -> dict:
-        return {"gravity": self.gravity, "gravity_direction": self.gravity_direction,
-                "point": [x.given() for x in self.point], "line": [x.given() for x in self.line],
-                "surface": [x.given() for x in self.surface]}
+        return {
+            "gravity": self.gravity,
+            "gravity_direction": self.gravity_direction,
+            "point": [x.given() for x in self.point],
+            "line": [x.given() for x in self.line],
+            "surface": [x.given() for x in self.surface],
+        }
 
 
 class Body(Table):
@@ -407,7 +460,7 @@ class Plane(Body):
 
 class Pedestal(Body):
     shape: choice(("square", "disc")) = "square"
-    centre: Vec3 = [0.0, 0.0, 0.0]            # of its top face
+    centre: Vec3 = [0.0, 0.0, 0.0]  # of its top face
     size: Optional[Pos] = None
     diameter: Optional[Pos] = None
     height: Pos = 10.0
@@ -425,22 +478,34 @@ class Pedestal(Body):
 
 
 BODIES = {"sphere": Sphere, "plane": Plane, "pedestal": Pedestal}
-Contact = _tagged(BODIES, lambda d: d.get("type"),
-                  key="type", what="contact body", known=", ".join(BODIES), missing="sphere, plane or pedestal")
+Contact = _tagged(
+    BODIES,
+    lambda d: d.get("type"),
+    key="type",
+    what="contact body",
+    known=", ".join(BODIES),
+    missing="sphere, plane or pedestal",
+)
 
-SolverTable = create_model("SolverTable", __base__=Table, kind=(choice(tuple(KINDS), "solver"), "static"),
-                           **{k: (SettingsTable, {}) for k in KINDS})
+SolverTable = create_model(
+    "SolverTable",
+    __base__=Table,
+    kind=(choice(tuple(KINDS), "solver"), "static"),
+    **{k: (SettingsTable, {}) for k in KINDS},
+)
 
 
 class OutputTable(Table):
-    snapshots: Annotated[array(NonNeg, "an array of times [s]"),
-                         _rule(lambda v: v == sorted(v), "times must be increasing")] = []
+    snapshots: Annotated[
+        array(NonNeg, "an array of times [s]"), _rule(lambda v: v == sorted(v), "times must be increasing")
+    ] = []
     pictures: array(choice(VIEWS, "view"), "an array of views") = ["top", "iso"]
 
 
 def _own_model(name: str, model, filled: bool):
     """A table its own settings model checks now (``model()`` imports it on demand; its one-line
     message kept): the table as written, or (``filled``) every key with its default ({} = none)."""
+
     def check(v):
         if not isinstance(v, dict):
             raise ValueError(f"must be a table, got {_got(v)}")
@@ -451,16 +516,19 @@ def _own_model(name: str, model, filled: bool):
         except InputError as e:
             raise ValueError(str(e).removeprefix(f"{name}: ")) from None
         return parsed.as_dict() if filled else dict(v)
+
     return Annotated[dict, PlainValidator(check)]
 
 
 def _adapt_settings():
     from ..adapt.settings import AdaptSettings
+
     return AdaptSettings
 
 
 def _perturbation_settings():
     from ..perturbation import PerturbationSettings
+
     return PerturbationSettings
 
 
@@ -474,8 +542,7 @@ _DENSITY_RE = re.compile(r"^\s*\d+(\s*[xX×]\s*\d+)*\s*$")
 
 def _density_problem(density, recipe: str | None) -> str | None:
     if not isinstance(density, str) or not _DENSITY_RE.match(density):
-        return (f"malformed mesh density {density!r}: expected positive integers joined by 'x', "
-                f"e.g. '48x16x4'")
+        return f"malformed mesh density {density!r}: expected positive integers joined by 'x', e.g. '48x16x4'"
     parts = [int(p) for p in re.split(r"\s*[xX×]\s*", density.strip())]
     if any(p <= 0 for p in parts):
         return f"malformed mesh density {density!r}: every count must be positive"
@@ -512,16 +579,19 @@ class SceneDoc(Table):
     contact: array(Contact, "an array of tables ([[contact]])", tables=True) = []
     solver: SolverTable = {}
     output: OutputTable = {}
-    adapt: _own_model("adapt", _adapt_settings, filled=False) = Field(default_factory=dict)   # §5
+    adapt: _own_model("adapt", _adapt_settings, filled=False) = Field(default_factory=dict)  # §5
     perturbation: _own_model("perturbation", _perturbation_settings, filled=True) = Field(default_factory=dict)
 
     @model_validator(mode="after")
     def _densities(self):
         """The mesh densities fit the recipe (its number of counts); a mesh file takes none."""
-        recipe = self.geometry.recipe if isinstance(self.geometry, RecipeGeometry) else None   # a file: none
+        recipe = self.geometry.recipe if isinstance(self.geometry, RecipeGeometry) else None  # a file: none
         m = self.mesh
-        for key, d in (("density", m.density), *((f"paper_meshes[{i}]", d) for i, d in enumerate(m.paper_meshes)),
-                       ("adaptive_level0", m.adaptive_level0)):
+        for key, d in (
+            ("density", m.density),
+            *((f"paper_meshes[{i}]", d) for i, d in enumerate(m.paper_meshes)),
+            ("adaptive_level0", m.adaptive_level0),
+        ):
             problem = d is not None and _density_problem(d, recipe)
             if problem:
                 raise Bad(f"mesh.{key}", problem)
@@ -534,17 +604,28 @@ class SceneDoc(Table):
     def tables(self) -> dict:
         """The Scene's fields (every table a plain dict; densities normalised, "48x16x4")."""
         m = self.mesh
-        norm = lambda d: None if d is None else check_density(d)     # noqa: E731
-        return {"name": self.name, "title": self.title, "paper_section": self.paper_section,
-                "description": self.description, "geometry": self.geometry.given(),
-                "mesh": {"density": norm(m.density), "paper_meshes": [norm(d) for d in m.paper_meshes],
-                         "adaptive_level0": norm(m.adaptive_level0)},
-                "material": self.material.given(), "model": self.model.as_dict(),
-                "supports": self.supports.given(), "loads": self.loads.given(),
-                "contact": tuple(c.given() for c in self.contact),
-                "solver": {"kind": self.solver.kind, **{k: dict(getattr(self.solver, k)) for k in KINDS}},
-                "output": {"snapshots": list(self.output.snapshots), "pictures": list(self.output.pictures)},
-                "adapt": dict(self.adapt), "perturbation": dict(self.perturbation)}
+        norm = lambda d: None if d is None else check_density(d)  # noqa: E731
+        return {
+            "name": self.name,
+            "title": self.title,
+            "paper_section": self.paper_section,
+            "description": self.description,
+            "geometry": self.geometry.given(),
+            "mesh": {
+                "density": norm(m.density),
+                "paper_meshes": [norm(d) for d in m.paper_meshes],
+                "adaptive_level0": norm(m.adaptive_level0),
+            },
+            "material": self.material.given(),
+            "model": self.model.as_dict(),
+            "supports": self.supports.given(),
+            "loads": self.loads.given(),
+            "contact": tuple(c.given() for c in self.contact),
+            "solver": {"kind": self.solver.kind, **{k: dict(getattr(self.solver, k)) for k in KINDS}},
+            "output": {"snapshots": list(self.output.snapshots), "pictures": list(self.output.pictures)},
+            "adapt": dict(self.adapt),
+            "perturbation": dict(self.perturbation),
+        }
 
 
 def parse(data, source: str) -> SceneDoc:

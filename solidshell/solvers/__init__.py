@@ -38,11 +38,14 @@ class Kind:
         return self._attr(self.settings)
 
 
-KINDS: dict[str, Kind] = {k.name: k for k in (
-    Kind("static", "solidshell.solvers.static.driver:run", "solidshell.solvers.static.settings:StaticSettings"),
-    Kind("explicit", "solidshell.solvers.explicit:run", "solidshell.solvers.explicit.settings:ExplicitSettings"),
-    Kind("relax", "solidshell.solvers.explicit:run_relax", "solidshell.solvers.explicit.settings:RelaxSettings"),
-)}
+KINDS: dict[str, Kind] = {
+    k.name: k
+    for k in (
+        Kind("static", "solidshell.solvers.static.driver:run", "solidshell.solvers.static.settings:StaticSettings"),
+        Kind("explicit", "solidshell.solvers.explicit:run", "solidshell.solvers.explicit.settings:ExplicitSettings"),
+        Kind("relax", "solidshell.solvers.explicit:run_relax", "solidshell.solvers.explicit.settings:RelaxSettings"),
+    )
+}
 
 
 def kind(name: str) -> Kind:

@@ -22,14 +22,26 @@ Two factorisations, for two jobs:
 
 from __future__ import annotations
 
-import numpy as np
-
 import cvxopt
 import cvxopt.cholmod as _cholmod
+import numpy as np
 
-__all__ = ["Cholesky", "LowerCSC", "PatternFactor", "SuperLUDefinite", "as_csc", "ldl_inertia", "pcg",
-           "SINGULAR_PIVOT", "FACTORIZATIONS", "CHOLESKY_KINDS", "PARDISO_MIN_DOFS",
-           "resolve_factorization", "positive_definite_factor", "arpack_start"]
+__all__ = [
+    "Cholesky",
+    "LowerCSC",
+    "PatternFactor",
+    "SuperLUDefinite",
+    "as_csc",
+    "ldl_inertia",
+    "pcg",
+    "SINGULAR_PIVOT",
+    "FACTORIZATIONS",
+    "CHOLESKY_KINDS",
+    "PARDISO_MIN_DOFS",
+    "resolve_factorization",
+    "positive_definite_factor",
+    "arpack_start",
+]
 
 FACTORIZATIONS = ("auto", "cholmod", "pardiso", "superlu")
 """The static solvers' ``factorization`` setting: "auto" is "pardiso" where MKL is installed (on
@@ -81,6 +93,7 @@ def positive_definite_factor(kind: str):
         return Pardiso()
     return Cholesky() if kind == "cholmod" else SuperLUDefinite()
 
+
 SINGULAR_PIVOT = 1e-14
 """A pivot smaller than this fraction of the largest marks a matrix as numerically singular (a free
 rigid-body mode or mechanism); legitimate fabric tangents stay above ~1e-10."""
@@ -93,11 +106,10 @@ def ldl_inertia(A):
     symmetric permutation and diagonal pivots the U diagonal is the D of an LDL^T), or None when the
     pivoting was not symmetric.  Raises RuntimeError when A is singular.
     """
-    from scipy.sparse.linalg import splu   # only where a tangent is indefinite: a lazy import
+    from scipy.sparse.linalg import splu  # only where a tangent is indefinite: a lazy import
 
     A = as_csc(A)
-    lu = splu(A, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-              options=dict(SymmetricMode=True))
+    lu = splu(A, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options=dict(SymmetricMode=True))
     d = lu.U.diagonal()
     ad = np.abs(d)
     if not np.all(np.isfinite(d)) or ad.min(initial=np.inf) <= SINGULAR_PIVOT * ad.max(initial=0.0):
@@ -205,8 +217,11 @@ class PatternFactor:
             return False
         if L.key is not None:
             return L.key is self._key
-        return (L.indptr.size == self._indptr.size and np.array_equal(L.indptr, self._indptr)
-                and np.array_equal(L.indices, self._indices))
+        return (
+            L.indptr.size == self._indptr.size
+            and np.array_equal(L.indptr, self._indptr)
+            and np.array_equal(L.indices, self._indices)
+        )
 
     def _values(self, A, shift=None):
         """The buffer ``_v`` holding A + diag(shift) (A a LowerCSC or a symmetric scipy matrix; a
@@ -246,9 +261,8 @@ class Cholesky(PatternFactor):
         n = L.shape[0]
         col = np.repeat(np.arange(n, dtype=np.int64), np.diff(L.indptr))
         self._vbuf = cvxopt.matrix(np.ones(L.indices.size))
-        self._v = np.asarray(self._vbuf).reshape(-1)      # a view of the cvxopt buffer
-        self._M = cvxopt.spmatrix(self._vbuf, cvxopt.matrix(L.indices.astype(np.int64)),
-                                  cvxopt.matrix(col), (n, n))
+        self._v = np.asarray(self._vbuf).reshape(-1)  # a view of the cvxopt buffer
+        self._M = cvxopt.spmatrix(self._vbuf, cvxopt.matrix(L.indices.astype(np.int64)), cvxopt.matrix(col), (n, n))
         self._n = n
         self._key = L.key
         # a keyed pattern owns its arrays (they are never changed): no copy (2 MB on square-pedestal
@@ -273,7 +287,7 @@ class Cholesky(PatternFactor):
             _cholmod.numeric(self._M, self._F)
         except ArithmeticError:
             return False
-        d = np.asarray(_cholmod.diag(self._F)).ravel()    # diagonal of L
+        d = np.asarray(_cholmod.diag(self._F)).ravel()  # diagonal of L
         self._ok = bool(d.size and d.min() > 0.0 and d.min() ** 2 > SINGULAR_PIVOT * d.max() ** 2)
         return self._ok
 
@@ -315,7 +329,6 @@ class SuperLUDefinite:
         if self._lu is None:
             raise RuntimeError("no positive-definite factorisation to solve with")
         return self._lu.solve(np.asarray(b, dtype=float))
-
 
 
 def pcg(matvec, b, precondition, eta, max_iter):

@@ -35,16 +35,16 @@ from ctypes.util import find_library
 
 import numpy as np
 
-from .linear import SINGULAR_PIVOT, LowerCSC, PatternFactor
+from .linear import SINGULAR_PIVOT, PatternFactor
 
 __all__ = ["Pardiso", "PardisoLDL", "available", "unavailable_reason"]
 
 _LIB = None
 _REASON = None
-_SEQUENTIAL = 1           # MKL_THREADING_SEQUENTIAL (mkl_service.h)
-_GNU_OPENMP = 3           # MKL_THREADING_GNU
-_CNR = 2                  # iparm[33] > 0: reproducible mode (the value: threads to tune for; the
-                          # factors were the same bits for 1-8 and on 1 or 2 threads)
+_SEQUENTIAL = 1  # MKL_THREADING_SEQUENTIAL (mkl_service.h)
+_GNU_OPENMP = 3  # MKL_THREADING_GNU
+_CNR = 2  # iparm[33] > 0: reproducible mode (the value: threads to tune for; the
+# factors were the same bits for 1-8 and on 1 or 2 threads)
 
 THREADED_MFLOP = 1000
 """Factorisations of at least this many Mflop run threaded.  square-on-disc 30x240 (1,875 Mflop):
@@ -104,15 +104,33 @@ def _load():
         # MKL's own memory pool keeps every freed buffer: without it the static square-pedestal
         # run peaks 2.6 MB lower, at no measured cost (PARDISO allocates a few buffers per call)
         lib.mkl_disable_fast_mm()
-        lib.pardiso.argtypes = [ctypes.POINTER(ctypes.c_int64), _IP, _IP, _IP, _IP, _IP, _DP, _IP, _IP,
-                                _IP, _IP, _IP, _IP, _DP, _DP, _IP]
+        lib.pardiso.argtypes = [
+            ctypes.POINTER(ctypes.c_int64),
+            _IP,
+            _IP,
+            _IP,
+            _IP,
+            _IP,
+            _DP,
+            _IP,
+            _IP,
+            _IP,
+            _IP,
+            _IP,
+            _IP,
+            _DP,
+            _DP,
+            _IP,
+        ]
         lib.pardiso.restype = None
         lib.pardiso_getdiag.argtypes = [ctypes.POINTER(ctypes.c_int64), _DP, _DP, _IP, _IP]
         lib.pardiso_getdiag.restype = None
         _LIB = lib
         return lib
-    _REASON = ("Intel MKL (libmkl_rt) not found: `pip install mkl` (Linux/Windows x86-64), or set "
-               "SOLIDSHELL_MKL_RT to the library's path")
+    _REASON = (
+        "Intel MKL (libmkl_rt) not found: `pip install mkl` (Linux/Windows x86-64), or set "
+        "SOLIDSHELL_MKL_RT to the library's path"
+    )
     return None
 
 
@@ -139,16 +157,16 @@ class Pardiso(PatternFactor):
         if lib is None:
             raise RuntimeError(_REASON)
         self._lib = lib
-        self._pt = np.zeros(64, dtype=np.int64)      # PARDISO's opaque handle
+        self._pt = np.zeros(64, dtype=np.int64)  # PARDISO's opaque handle
         self._iparm = np.zeros(64, dtype=np.int32)
         ip = self._iparm
-        ip[0] = 1          # the settings below, not the defaults
-        ip[1] = 0          # minimum-degree ordering: on the drapes' tangents 12 % less fill than
-                           # METIS, a 15 % faster factorisation and no 0.4 s METIS start-up
-                           # (docs/solvers.md, section 5)
-        ip[7] = 0          # no iterative refinement (a plain solve, as CHOLMOD's)
-        ip[34] = 1         # zero-based indices
-        ip[55] = 1         # keep the factor's diagonal (pardiso_getdiag: the singular-pivot test)
+        ip[0] = 1  # the settings below, not the defaults
+        ip[1] = 0  # minimum-degree ordering: on the drapes' tangents 12 % less fill than
+        # METIS, a 15 % faster factorisation and no 0.4 s METIS start-up
+        # (docs/solvers.md, section 5)
+        ip[7] = 0  # no iterative refinement (a plain solve, as CHOLMOD's)
+        ip[34] = 1  # zero-based indices
+        ip[55] = 1  # keep the factor's diagonal (pardiso_getdiag: the singular-pivot test)
         self._v = None
         self._n = 0
         self._threads = 1
@@ -166,14 +184,24 @@ class Pardiso(PatternFactor):
 
     def _pardiso(self, phase, a, b, x):
         err = _INT(0)
-        self._lib.pardiso(self._pt.ctypes.data_as(ctypes.POINTER(ctypes.c_int64)),
-                          ctypes.byref(_INT(1)), ctypes.byref(_INT(1)), ctypes.byref(_INT(self._mtype)),
-                          ctypes.byref(_INT(phase)), ctypes.byref(_INT(self._n)),
-                          a.ctypes.data_as(_DP), self._indptr.ctypes.data_as(_IP),
-                          self._indices.ctypes.data_as(_IP), None, ctypes.byref(_INT(1)),
-                          self._iparm.ctypes.data_as(_IP), ctypes.byref(_INT(0)),
-                          None if b is None else b.ctypes.data_as(_DP),
-                          None if x is None else x.ctypes.data_as(_DP), ctypes.byref(err))
+        self._lib.pardiso(
+            self._pt.ctypes.data_as(ctypes.POINTER(ctypes.c_int64)),
+            ctypes.byref(_INT(1)),
+            ctypes.byref(_INT(1)),
+            ctypes.byref(_INT(self._mtype)),
+            ctypes.byref(_INT(phase)),
+            ctypes.byref(_INT(self._n)),
+            a.ctypes.data_as(_DP),
+            self._indptr.ctypes.data_as(_IP),
+            self._indices.ctypes.data_as(_IP),
+            None,
+            ctypes.byref(_INT(1)),
+            self._iparm.ctypes.data_as(_IP),
+            ctypes.byref(_INT(0)),
+            None if b is None else b.ctypes.data_as(_DP),
+            None if x is None else x.ctypes.data_as(_DP),
+            ctypes.byref(err),
+        )
         return err.value
 
     def _release(self):
@@ -195,7 +223,7 @@ class Pardiso(PatternFactor):
         self._indptr = np.ascontiguousarray(L.indptr, dtype=np.int32)
         self._indices = np.ascontiguousarray(L.indices, dtype=np.int32)
         self._v = np.array(L.data, dtype=float)
-        self._threads, self._iparm[33], self._iparm[18] = 1, 0, -1   # [18] < 0: count the flops
+        self._threads, self._iparm[33], self._iparm[18] = 1, 0, -1  # [18] < 0: count the flops
         err = self._call(11, self._v)
         if err == 0 and self._iparm[18] >= THREADED_MFLOP:
             from numba import get_num_threads
@@ -216,7 +244,7 @@ class Pardiso(PatternFactor):
         if v is None:
             return False
         err = self._call(22, v)
-        if err == -4:          # zero or negative pivot: not positive definite
+        if err == -4:  # zero or negative pivot: not positive definite
             return False
         if err != 0:
             raise RuntimeError(f"PARDISO factorisation failed (MKL error {err})")
@@ -229,9 +257,13 @@ class Pardiso(PatternFactor):
         df = np.empty(self._n)
         da = np.empty(self._n)
         err = _INT(0)
-        self._lib.pardiso_getdiag(self._pt.ctypes.data_as(ctypes.POINTER(ctypes.c_int64)),
-                                  df.ctypes.data_as(_DP), da.ctypes.data_as(_DP),
-                                  ctypes.byref(_INT(1)), ctypes.byref(err))
+        self._lib.pardiso_getdiag(
+            self._pt.ctypes.data_as(ctypes.POINTER(ctypes.c_int64)),
+            df.ctypes.data_as(_DP),
+            da.ctypes.data_as(_DP),
+            ctypes.byref(_INT(1)),
+            ctypes.byref(err),
+        )
         if err.value != 0:
             raise RuntimeError(f"PARDISO diagonal not available (MKL error {err.value})")
         return df
@@ -264,11 +296,11 @@ class PardisoLDL(Pardiso):
     def __init__(self):
         super().__init__()
         ip = self._iparm
-        ip[9] = 8          # perturb pivots below 1e-8 (and report them: iparm[13])
-        ip[10] = 1         # symmetric scaling and
-        ip[12] = 1         # weighted matching: the 2x2 pivots chosen before the ordering
-        ip[20] = 1         # Bunch-Kaufman pivoting
-        ip[55] = 0         # no pardiso_getdiag here: 2x2 pivots make D's diagonal no test
+        ip[9] = 8  # perturb pivots below 1e-8 (and report them: iparm[13])
+        ip[10] = 1  # symmetric scaling and
+        ip[12] = 1  # weighted matching: the 2x2 pivots chosen before the ordering
+        ip[20] = 1  # Bunch-Kaufman pivoting
+        ip[55] = 0  # no pardiso_getdiag here: 2x2 pivots make D's diagonal no test
 
     def factor(self, A, shift=None):
         raise TypeError("PardisoLDL factorises with ldl(A)")
@@ -284,4 +316,3 @@ class PardisoLDL(Pardiso):
             return None
         self._ok = True
         return self, int(ip[22])
-

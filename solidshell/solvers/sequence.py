@@ -127,7 +127,7 @@ def _candidates(lo, hi, x):
     i1 = np.floor((hi - o) / h).astype(np.int64)
     ix = np.floor((x - o) / h).astype(np.int64)
     ny = int(max(i1[:, 1].max(), ix[:, 1].max())) + 1
-    n = i1 - i0 + 1                                              # cells per box along x and y
+    n = i1 - i0 + 1  # cells per box along x and y
     cnt = n[:, 0] * n[:, 1]
     tri = np.repeat(np.arange(len(lo)), cnt)
     k = np.arange(cnt.sum()) - np.repeat(np.cumsum(cnt) - cnt, cnt)
@@ -185,8 +185,8 @@ def _bilinear_coords(Xq, x, xi, iters=8):
         a = 1.0 + sx[None, :] * xi[:, 0, None]
         b = 1.0 + sy[None, :] * xi[:, 1, None]
         r = np.einsum("na,nac->nc", 0.25 * a * b, Xq) - x
-        jx = np.einsum("na,nac->nc", 0.25 * sx * b, Xq)      # d x / d xi
-        jy = np.einsum("na,nac->nc", 0.25 * sy * a, Xq)      # d x / d eta
+        jx = np.einsum("na,nac->nc", 0.25 * sx * b, Xq)  # d x / d xi
+        jy = np.einsum("na,nac->nc", 0.25 * sy * a, Xq)  # d x / d eta
         det = jx[:, 0] * jy[:, 1] - jx[:, 1] * jy[:, 0]
         d0 = (r[:, 0] * jy[:, 1] - r[:, 1] * jy[:, 0]) / det
         d1 = (jx[:, 0] * r[:, 1] - jx[:, 1] * r[:, 0]) / det
@@ -224,8 +224,7 @@ def prolong(coarse, Uc, fine) -> np.ndarray:
         sx, sy = corners[:, 0], corners[:, 1]
         N = 0.25 * (1.0 + sx * xi[:, 0, None]) * (1.0 + sy * xi[:, 1, None])
         out[inq] = np.einsum("na,nac->nc", N, Uc[quad])
-    return _director_lengths(coarse, Uc, fine, out, T, t, w, inq, quad if inq.size else None,
-                             N if inq.size else None)
+    return _director_lengths(coarse, Uc, fine, out, T, t, w, inq, quad if inq.size else None, N if inq.size else None)
 
 
 def _director_lengths(coarse, Uc, fine, out, T, t, w, inq, quad, N):
@@ -281,8 +280,13 @@ def solve_sequenced(run, problem, settings: dict, progress, scene, density, make
             s.update(U0=prolong(prev[0], prev[1], pb.model.mesh), predictor=False)
         t = time.perf_counter()
         r = run(pb, s, lambda f, text="", i=i, d=d: progress((i + f) / n, f"mesh {d}: {text}"))
-        rec = {"mesh": d, "converged": bool(r.converged), "iterations": r.info.get("iterations"),
-               "factorizations": r.info.get("factorizations"), "wall_time_s": time.perf_counter() - t}
+        rec = {
+            "mesh": d,
+            "converged": bool(r.converged),
+            "iterations": r.info.get("iterations"),
+            "factorizations": r.info.get("factorizations"),
+            "wall_time_s": time.perf_counter() - t,
+        }
         records.append(rec)
         bad = not r.converged or _interpenetrates(pb.model, r.U)
         rec["interpenetrated"] = bool(r.converged and bad)
@@ -303,10 +307,16 @@ def solve_sequenced(run, problem, settings: dict, progress, scene, density, make
         s.setdefault("pcg_iterations", FINE_PCG_ITERATIONS)
     t = time.perf_counter()
     res = run(problem, s, lambda f, text="": progress((n - 1 + f) / n, f"mesh {density}: {text}"))
-    records.append({"mesh": density, "converged": bool(res.converged),
-                    "iterations": res.info.get("iterations"),
-                    "factorizations": res.info.get("factorizations"),
-                    "wall_time_s": time.perf_counter() - t, "from_coarse": prev is not None})
+    records.append(
+        {
+            "mesh": density,
+            "converged": bool(res.converged),
+            "iterations": res.info.get("iterations"),
+            "factorizations": res.info.get("factorizations"),
+            "wall_time_s": time.perf_counter() - t,
+            "from_coarse": prev is not None,
+        }
+    )
     res.info["sequence"] = records
     res.info["fine_wall_time_s"] = res.info.get("wall_time_s")
     res.info["wall_time_s"] = time.perf_counter() - t0

@@ -45,11 +45,11 @@ from numba import njit
 class OmegaEstimate:
     """Result of :func:`estimate_omega_max`."""
 
-    omega_max: float          # highest natural frequency [rad / time]
-    method: str               # lanczos | power | tangent
-    n_force_evals: int        # internal-force evaluations spent (0 for "tangent")
+    omega_max: float  # highest natural frequency [rad / time]
+    method: str  # lanczos | power | tangent
+    n_force_evals: int  # internal-force evaluations spent (0 for "tangent")
     converged: bool
-    mode: np.ndarray | None = field(default=None, repr=False)   # (6N,) flat mode shape (M-normalised)
+    mode: np.ndarray | None = field(default=None, repr=False)  # (6N,) flat mode shape (M-normalised)
 
     @property
     def dt_undamped(self) -> float:
@@ -86,8 +86,19 @@ class Iteration:
     seed: int = 0
 
 
-def estimate_omega_max(force, mass, free, U=None, *, method: str = "lanczos", tol: float = 1e-6, tangent=None,
-                       v0=None, difference: str = "central", iteration: Iteration = Iteration()) -> OmegaEstimate:
+def estimate_omega_max(
+    force,
+    mass,
+    free,
+    U=None,
+    *,
+    method: str = "lanczos",
+    tol: float = 1e-6,
+    tangent=None,
+    v0=None,
+    difference: str = "central",
+    iteration: Iteration = Iteration(),
+) -> OmegaEstimate:
     """Highest natural frequency of M^-1 K on the free dofs.
 
     force   : callable U (N,6) -> internal force (N,6) (``model.internal_force``)
@@ -142,6 +153,7 @@ def estimate_omega_max(force, mass, free, U=None, *, method: str = "lanczos", to
             raise ValueError("method='tangent' needs the tangent callable")
         K = tangent(U).tocsr()[idx][:, idx]
         from scipy.sparse import diags
+
         A = diags(s) @ K @ diags(s)
         lam, vec = eigsh(A, k=1, which="LA", tol=tol, v0=start, maxiter=maxiter or 10 * n)
         lam, vec = float(lam[0]), vec[:, 0]
@@ -156,7 +168,7 @@ def estimate_omega_max(force, mass, free, U=None, *, method: str = "lanczos", to
         if difference == "forward":
             f0 = np.array(force(base.reshape(shape)), dtype=float).ravel()[idx]
             count[0] += 1
-        w = base.copy()          # the perturbed state, one buffer: only its ``idx`` entries change
+        w = base.copy()  # the perturbed state, one buffer: only its ``idx`` entries change
         v = np.empty(n)
         fp = np.empty(n)
 
@@ -171,7 +183,7 @@ def estimate_omega_max(force, mass, free, U=None, *, method: str = "lanczos", to
             if f0 is not None:
                 count[0] += 1
                 return _forward_product(s, Fp, idx, f0, e)
-            np.take(Fp, idx, out=fp)     # kept: force may reuse its buffer for the second evaluation
+            np.take(Fp, idx, out=fp)  # kept: force may reuse its buffer for the second evaluation
             _place(w, idx, base, e, v, -1.0)
             Fm = np.asarray(force(w.reshape(shape)), dtype=float).ravel()
             count[0] += 2
@@ -207,18 +219,20 @@ def estimate_omega_max(force, mass, free, U=None, *, method: str = "lanczos", to
             raise ValueError(f"unknown method {method!r}; use lanczos, power or tangent")
 
     if not (lam > 0.0 and math.isfinite(lam)):
-        raise ValueError(f"largest eigenvalue of M^-1 K is {lam!r}: the stiffness is not positive "
-                         "at this state or the force is not finite")
+        raise ValueError(
+            f"largest eigenvalue of M^-1 K is {lam!r}: the stiffness is not positive "
+            "at this state or the force is not finite"
+        )
     mode = np.zeros(Mf.size)
     mode[idx] = s * vec
-    return OmegaEstimate(omega_max=math.sqrt(lam), method=method, n_force_evals=count[0],
-                         converged=conv, mode=mode)
+    return OmegaEstimate(omega_max=math.sqrt(lam), method=method, n_force_evals=count[0], converged=conv, mode=mode)
 
 
 # The matrix-free product's vector work, one pass each (the numpy expressions they replace took
 # ~0.13 ms per product on a 10^4-dof sheet, a quarter of a force evaluation).  No fastmath: each
 # entry gets the operations of those expressions in their order, so the products, omega and the
 # mode are bit for bit what they were (tests/test_explicit.py).
+
 
 @njit(cache=True)
 def _scale_max(s, x, v):
@@ -227,7 +241,7 @@ def _scale_max(s, x, v):
     for k in range(x.size):
         v[k] = s[k] * x[k]
         a = abs(v[k])
-        if a > m or a != a:      # a NaN propagates, as np.max's does
+        if a > m or a != a:  # a NaN propagates, as np.max's does
             m = a
     return m
 

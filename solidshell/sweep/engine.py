@@ -47,13 +47,13 @@ class SweepResult:
     """What :func:`run_sweep` returns."""
 
     out: Path
-    total: int                     # runs in the sweep
-    skipped: int                   # already in the ledger when it started (with a result or failed)
-    recorded: int                  # results (status "done") recorded by this invocation
-    failed: list = field(default_factory=list)    # (key, one-line reason) of this invocation's runs
+    total: int  # runs in the sweep
+    skipped: int  # already in the ledger when it started (with a result or failed)
+    recorded: int  # results (status "done") recorded by this invocation
+    failed: list = field(default_factory=list)  # (key, one-line reason) of this invocation's runs
     #                                without a result: refused/stopped (an "error" row, recorded so a
     #                                resumed sweep does not repeat it) or lost (a task that kept raising)
-    failed_before: list = field(default_factory=list)   # (key, reason) of skipped runs whose row is an error
+    failed_before: list = field(default_factory=list)  # (key, reason) of skipped runs whose row is an error
     interrupted: bool = False
     wall_time_s: float = 0.0
     workers: int = 0
@@ -78,8 +78,14 @@ def _client(scheduler, workers, threads):
         except (OSError, TimeoutError) as e:
             raise InputError(f"--scheduler {scheduler}: cannot connect ({e})") from None
     n = workers or max(1, (os.cpu_count() or 1) // max(1, threads))
-    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
-                           dashboard_address="127.0.0.1:0", silence_logs=40)
+    cluster = LocalCluster(
+        n_workers=n,
+        threads_per_worker=1,
+        processes=True,
+        host="127.0.0.1",
+        dashboard_address="127.0.0.1:0",
+        silence_logs=40,
+    )
     return Client(cluster), cluster
 
 
@@ -108,6 +114,7 @@ class _Progress:
         self.bar = None
         if enabled and stream.isatty():
             from tqdm import tqdm
+
             self.bar = tqdm(total=total, initial=done, desc="sweep", unit="run", file=stream, smoothing=0.0)
         self.enabled = enabled
 
@@ -143,8 +150,17 @@ def _label(row) -> str:
     return f"{row['key']}: {dc_s}, {row.get('fold_count')} folds, {row.get('wall_time_s', 0):.0f} s{conv}"
 
 
-def run_sweep(spec: SweepSpec, out, cluster: Cluster = Cluster(), *, progress: bool = True, group: str = "C1",
-              pictures=("top",), stream: TextIO | None = None, limit: int | None = None) -> SweepResult:
+def run_sweep(
+    spec: SweepSpec,
+    out,
+    cluster: Cluster = Cluster(),
+    *,
+    progress: bool = True,
+    group: str = "C1",
+    pictures=("top",),
+    stream: TextIO | None = None,
+    limit: int | None = None,
+) -> SweepResult:
     """Run the sweep's runs missing from ``out``'s ledger on a Dask cluster (module docstring).
 
     cluster   : the scheduler or local workers, threads per run, retries (:class:`Cluster`)
@@ -170,8 +186,13 @@ def run_sweep(spec: SweepSpec, out, cluster: Cluster = Cluster(), *, progress: b
     if limit is not None:
         todo = todo[:limit]
     keys = {r.key for r in spec.runs}
-    res = SweepResult(out=Path(out), total=spec.n_runs, skipped=len(done & keys), recorded=0,
-                      failed_before=[(k, why) for k, why in ledger.errors() if k in keys])
+    res = SweepResult(
+        out=Path(out),
+        total=spec.n_runs,
+        skipped=len(done & keys),
+        recorded=0,
+        failed_before=[(k, why) for k, why in ledger.errors() if k in keys],
+    )
     if not todo:
         return res
     t0 = time.perf_counter()
@@ -182,11 +203,17 @@ def run_sweep(spec: SweepSpec, out, cluster: Cluster = Cluster(), *, progress: b
         res.workers = len(client.scheduler_info().get("workers", {}))
         res.dashboard = _dashboard(client)
         where = scheduler or f"local cluster of {res.workers} worker process(es) on 127.0.0.1"
-        print(f"sweep {spec.name}: {len(todo)} run(s) to do, {res.skipped} already recorded; {where}; "
-              f"dashboard: {res.dashboard or 'not served (pip install bokeh)'}", file=stream, flush=True)
+        print(
+            f"sweep {spec.name}: {len(todo)} run(s) to do, {res.skipped} already recorded; {where}; "
+            f"dashboard: {res.dashboard or 'not served (pip install bokeh)'}",
+            file=stream,
+            flush=True,
+        )
         tasks = [make_task(spec, r, out, threads, group, pictures) for r in todo]
-        futures = [client.submit(run_task, t, key=f"solidshell-{spec.name}-{t['key']}", retries=retries,
-                                 pure=False) for t in tasks]
+        futures = [
+            client.submit(run_task, t, key=f"solidshell-{spec.name}-{t['key']}", retries=retries, pure=False)
+            for t in tasks
+        ]
         bar = _Progress(spec.n_runs, res.skipped, progress, stream)
         for fut in as_completed(futures):
             try:
@@ -196,7 +223,7 @@ def run_sweep(spec: SweepSpec, out, cluster: Cluster = Cluster(), *, progress: b
                 res.failed.append((key, " ".join(f"{type(e).__name__}: {e}".split())[:300]))
                 bar.update(f"{key}: FAILED")
                 continue
-            if row.get("status") != "done":         # refused or stopped: recorded, but not a result
+            if row.get("status") != "done":  # refused or stopped: recorded, but not a result
                 res.failed.append((row["key"], row.get("error") or f"status {row.get('status')!r}"))
                 ledger.append(row)
             elif ledger.append(row):

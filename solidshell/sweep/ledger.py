@@ -27,6 +27,7 @@ on it.  1 deg resolves a 12-fold pattern (30 deg period) with 30 points per fold
 
 def _pa():
     import pyarrow as pa
+
     return pa
 
 
@@ -122,8 +123,9 @@ class Ledger:
             except (OSError, ValueError):
                 other = None
             if other != self.spec.name:
-                raise InputError(f"{self.out} holds the ledger of sweep {other!r}, not {self.spec.name!r}; "
-                                 f"choose another --out")
+                raise InputError(
+                    f"{self.out} holds the ledger of sweep {other!r}, not {self.spec.name!r}; choose another --out"
+                )
         elif self.out.exists() and not self.out.is_dir():
             raise InputError(f"output path {self.out} exists and is not a directory")
 
@@ -131,8 +133,13 @@ class Ledger:
         """Create the folders and write sweep.json (the sweep's name, source and run count)."""
         try:
             self.dir.mkdir(parents=True, exist_ok=True)
-            meta = {"name": self.spec.name, "source": self.spec.source, "scene": self.spec.scene,
-                    "runs": self.spec.n_runs, "axes": list(self.spec.axes)}
+            meta = {
+                "name": self.spec.name,
+                "source": self.spec.source,
+                "scene": self.spec.scene,
+                "runs": self.spec.n_runs,
+                "axes": list(self.spec.axes),
+            }
             tmp = self.out / ".sweep.json.tmp"
             tmp.write_text(json.dumps(meta, indent=1))
             os.replace(tmp, self.out / "sweep.json")
@@ -154,8 +161,7 @@ class Ledger:
             return []
         out = []
         for p in sorted(self.dir.glob("*.parquet")):
-            t = pq.read_table(p, columns=[c for c in ("key", "status", "error")
-                                          if c in pq.read_schema(p).names])
+            t = pq.read_table(p, columns=[c for c in ("key", "status", "error") if c in pq.read_schema(p).names])
             for r in t.to_pylist():
                 if r.get("status") != "done":
                     out.append((r.get("key", p.stem), r.get("error") or f"status {r.get('status')!r}"))
@@ -196,6 +202,8 @@ class Ledger:
     def _part(self, t):
         """A part in this ledger's schema (a column an older part lacks is read as nulls)."""
         pa = _pa()
-        cols = [t.column(f.name).cast(f.type) if f.name in t.column_names else pa.nulls(t.num_rows, f.type)
-                for f in self.schema]
+        cols = [
+            t.column(f.name).cast(f.type) if f.name in t.column_names else pa.nulls(t.num_rows, f.type)
+            for f in self.schema
+        ]
         return pa.Table.from_arrays(cols, schema=self.schema)

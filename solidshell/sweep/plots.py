@@ -12,8 +12,10 @@ __all__ = ["states_figure", "curve_figure"]
 
 def _plt():
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
     return plt
 
 
@@ -46,8 +48,11 @@ def states_figure(states, unsettled, total, path, title="") -> Path:
         a.set_yticklabels([])
         a.set_xticklabels([])
         lo, mean, hi = st.dc_range()
-        a.set_title(f"S{st.number}: {st.fold_count} folds, DC {mean:.3f}\n{st.count}/{total} runs "
-                    f"({100 * st.count / total:.0f} %)", fontsize=9)
+        a.set_title(
+            f"S{st.number}: {st.fold_count} folds, DC {mean:.3f}\n{st.count}/{total} runs "
+            f"({100 * st.count / total:.0f} %)",
+            fontsize=9,
+        )
     if title:
         fig.suptitle(title)
     fig.tight_layout()
@@ -73,7 +78,7 @@ def curve_figure(rows, x, y, path, x_ref=1.0, x_label=None, by=None, log_x=False
         ys = np.array([float(r[y]) for r in rs])
         ok = np.array([bool(r.get("converged")) for r in rs])
         lab = f"{by} = {g}" if by else None
-        line, = ax.plot(xs, ys, "-", lw=1, label=lab)
+        (line,) = ax.plot(xs, ys, "-", lw=1, label=lab)
         ax.plot(xs[ok], ys[ok], "o", color=line.get_color())
         ax.plot(xs[~ok], ys[~ok], "x", color=line.get_color())
         for xi, yi, r in zip(xs, ys, rs):
@@ -86,8 +91,9 @@ def curve_figure(rows, x, y, path, x_ref=1.0, x_label=None, by=None, log_x=False
     ax.grid(True, alpha=0.3)
     if by:
         ax.legend(fontsize=8)
-    ax.set_title(f"{title + ': ' if title else ''}{y.replace('_', ' ')}  (numbers: fold count; x: not converged)",
-                 fontsize=10)
+    ax.set_title(
+        f"{title + ': ' if title else ''}{y.replace('_', ' ')}  (numbers: fold count; x: not converged)", fontsize=10
+    )
     fig.tight_layout()
     path = Path(path)
     fig.savefig(path, dpi=110)

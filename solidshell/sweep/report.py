@@ -47,41 +47,80 @@ def write_report(spec: SweepSpec, out, group: str | None = None) -> dict:
     st_csv = out / "states.csv"
     with open(st_csv, "w", newline="") as f:
         w = csv.writer(f)
-        w.writerow(["state", "fold_count", "runs", "frequency", "dc_min", "dc_mean", "dc_max",
-                    "fold_angles_deg", "stable_runs", "interpenetrated_runs", "representative_key", "picture"])
+        w.writerow(
+            [
+                "state",
+                "fold_count",
+                "runs",
+                "frequency",
+                "dc_min",
+                "dc_mean",
+                "dc_max",
+                "fold_angles_deg",
+                "stable_runs",
+                "interpenetrated_runs",
+                "representative_key",
+                "picture",
+            ]
+        )
         for st in states:
             lo, mean, hi = st.dc_range()
             rep = st.representative
-            w.writerow([st.number, st.fold_count, st.count, f"{st.count / total:.4f}", f"{lo:.4f}",
-                        f"{mean:.4f}", f"{hi:.4f}",
-                        " ".join(f"{a:.1f}" for a in rep.get("fold_angles_deg") or []),
-                        sum(1 for m in st.members if m.get("stable")),
-                        sum(1 for m in st.members if m.get("interpenetrated_nodes")), rep["key"],
-                        str(Path(rep["run_dir"]) / "top.png")])
+            w.writerow(
+                [
+                    st.number,
+                    st.fold_count,
+                    st.count,
+                    f"{st.count / total:.4f}",
+                    f"{lo:.4f}",
+                    f"{mean:.4f}",
+                    f"{hi:.4f}",
+                    " ".join(f"{a:.1f}" for a in rep.get("fold_angles_deg") or []),
+                    sum(1 for m in st.members if m.get("stable")),
+                    sum(1 for m in st.members if m.get("interpenetrated_nodes")),
+                    rep["key"],
+                    str(Path(rep["run_dir"]) / "top.png"),
+                ]
+            )
     files.append(st_csv)
     freq = {}
     for st in states:
         freq[st.fold_count] = freq.get(st.fold_count, 0) + st.count
     n_failed = sum(1 for r in rows if r.get("status") != "done")
-    lines = [f"# Sweep {spec.name}", "", spec.description, "",
-             f"{total} of {spec.n_runs} runs recorded, {n_failed} of them failed (no result); "
-             f"{len(states)} distinct state(s) under symmetry {group} "
-             f"(dc_tol {c.dc_tol}, boundary_tol {c.boundary_tol}); {len(unsettled)} run(s) unsettled "
-             f"(not converged or failed).", "",
-             "| state | folds | runs | frequency | DC mean (min-max) | stable | self-penetrating | representative |",
-             "|---|---|---|---|---|---|---|---|"]
+    lines = [
+        f"# Sweep {spec.name}",
+        "",
+        spec.description,
+        "",
+        f"{total} of {spec.n_runs} runs recorded, {n_failed} of them failed (no result); "
+        f"{len(states)} distinct state(s) under symmetry {group} "
+        f"(dc_tol {c.dc_tol}, boundary_tol {c.boundary_tol}); {len(unsettled)} run(s) unsettled "
+        f"(not converged or failed).",
+        "",
+        "| state | folds | runs | frequency | DC mean (min-max) | stable | self-penetrating | representative |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
     for st in states:
         lo, mean, hi = st.dc_range()
         stable = sum(1 for m in st.members if m.get("stable"))
         pen = [m.get("interpenetrated_nodes") for m in st.members]
         pen_s = "?" if all(p is None for p in pen) else f"{sum(1 for p in pen if p)}/{st.count}"
-        lines.append(f"| S{st.number} | {st.fold_count} | {st.count} | {st.count / total:.2f} | "
-                     f"{mean:.4f} ({lo:.4f}-{hi:.4f}) | {stable}/{st.count} | {pen_s} | {st.representative['key']} |")
-    lines += ["", "Fold-count frequencies: " + (", ".join(f"{k} folds: {v}/{total}" for k, v in sorted(freq.items()))
-                                                 or "none"), ""]
+        lines.append(
+            f"| S{st.number} | {st.fold_count} | {st.count} | {st.count / total:.2f} | "
+            f"{mean:.4f} ({lo:.4f}-{hi:.4f}) | {stable}/{st.count} | {pen_s} | {st.representative['key']} |"
+        )
+    lines += [
+        "",
+        "Fold-count frequencies: " + (", ".join(f"{k} folds: {v}/{total}" for k, v in sorted(freq.items())) or "none"),
+        "",
+    ]
     if unsettled:
-        lines.append("Unsettled runs: " + ", ".join(
-            f"{r['key']} ({r.get('error') or r.get('solver_status') or 'not converged'})" for r in unsettled))
+        lines.append(
+            "Unsettled runs: "
+            + ", ".join(
+                f"{r['key']} ({r.get('error') or r.get('solver_status') or 'not converged'})" for r in unsettled
+            )
+        )
         lines.append("")
     if len({r["case"] for r in rows}) > 1:
         lines += ["State per case (runs):", ""]
@@ -109,5 +148,10 @@ def write_report(spec: SweepSpec, out, group: str | None = None) -> dict:
     md = out / "report.md"
     md.write_text("\n".join(lines) + "\n")
     files.append(md)
-    return {"states": states, "unsettled": len(unsettled), "files": files, "group": group,
-            "fold_frequencies": {k: v / total for k, v in sorted(freq.items())} if total else {}}
+    return {
+        "states": states,
+        "unsettled": len(unsettled),
+        "files": files,
+        "group": group,
+        "fold_frequencies": {k: v / total for k, v in sorted(freq.items())} if total else {},
+    }

@@ -60,7 +60,6 @@ import hashlib
 import itertools
 import json
 import math
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal, Optional
@@ -75,9 +74,21 @@ from ..settings import Finite, SettingsModel, parse
 __all__ = ["SweepSpec", "Run", "load_spec", "STUDY_DIR", "studies", "ClassifySettings", "PlotSettings"]
 
 STUDY_DIR = Path(__file__).with_name("studies")
-SPECIAL = ("mesh", "solver")                 # run keys that are not scene keys
-TOP_KEYS = {"name", "description", "scene", "mesh", "solver", "set", "case", "grid", "zip", "sample",
-            "classify", "plot"}
+SPECIAL = ("mesh", "solver")  # run keys that are not scene keys
+TOP_KEYS = {
+    "name",
+    "description",
+    "scene",
+    "mesh",
+    "solver",
+    "set",
+    "case",
+    "grid",
+    "zip",
+    "sample",
+    "classify",
+    "plot",
+}
 DISTRIBUTIONS = ("uniform", "log_uniform", "integers", "choice")
 
 
@@ -112,7 +123,7 @@ class Run:
     case: int
     mesh: Optional[str]
     solver: Optional[str]
-    overrides: dict                          # dotted scene key -> value
+    overrides: dict  # dotted scene key -> value
 
     def inputs(self) -> dict:
         """Everything that defines the run (JSON-able)."""
@@ -123,10 +134,10 @@ class Run:
 class SweepSpec:
     name: str
     description: str
-    scene: str                               # name or absolute path
+    scene: str  # name or absolute path
     source: str
     runs: tuple
-    axes: tuple                              # the keys that vary (grid, zip, sample, cases)
+    axes: tuple  # the keys that vary (grid, zip, sample, cases)
     classify: ClassifySettings
     plot: PlotSettings
     raw: dict = field(default_factory=dict, repr=False, compare=False)
@@ -154,8 +165,11 @@ def _plain(v):
 
 def run_key(scene: str, mesh, solver, overrides: dict) -> str:
     """A stable 16-hex-digit key of a run's definition (same definition, same key, anywhere)."""
-    blob = json.dumps({"scene": scene, "mesh": mesh, "solver": solver, "set": _plain(overrides)},
-                      sort_keys=True, separators=(",", ":"))
+    blob = json.dumps(
+        {"scene": scene, "mesh": mesh, "solver": solver, "set": _plain(overrides)},
+        sort_keys=True,
+        separators=(",", ":"),
+    )
     return hashlib.sha1(blob.encode()).hexdigest()[:16]
 
 
@@ -171,15 +185,22 @@ def _values(source, key, v) -> list:
 
 def _draw(rng, source, key, dist) -> Any:
     if not isinstance(dist, dict) or len(dist) != 1 or next(iter(dist)) not in DISTRIBUTIONS:
-        raise _err(source, f"sample.axes.{key}", f"must be one of {{ uniform = [lo, hi] }}, "
-                   f"{{ log_uniform = [lo, hi] }}, {{ integers = [lo, hi] }}, {{ choice = [...] }}; got {dist!r}")
+        raise _err(
+            source,
+            f"sample.axes.{key}",
+            f"must be one of {{ uniform = [lo, hi] }}, "
+            f"{{ log_uniform = [lo, hi] }}, {{ integers = [lo, hi] }}, {{ choice = [...] }}; got {dist!r}",
+        )
     kind, arg = next(iter(dist.items()))
     if kind == "choice":
         vals = _values(source, f"sample.axes.{key}.choice", arg)
         return vals[int(rng.integers(len(vals)))]
-    if (not isinstance(arg, list) or len(arg) != 2
-            or not all(isinstance(a, (int, float)) and not isinstance(a, bool) and math.isfinite(a) for a in arg)
-            or not arg[0] <= arg[1]):
+    if (
+        not isinstance(arg, list)
+        or len(arg) != 2
+        or not all(isinstance(a, (int, float)) and not isinstance(a, bool) and math.isfinite(a) for a in arg)
+        or not arg[0] <= arg[1]
+    ):
         raise _err(source, f"sample.axes.{key}.{kind}", f"must be [lo, hi] with lo <= hi, got {arg!r}")
     lo, hi = arg
     if kind == "uniform":
@@ -206,8 +227,10 @@ def load_spec(path_or_name) -> SweepSpec:
     if "/" not in s and not s.endswith(".toml"):
         p = STUDY_DIR / f"{s}.toml"
         if not p.is_file():
-            raise InputError(f"unknown sweep {s!r}; packaged studies: {', '.join(studies())} "
-                             f"(or give the path of a sweep .toml file)")
+            raise InputError(
+                f"unknown sweep {s!r}; packaged studies: {', '.join(studies())} "
+                f"(or give the path of a sweep .toml file)"
+            )
     from ..scenes import read_toml
 
     if not p.is_file():
@@ -281,7 +304,7 @@ def from_dict(data: dict, source: str = "<sweep>", base_dir: Path | None = None)
         for combo in itertools.product(*gaxes):
             pt = {}
             for item in combo:
-                for k, v in (item if isinstance(item[0], tuple) else (item,)):
+                for k, v in item if isinstance(item[0], tuple) else (item,):
                     pt[k] = v
             points.append(pt)
         axis_keys = list(grid) + list(zp)
@@ -295,14 +318,21 @@ def from_dict(data: dict, source: str = "<sweep>", base_dir: Path | None = None)
             d = {**base, **c, **pt}
             mesh, solver, over = _split(d)
             key = run_key(scene, mesh, solver, over)
-            if key in seen:                 # a sample may draw the same point twice: one run
+            if key in seen:  # a sample may draw the same point twice: one run
                 continue
             seen[key] = len(runs)
             runs.append(Run(index=len(runs), key=key, case=ci, mesh=mesh, solver=solver, overrides=over))
-    spec = SweepSpec(name=name, description=str(data.get("description", "")), scene=scene, source=source,
-                     runs=tuple(runs), axes=tuple(dict.fromkeys(case_keys + axis_keys)),
-                     classify=parse(ClassifySettings, data.get("classify"), f"{source}: classify"),
-                     plot=parse(PlotSettings, data.get("plot"), f"{source}: plot"), raw=data)
+    spec = SweepSpec(
+        name=name,
+        description=str(data.get("description", "")),
+        scene=scene,
+        source=source,
+        runs=tuple(runs),
+        axes=tuple(dict.fromkeys(case_keys + axis_keys)),
+        classify=parse(ClassifySettings, data.get("classify"), f"{source}: classify"),
+        plot=parse(PlotSettings, data.get("plot"), f"{source}: plot"),
+        raw=data,
+    )
     check_runs(spec)
     return spec
 
@@ -310,8 +340,8 @@ def from_dict(data: dict, source: str = "<sweep>", base_dir: Path | None = None)
 def check_runs(spec: SweepSpec) -> None:
     """Every run's scene, overrides, mesh density and solver settings, before any work (InputError
     naming the sweep, the run and the problem).  The scene is parsed once per distinct setting set."""
-    from ..scenes.build import check_solver_settings
     from ..scenes import check_density, load
+    from ..scenes.build import check_solver_settings
 
     base = load(spec.scene)
     for r in spec.runs:
@@ -319,7 +349,7 @@ def check_runs(spec: SweepSpec) -> None:
         try:
             sc = base.with_overrides(r.overrides)
             kind = r.solver or sc.solver["kind"]
-            solvers.kind(kind)      # the registry's one-line error for an unknown kind
+            solvers.kind(kind)  # the registry's one-line error for an unknown kind
             if r.mesh is not None:
                 check_density(r.mesh, sc.recipe, "mesh")
             check_solver_settings(kind, sc.solver_settings(kind))

@@ -44,10 +44,11 @@ def symmetry_group(scene) -> str:
         return "C1@0"
     m = scene.material_object()
     Cm, Cb = np.asarray(m.C_m, float), np.asarray(m.C_b, float)
-    warp = math.degrees(float(m.warp_angle_rad))   # Fabric's angle; 0 for an IsotropicShell
+    warp = math.degrees(float(m.warp_angle_rad))  # Fabric's angle; 0 for an IsotropicShell
 
     def differs(C):
         return abs(C[0, 0] - C[1, 1]) > 1e-9 * max(abs(C[0, 0]), abs(C[1, 1]), 1e-300)
+
     if not (differs(Cm) or differs(Cb)):
         return f"{geo}@0"
     if geo == "O2":
@@ -72,7 +73,7 @@ def _elements(name: str, axis: float, step: float = 360.0 / PROFILE_POINTS):
         return [(1, 0.0)]
     if name == "C2":
         return [(1, 0.0), (1, 180.0)]
-    if name == "D2":      # rotations 0, 180; mirrors in the axis a and its normal: theta -> 2a - theta (+180)
+    if name == "D2":  # rotations 0, 180; mirrors in the axis a and its normal: theta -> 2a - theta (+180)
         return [(1, 0.0), (1, 180.0), (-1, (2 * axis) % 360.0), (-1, (2 * axis + 180.0) % 360.0)]
     if name == "D4":
         return [(s, float(k * 90 + (2 * axis if s < 0 else 0.0)) % 360.0) for s in (1, -1) for k in range(4)]
@@ -118,7 +119,7 @@ def fingerprint(fold_count, fold_angles_deg, dc, group: str = "C1") -> str:
     best = None
     name = group.partition("@")[0]
     elems = group_elements(group) if name != "O2" else None
-    if name == "O2":                     # every rotation: put each fold at 0 in turn, both mirrors
+    if name == "O2":  # every rotation: put each fold at 0 in turn, both mirrors
         cands = []
         for s in (1, -1):
             b = (s * a) % 360.0
@@ -139,9 +140,9 @@ class State:
 
     number: int
     fold_count: int
-    representative: dict                     # the ledger row of its first run
-    members: list = field(default_factory=list)   # ledger rows
-    profile: np.ndarray | None = field(default=None, repr=False)   # the representative's r(theta)
+    representative: dict  # the ledger row of its first run
+    members: list = field(default_factory=list)  # ledger rows
+    profile: np.ndarray | None = field(default=None, repr=False)  # the representative's r(theta)
 
     @property
     def count(self) -> int:
@@ -153,9 +154,13 @@ class State:
 
 
 def _settled(row) -> bool:
-    return (row.get("status") == "done" and bool(row.get("converged"))
-            and row.get("radius_profile") is not None and row.get("drape_coefficient") is not None
-            and row.get("fold_count") is not None)
+    return (
+        row.get("status") == "done"
+        and bool(row.get("converged"))
+        and row.get("radius_profile") is not None
+        and row.get("drape_coefficient") is not None
+        and row.get("fold_count") is not None
+    )
 
 
 def classify(rows, dc_tol: float = 0.01, boundary_tol: float = 0.03, group: str = "C1"):

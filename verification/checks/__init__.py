@@ -42,8 +42,15 @@ __all__ = ["CHECKS", "Record", "measure", "skipped", "select", "verify", "DEFAUL
 TOPICS = ("strips", "cantilevers", "plates", "elements", "dynamics", "pedestal")
 """The topic modules; importing them registers their checks, in this (report) order."""
 
-_FROM = {"CHECKS": "record", "Record": "record", "measure": "record", "skipped": "record",
-         "DEFAULT_OUT": "runner", "select": "runner", "verify": "runner"}
+_FROM = {
+    "CHECKS": "record",
+    "Record": "record",
+    "measure": "record",
+    "skipped": "record",
+    "DEFAULT_OUT": "runner",
+    "select": "runner",
+    "verify": "runner",
+}
 
 
 def load_checks() -> dict:
@@ -57,6 +64,7 @@ def load_checks() -> dict:
     for t in TOPICS:
         importlib.import_module(f"{__name__}.{t}")
     from .record import CHECKS
+
     return CHECKS
 
 

@@ -12,7 +12,7 @@ def rect_grid(nx: int, ny: int, lx: float, ly: float, x0: float = 0.0, y0: float
     clockwise quads; node (i, j) has index j*(nx+1) + i."""
     x = x0 + np.linspace(0.0, lx, nx + 1)
     y = y0 + np.linspace(0.0, ly, ny + 1)
-    X, Y = np.meshgrid(x, y)                       # (ny+1, nx+1)
+    X, Y = np.meshgrid(x, y)  # (ny+1, nx+1)
     nodes = np.column_stack([X.ravel(), Y.ravel(), np.zeros(X.size)])
     i, j = np.meshgrid(np.arange(nx), np.arange(ny))
     n0 = (j * (nx + 1) + i).ravel()
@@ -32,8 +32,9 @@ def split_quads(quads: np.ndarray, pattern: str = "/") -> np.ndarray:
         return t24
     if pattern == "x":
         alt = (np.arange(len(q)) % 2).astype(bool)
-        return np.concatenate([q[~alt][:, [0, 1, 2]], q[~alt][:, [0, 2, 3]],
-                               q[alt][:, [0, 1, 3]], q[alt][:, [1, 2, 3]]])
+        return np.concatenate(
+            [q[~alt][:, [0, 1, 2]], q[~alt][:, [0, 2, 3]], q[alt][:, [0, 1, 3]], q[alt][:, [1, 2, 3]]]
+        )
     raise ValueError(f"unknown split pattern {pattern!r}")
 
 

@@ -31,6 +31,7 @@ from solidshell.model import Model
 from solidshell.problem import Problem
 from solidshell.solvers import explicit
 from solidshell.units import G0
+
 from .common import rect_grid
 from .record import check, measure, timed
 
@@ -78,11 +79,20 @@ def frequency_case(name, material, nx, L, W, B, mu, settings):
     w = np.array([f[1][tip, 2].mean() for f in res.frames])
     T_meas = crossings(t, w).mean()
     w_meas = 2 * math.pi / T_meas
-    row = dict(case=name, elements=nx, steps=res.info["steps"], dt=res.info["dt"],
-               omega_closed_form=w_ref, omega_discrete=w_disc, omega_explicit=w_meas,
-               error_vs_discrete=w_meas / w_disc - 1, error_vs_closed_form=w_meas / w_ref - 1,
-               discrete_vs_closed_form=w_disc / w_ref - 1, energy_balance_error=res.info["energy_balance_error"],
-               wall_s=wall)
+    row = dict(
+        case=name,
+        elements=nx,
+        steps=res.info["steps"],
+        dt=res.info["dt"],
+        omega_closed_form=w_ref,
+        omega_discrete=w_disc,
+        omega_explicit=w_meas,
+        error_vs_discrete=w_meas / w_disc - 1,
+        error_vs_closed_form=w_meas / w_ref - 1,
+        discrete_vs_closed_form=w_disc / w_ref - 1,
+        energy_balance_error=res.info["energy_balance_error"],
+        wall_s=wall,
+    )
     return row
 
 
@@ -102,10 +112,19 @@ def free_fall(alpha):
         z = r.U[:, 2].mean()
         g = G0 / ms
         ref = -g * T**2 / 2 if alpha == 0 else -(g / alpha) * (T - (1 - math.exp(-alpha * T)) / alpha)
-        rows.append(dict(alpha=alpha, mass_scaling=ms, dt=r.info["dt"], z=z, z_closed_form=ref, rel_error=z / ref - 1,
-                         energy_balance_error=r.info["energy_balance_error"], status=r.info["status"]))
+        rows.append(
+            dict(
+                alpha=alpha,
+                mass_scaling=ms,
+                dt=r.info["dt"],
+                z=z,
+                z_closed_form=ref,
+                rel_error=z / ref - 1,
+                energy_balance_error=r.info["energy_balance_error"],
+                status=r.info["status"],
+            )
+        )
     return rows
-
 
 
 VARIANTS = {
@@ -128,7 +147,6 @@ def relax_strip_problem(cut: str, nx: int):
     return Problem(model, fixed, loads, name=f"strip {cut} {nx}x1")
 
 
-
 # ------------------------------------------------------------------------------------------ checks
 EB = "Euler-Bernoulli cantilever, omega_1 = 1.8751^2 sqrt(B/(mu L^4)) (closed form)"
 # an isotropic strip with L/h = 20: a bending period is ~3000 critical steps, so a run of 2.3
@@ -142,34 +160,58 @@ def _frequency(ctx, nx):
         p = ISO_STRIP
         iso = IsotropicShell(E=p["E"], nu=0.0, h=p["h"], density=1.0)
         with timed() as t:
-            row = frequency_case("isotropic L/h=20", iso, nx, p["L"], p["W"], iso.E * iso.h**3 / 12,
-                                 iso.density * iso.h, {})
+            row = frequency_case(
+                "isotropic L/h=20", iso, nx, p["L"], p["W"], iso.E * iso.h**3 / 12, iso.density * iso.h, {}
+            )
         row["wall_s"] = t()
         ctx.cache[key] = row
     return ctx.cache[key]
 
 
-@check("explicit-period", "dynamics", "first bending period of a cantilever strip by Eq. (23) vs the discrete "
-       "eigenvalue and the Euler-Bernoulli closed form")
+@check(
+    "explicit-period",
+    "dynamics",
+    "first bending period of a cantilever strip by Eq. (23) vs the discrete "
+    "eigenvalue and the Euler-Bernoulli closed form",
+)
 def check_explicit_period(ctx):
     recs = []
-    for nx in ((8,) if ctx.quick else (8, 16)):
+    for nx in (8,) if ctx.quick else (8, 16):
         row = _frequency(ctx, nx)
-        recs.append(measure(f"explicit-period/{nx}x1/vs-eigenvalue", "omega_1 from zero crossings of the tip",
-                            row["omega_explicit"], row["omega_discrete"], 1e-5, wall_time_s=row["wall_s"],
-                            reference="omega_1 of K(0) phi = omega^2 M phi (same mesh, scipy eigh)",
-                            source="dense generalized eigenproblem (scipy.linalg.eigh)",
-                            why="central differences shift omega by (omega dt)^2/24 ~ 1e-7 at 0.9 dt_crit; "
-                                "measured 2.1e-7; an integrator or mass error is O(1e-2) or more"))
-        recs.append(measure(f"explicit-period/{nx}x1/vs-closed-form", "omega_1 from zero crossings of the tip",
-                            row["omega_explicit"], row["omega_closed_form"], 1e-2, wall_time_s=row["wall_s"],
-                            reference="Euler-Bernoulli beam, L/h = 20, nu = 0", source=EB,
-                            why="measured -0.67 % (8x1) and -0.36 % (16x1): shear and rotary inertia at L/h = 20 "
-                                "(~ -0.3 %) plus the O(h^2) discretisation; a 2 % mass or stiffness error leaves 1 %"))
+        recs.append(
+            measure(
+                f"explicit-period/{nx}x1/vs-eigenvalue",
+                "omega_1 from zero crossings of the tip",
+                row["omega_explicit"],
+                row["omega_discrete"],
+                1e-5,
+                wall_time_s=row["wall_s"],
+                reference="omega_1 of K(0) phi = omega^2 M phi (same mesh, scipy eigh)",
+                source="dense generalized eigenproblem (scipy.linalg.eigh)",
+                why="central differences shift omega by (omega dt)^2/24 ~ 1e-7 at 0.9 dt_crit; "
+                "measured 2.1e-7; an integrator or mass error is O(1e-2) or more",
+            )
+        )
+        recs.append(
+            measure(
+                f"explicit-period/{nx}x1/vs-closed-form",
+                "omega_1 from zero crossings of the tip",
+                row["omega_explicit"],
+                row["omega_closed_form"],
+                1e-2,
+                wall_time_s=row["wall_s"],
+                reference="Euler-Bernoulli beam, L/h = 20, nu = 0",
+                source=EB,
+                why="measured -0.67 % (8x1) and -0.36 % (16x1): shear and rotary inertia at L/h = 20 "
+                "(~ -0.3 %) plus the O(h^2) discretisation; a 2 % mass or stiffness error leaves 1 %",
+            )
+        )
     return recs
 
 
-@check("explicit-energy", "dynamics", "energy balance of Eq. (23) and free fall with Rayleigh damping vs the closed form")
+@check(
+    "explicit-energy", "dynamics", "energy balance of Eq. (23) and free fall with Rayleigh damping vs the closed form"
+)
 def check_explicit_energy(ctx):
     recs = []
     src = "z(t) = -(g/alpha)(t - (1 - exp(-alpha t))/alpha); alpha = 0: -g t^2/2 (closed form)"
@@ -178,25 +220,55 @@ def check_explicit_energy(ctx):
             rows = free_fall(alpha)
         for r in rows:
             exact = alpha == 0.0
-            recs.append(measure(f"explicit-energy/free-fall/alpha={alpha:g}/masses-x{r['mass_scaling']:g}",
-                                "z(0.05 s) of a free 2x2 sheet", r["z"], r["z_closed_form"], 1e-8 if exact else 2e-6,
-                                wall_time_s=t() / len(rows), reference="damped free fall", source=src,
-                                why=("central differences integrate constant acceleration exactly: measured 2e-10 "
-                                     "(round-off over the steps)" if exact else
-                                     "O((alpha dt)^2): measured 2.1e-9 (masses x1) and 2.0e-7 (x100, dt 10x "
-                                     "longer); a damping term off by a factor changes z by >1e-3")))
-            recs.append(measure(f"explicit-energy/free-fall/alpha={alpha:g}/masses-x{r['mass_scaling']:g}/balance",
-                                "energy balance error |W_ext - E_kin - W_int - W_damp| / max", r["energy_balance_error"],
-                                0.0, 1e-7, error_kind="abs", wall_time_s=t() / len(rows),
-                                reference="energy conservation (damping work booked)", source="exact",
-                                why="measured <= 4e-8 (the trapezoidal booking of the damping work is O(dt^2)); a "
-                                    "missing term is O(1)"))
+            recs.append(
+                measure(
+                    f"explicit-energy/free-fall/alpha={alpha:g}/masses-x{r['mass_scaling']:g}",
+                    "z(0.05 s) of a free 2x2 sheet",
+                    r["z"],
+                    r["z_closed_form"],
+                    1e-8 if exact else 2e-6,
+                    wall_time_s=t() / len(rows),
+                    reference="damped free fall",
+                    source=src,
+                    why=(
+                        "central differences integrate constant acceleration exactly: measured 2e-10 "
+                        "(round-off over the steps)"
+                        if exact
+                        else "O((alpha dt)^2): measured 2.1e-9 (masses x1) and 2.0e-7 (x100, dt 10x "
+                        "longer); a damping term off by a factor changes z by >1e-3"
+                    ),
+                )
+            )
+            recs.append(
+                measure(
+                    f"explicit-energy/free-fall/alpha={alpha:g}/masses-x{r['mass_scaling']:g}/balance",
+                    "energy balance error |W_ext - E_kin - W_int - W_damp| / max",
+                    r["energy_balance_error"],
+                    0.0,
+                    1e-7,
+                    error_kind="abs",
+                    wall_time_s=t() / len(rows),
+                    reference="energy conservation (damping work booked)",
+                    source="exact",
+                    why="measured <= 4e-8 (the trapezoidal booking of the damping work is O(dt^2)); a "
+                    "missing term is O(1)",
+                )
+            )
     row = _frequency(ctx, 8)
-    recs.append(measure("explicit-energy/free-vibration/8x1/balance", "energy balance error over 2.3 periods, undamped",
-                        row["energy_balance_error"], 0.0, 1e-4, error_kind="abs", wall_time_s=row["wall_s"],
-                        reference="energy conservation", source="exact (central differences conserve a shadow energy)",
-                        why="measured 7e-6: the O(omega dt)^2 oscillation of the booked energy; a wrong force or "
-                            "mass gives O(1)"))
+    recs.append(
+        measure(
+            "explicit-energy/free-vibration/8x1/balance",
+            "energy balance error over 2.3 periods, undamped",
+            row["energy_balance_error"],
+            0.0,
+            1e-4,
+            error_kind="abs",
+            wall_time_s=row["wall_s"],
+            reference="energy conservation",
+            source="exact (central differences conserve a shadow energy)",
+            why="measured 7e-6: the O(omega dt)^2 oscillation of the booked energy; a wrong force or mass gives O(1)",
+        )
+    )
     return recs
 
 
@@ -222,16 +294,25 @@ def check_relaxation(ctx):
     X = prob.model.mesh.nodes
     tip = np.isclose(X[:, 0], 5.0)
     ref_x, ref_z = (X[tip, 0] + static.U[tip, 0]).mean(), (X[tip, 2] + static.U[tip, 2]).mean()
-    for name in (("kin+dir",) if ctx.quick else ("kin+dir", "kinetic", "paper")):
+    for name in ("kin+dir",) if ctx.quick else ("kin+dir", "kinetic", "paper"):
         with timed() as t:
             r = explicit.run_relax(prob, {**VARIANTS[name], **TOL})
         x, z = (X[tip, 0] + r.U[tip, 0]).mean(), (X[tip, 2] + r.U[tip, 2]).mean()
-        recs.append(measure(f"relaxation/{cut}/{nx}x1/{name}", "|tip position - static tip| / L", math.hypot(x - ref_x, z - ref_z) / 5.0,
-                            0.0, 3e-4, error_kind="abs", wall_time_s=t() + st,
-                            reference="static Newton equilibrium, same mesh (residual 1e-8)",
-                            source="solidshell.solvers.static.solve_static",
-                            why="relaxation stops at a residual of 1e-4 of the weight, i.e. within ~1e-4 of the "
-                                "tip motion (0.9 L); measured 9.5e-6 (kinetic), 1.8e-5 (kin+dir), 1.0e-4 (paper) "
-                                "L; masses and damping cannot move a steady state, a force error does by >1e-3",
-                            note="" if r.info["steady_state_reached"] else f"NOT steady: {r.message}"))
+        recs.append(
+            measure(
+                f"relaxation/{cut}/{nx}x1/{name}",
+                "|tip position - static tip| / L",
+                math.hypot(x - ref_x, z - ref_z) / 5.0,
+                0.0,
+                3e-4,
+                error_kind="abs",
+                wall_time_s=t() + st,
+                reference="static Newton equilibrium, same mesh (residual 1e-8)",
+                source="solidshell.solvers.static.solve_static",
+                why="relaxation stops at a residual of 1e-4 of the weight, i.e. within ~1e-4 of the "
+                "tip motion (0.9 L); measured 9.5e-6 (kinetic), 1.8e-5 (kin+dir), 1.0e-4 (paper) "
+                "L; masses and damping cannot move a steady state, a force error does by >1e-3",
+                note="" if r.info["steady_state_reached"] else f"NOT steady: {r.message}",
+            )
+        )
     return recs

@@ -52,6 +52,7 @@ import scipy.sparse.linalg as spl
 from solidshell import IsotropicShell, ShellMesh
 from solidshell.boundary import surface_load
 from solidshell.model import Model
+
 from .common import linear_solve
 from .record import check, measure, observed_order, timed
 
@@ -59,8 +60,9 @@ R, L, PHI, H, E = 25.0, 50.0, np.radians(40.0), 0.25, 4.32e8
 REFERENCE = 0.3024
 
 
-NODES = np.array([[0.0, 0.0], [0.24, 0.0], [0.24, 0.12], [0.0, 0.12],
-                  [0.04, 0.02], [0.18, 0.03], [0.16, 0.08], [0.08, 0.08]])
+NODES = np.array(
+    [[0.0, 0.0], [0.24, 0.0], [0.24, 0.12], [0.0, 0.12], [0.04, 0.02], [0.18, 0.03], [0.16, 0.08], [0.08, 0.08]]
+)
 QUADS = np.array([[0, 1, 5, 4], [1, 2, 6, 5], [2, 3, 7, 6], [3, 0, 4, 7], [4, 5, 6, 7]])
 OUTER = np.arange(4)
 INNER = np.arange(4, 8)
@@ -125,16 +127,19 @@ def run_one(kind: str, case: str, h: float | None = None, membrane: str = "full"
     C = mat.C_m if case == "membrane" else mat.C_b
     energy = 0.5 * Ue.ravel() @ (K @ Ue.ravel())
     energy_ref = 0.5 * AREA * e @ C @ e
-    out = dict(mesh=kind, case=case, h=mat.h,
-               displacement_error=float(np.abs(U[INNER] - Ue[INNER]).max() / np.abs(Ue).max()),
-               equilibrium_residual=float(np.abs(r[INNER]).max() / np.abs(r).max()),
-               energy_error=float((energy - energy_ref) / energy_ref))
+    out = dict(
+        mesh=kind,
+        case=case,
+        h=mat.h,
+        displacement_error=float(np.abs(U[INNER] - Ue[INNER]).max() / np.abs(Ue).max()),
+        equilibrium_residual=float(np.abs(r[INNER]).max() / np.abs(r).max()),
+        energy_error=float((energy - energy_ref) / energy_ref),
+    )
     if not kind.endswith("-rot"):
         kb = model.bending_strain(U)
         target = np.sqrt(3.0) * AMP if case == "bending" else 0.0
         out["bending_strain_error"] = float(np.abs(kb - target).max() / (np.sqrt(3.0) * AMP))
     return out
-
 
 
 def distorted_patch(n: int, kind: str, distort: float = 0.3) -> ShellMesh:
@@ -150,10 +155,9 @@ def distorted_patch(n: int, kind: str, distort: float = 0.3) -> ShellMesh:
     t = np.vstack([q[:, [0, 1, 2]], q[:, [0, 2, 3]]])
     if kind == "tri":
         return ShellMesh(P, tris=t)
-    half = len(q) // 2 if len(q) > 1 else 0          # mixed: first half quads, rest split
+    half = len(q) // 2 if len(q) > 1 else 0  # mixed: first half quads, rest split
     rest = q[half:]
     return ShellMesh(P, quads=q[:half], tris=np.vstack([rest[:, [0, 1, 2]], rest[:, [0, 2, 3]]]))
-
 
 
 def roof(n: int, tri: bool = False) -> ShellMesh:
@@ -163,7 +167,7 @@ def roof(n: int, tri: bool = False) -> ShellMesh:
     nodes = np.column_stack([Xg.ravel(), R * np.sin(Pg.ravel()), R * np.cos(Pg.ravel())])
     directors = np.column_stack([np.zeros(Pg.size), np.sin(Pg.ravel()), np.cos(Pg.ravel())])
     a = (np.arange(n)[None, :] + (n + 1) * np.arange(n)[:, None]).ravel()
-    q = np.column_stack([a, a + 1, a + n + 2, a + n + 1])      # counter-clockwise about +r
+    q = np.column_stack([a, a + 1, a + n + 2, a + n + 1])  # counter-clockwise about +r
     if tri:
         return ShellMesh(nodes, tris=np.vstack([q[:, [0, 1, 2]], q[:, [0, 2, 3]]]), directors=directors)
     return ShellMesh(nodes, quads=q, directors=directors)
@@ -174,7 +178,7 @@ def midside_deflection(n: int, tri: bool = False, membrane: str = "full") -> flo
     model = Model(mesh, IsotropicShell(E=E, nu=0.0, h=H), membrane=membrane)
     fixed = np.zeros((mesh.n_nodes, 6), dtype=bool)
     ends = np.abs(np.abs(mesh.nodes[:, 0]) - L / 2) < 1e-9
-    fixed[np.ix_(ends, [1, 2, 4, 5])] = True                   # diaphragm: y, z of U_o and U_n
+    fixed[np.ix_(ends, [1, 2, 4, 5])] = True  # diaphragm: y, z of U_o and U_n
     P = surface_load(model, 90.0, direction=(0.0, 0.0, -1.0))
     K = model.tangent(np.zeros((mesh.n_nodes, 6)))
     free = np.flatnonzero(~fixed.ravel())
@@ -184,12 +188,9 @@ def midside_deflection(n: int, tri: bool = False, membrane: str = "full") -> flo
     return float(-u.reshape(-1, 6)[edge[0], 2])
 
 
-
-
 def mixed_curved_mesh() -> ShellMesh:
     """Two distorted quads and two triangles on a doubly curved surface (directors = averaged normals)."""
-    P = np.array([[0.0, 0.0], [1.1, 0.1], [2.0, -0.1], [-0.1, 0.9], [1.0, 1.2], [2.1, 1.0],
-                  [0.4, 2.0], [1.6, 2.1]])
+    P = np.array([[0.0, 0.0], [1.1, 0.1], [2.0, -0.1], [-0.1, 0.9], [1.0, 1.2], [2.1, 1.0], [0.4, 2.0], [1.6, 2.1]])
     z = 0.15 * P[:, 0] ** 2 - 0.1 * P[:, 1] ** 2 + 0.05 * P[:, 0] * P[:, 1]
     return ShellMesh(np.column_stack([P, z]), quads=[[0, 1, 4, 3], [1, 2, 5, 4]], tris=[[3, 4, 6], [4, 7, 6]])
 
@@ -214,32 +215,60 @@ def objectivity(material, rotvec=(2.1, -0.4, 1.3), seed=3, scale=0.1, **model_kw
     U[:, 3:] = mesh.directors @ R0.T - mesh.directors + scale * rng.standard_normal((mesh.n_nodes, 3))
     V = rigidly_moved(mesh, U, Rotation.from_rotvec(rotvec).as_matrix(), (3.0, -2.0, 5.0))
     kb, kb2 = model.bending_strain(U), model.bending_strain(V)
-    return {"energy": model.energy(U), "energy_moved": model.energy(V),
-            "bending_strain_change": float(np.abs(kb2 - kb).max() / np.abs(kb).max())}
+    return {
+        "energy": model.energy(U),
+        "energy_moved": model.energy(V),
+        "bending_strain_change": float(np.abs(kb2 - kb).max() / np.abs(kb).max()),
+    }
 
 
 # ------------------------------------------------------------------------------------------ checks
 MH = "MacNeal & Harder (1985), Finite Elem. Anal. Des. 1:3-20"
 
 
-@check("patch", "elements", "membrane and bending patch tests on the MacNeal-Harder patch (quads, tris, mixed, rotated)")
+@check(
+    "patch", "elements", "membrane and bending patch tests on the MacNeal-Harder patch (quads, tris, mixed, rotated)"
+)
 def check_patch(ctx):
     recs = []
-    kinds = ("quads", "tris", "mixed-rot") if ctx.quick else ("quads", "tris", "mixed", "quads-rot", "tris-rot",
-                                                               "mixed-rot")
+    kinds = (
+        ("quads", "tris", "mixed-rot")
+        if ctx.quick
+        else ("quads", "tris", "mixed", "quads-rot", "tris-rot", "mixed-rot")
+    )
     for kind in kinds:
         for case in ("membrane", "bending"):
             with timed() as t:
                 row = run_one(kind, case)
-            recs.append(measure(f"patch/{kind}/{case}/displacement", "max |U - U_exact| / max |U_exact| (interior)",
-                                row["displacement_error"], 0.0, 1e-9, error_kind="abs", wall_time_s=t(),
-                                reference=f"exact constant-{case}-strain field", source=MH,
-                                why="exact field: measured <= 8e-11 (round-off at L/h = 240); a patch-test "
-                                    "failure is O(1e-3..1) and does not shrink with h"))
-            recs.append(measure(f"patch/{kind}/{case}/energy", "strain energy / constant-strain energy - 1",
-                                row["energy_error"], 0.0, 1e-9, error_kind="abs", wall_time_s=t(),
-                                reference="1/2 A e^T C e", source=MH,
-                                why="measured <= 1.3e-10 (round-off)"))
+            recs.append(
+                measure(
+                    f"patch/{kind}/{case}/displacement",
+                    "max |U - U_exact| / max |U_exact| (interior)",
+                    row["displacement_error"],
+                    0.0,
+                    1e-9,
+                    error_kind="abs",
+                    wall_time_s=t(),
+                    reference=f"exact constant-{case}-strain field",
+                    source=MH,
+                    why="exact field: measured <= 8e-11 (round-off at L/h = 240); a patch-test "
+                    "failure is O(1e-3..1) and does not shrink with h",
+                )
+            )
+            recs.append(
+                measure(
+                    f"patch/{kind}/{case}/energy",
+                    "strain energy / constant-strain energy - 1",
+                    row["energy_error"],
+                    0.0,
+                    1e-9,
+                    error_kind="abs",
+                    wall_time_s=t(),
+                    reference="1/2 A e^T C e",
+                    source=MH,
+                    why="measured <= 1.3e-10 (round-off)",
+                )
+            )
     return recs
 
 
@@ -250,17 +279,31 @@ def check_zero_modes(ctx):
     cases = [(1, "quad"), (1, "tri"), (2, "mixed"), (4, "quad"), (4, "tri")]
     if not ctx.quick:
         cases += [(2, "quad"), (2, "tri"), (4, "mixed")]
-    meshes = [(f"{n}x{n}-{kind}", distorted_patch(n, kind)) for n, kind in cases] + [("curved-mixed", mixed_curved_mesh())]
+    meshes = [(f"{n}x{n}-{kind}", distorted_patch(n, kind)) for n, kind in cases] + [
+        ("curved-mixed", mixed_curved_mesh())
+    ]
     for name, mesh in meshes:
-        for membrane in (("full",) if ctx.quick else ("full", "ans")):
+        for membrane in ("full",) if ctx.quick else ("full", "ans"):
             with timed() as t:
-                ev = np.linalg.eigvalsh(Model(mesh, mat, membrane=membrane).tangent(np.zeros((mesh.n_nodes, 6))).toarray())
+                ev = np.linalg.eigvalsh(
+                    Model(mesh, mat, membrane=membrane).tangent(np.zeros((mesh.n_nodes, 6))).toarray()
+                )
                 nzero = int(np.sum(np.abs(ev) < 1e-10 * ev.max()))
-            recs.append(measure(f"zero-modes/{name}/{membrane}", "eigenvalues of K(0) below 1e-10 max", nzero, 6, 0,
-                                error_kind="abs", wall_time_s=t(), reference="six rigid-body modes",
-                                source="exact (rigid motions of a free body)",
-                                why="a count: zeros are round-off (~1e-16 max), the softest bending mode is "
-                                    "> 1e-7 max; one more is a mechanism"))
+            recs.append(
+                measure(
+                    f"zero-modes/{name}/{membrane}",
+                    "eigenvalues of K(0) below 1e-10 max",
+                    nzero,
+                    6,
+                    0,
+                    error_kind="abs",
+                    wall_time_s=t(),
+                    reference="six rigid-body modes",
+                    source="exact (rigid motions of a free body)",
+                    why="a count: zeros are round-off (~1e-16 max), the softest bending mode is "
+                    "> 1e-7 max; one more is a mechanism",
+                )
+            )
     return recs
 
 
@@ -274,15 +317,34 @@ def check_objectivity(ctx):
         for rname, rv in rots.items():
             with timed() as t:
                 d = objectivity(Fabric.wool(warp_angle=30.0), rv, thickness_strain=thick)
-            recs.append(measure(f"objectivity/{thick}/{rname}/energy", "energy after a rigid motion / before",
-                                d["energy_moved"], d["energy"], 1e-12, wall_time_s=t(),
-                                reference="the energy before the motion", source="exact (frame indifference)",
-                                why="strains are differences of squared lengths: equal to round-off (1e-15 "
-                                    "relative measured); a non-objective term is O(1)"))
-            recs.append(measure(f"objectivity/{thick}/{rname}/bending-strain", "max change of Eq. (25) strain / max",
-                                d["bending_strain_change"], 0.0, 1e-9, error_kind="abs", wall_time_s=t(),
-                                reference="unchanged", source="exact (frame indifference)",
-                                why="round-off of O(1) vectors; a frame-dependent measure changes O(1)"))
+            recs.append(
+                measure(
+                    f"objectivity/{thick}/{rname}/energy",
+                    "energy after a rigid motion / before",
+                    d["energy_moved"],
+                    d["energy"],
+                    1e-12,
+                    wall_time_s=t(),
+                    reference="the energy before the motion",
+                    source="exact (frame indifference)",
+                    why="strains are differences of squared lengths: equal to round-off (1e-15 "
+                    "relative measured); a non-objective term is O(1)",
+                )
+            )
+            recs.append(
+                measure(
+                    f"objectivity/{thick}/{rname}/bending-strain",
+                    "max change of Eq. (25) strain / max",
+                    d["bending_strain_change"],
+                    0.0,
+                    1e-9,
+                    error_kind="abs",
+                    wall_time_s=t(),
+                    reference="unchanged",
+                    source="exact (frame indifference)",
+                    why="round-off of O(1) vectors; a frame-dependent measure changes O(1)",
+                )
+            )
     return recs
 
 
@@ -300,19 +362,44 @@ def check_scordelis_lo(ctx):
         e = [w / REFERENCE - 1 for w in ws]
         n = ns[-1]
         if membrane == "full":
-            tol, why = ((0.03, "measured -2.67 % on 16x16 (-1.1 % on 32x32): the bilinear membrane of Eq. (6) "
-                               "locks in this membrane-dominated roof and converges from below")
-                        if n == 16 else
-                        (0.015, "measured -1.1 % on 32x32 (-2.67 % on 16x16), converging from below"))
+            tol, why = (
+                (
+                    0.03,
+                    "measured -2.67 % on 16x16 (-1.1 % on 32x32): the bilinear membrane of Eq. (6) "
+                    "locks in this membrane-dominated roof and converges from below",
+                )
+                if n == 16
+                else (0.015, "measured -1.1 % on 32x32 (-2.67 % on 16x16), converging from below")
+            )
         else:
-            tol, why = ((0.01, "measured +0.59 % on 16x16 with the assumed membrane, -0.25 % on 32x32")
-                        if n == 16 else (0.005, "measured -0.25 % on 32x32 (+0.59 % on 16x16)"))
-        recs.append(measure(f"scordelis-lo/{membrane}/{n}x{n}", "vertical deflection at the free-edge mid-point",
-                            ws[-1], REFERENCE, tol, wall_time_s=secs[-1], reference="0.3024 (normalising value)",
-                            source=MH, why=why))
+            tol, why = (
+                (0.01, "measured +0.59 % on 16x16 with the assumed membrane, -0.25 % on 32x32")
+                if n == 16
+                else (0.005, "measured -0.25 % on 32x32 (+0.59 % on 16x16)")
+            )
+        recs.append(
+            measure(
+                f"scordelis-lo/{membrane}/{n}x{n}",
+                "vertical deflection at the free-edge mid-point",
+                ws[-1],
+                REFERENCE,
+                tol,
+                wall_time_s=secs[-1],
+                reference="0.3024 (normalising value)",
+                source=MH,
+                why=why,
+            )
+        )
         h = [1.0 / k for k in ns]
-        series.append({"label": f"quads, membrane={membrane}", "h": h, "error": [abs(x) for x in e],
-                       "rate": observed_order(h, e)[-1]})
-    ctx.convergence("Scordelis-Lo roof: free-edge mid-point deflection vs 0.3024", series, "1/N (N x N quads)",
-                    "|relative error|")
+        series.append(
+            {
+                "label": f"quads, membrane={membrane}",
+                "h": h,
+                "error": [abs(x) for x in e],
+                "rate": observed_order(h, e)[-1],
+            }
+        )
+    ctx.convergence(
+        "Scordelis-Lo roof: free-edge mid-point deflection vs 0.3024", series, "1/N (N x N quads)", "|relative error|"
+    )
     return recs

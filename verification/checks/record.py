@@ -50,9 +50,20 @@ class Record:
         return d
 
 
-def measure(name: str, quantity: str, value, reference_value, tolerance: float, *, reference: str,
-            source: str, why: str, error_kind: str = "rel", wall_time_s: float = 0.0,
-            note: str = "") -> Record:
+def measure(
+    name: str,
+    quantity: str,
+    value,
+    reference_value,
+    tolerance: float,
+    *,
+    reference: str,
+    source: str,
+    why: str,
+    error_kind: str = "rel",
+    wall_time_s: float = 0.0,
+    note: str = "",
+) -> Record:
     """A record with its error and verdict computed: rel = |v - r| / |r|, abs = |v - r|.
     A non-finite value fails (NaN compares false)."""
     v = float(value)
@@ -64,17 +75,41 @@ def measure(name: str, quantity: str, value, reference_value, tolerance: float, 
     else:
         raise ValueError(f"error_kind {error_kind!r}")
     ok = bool(err <= tolerance) if math.isfinite(err) else False
-    return Record(name=name, reference=reference, source=source, quantity=quantity, value=v,
-                  reference_value=r, error=err, tolerance=float(tolerance), passed=ok,
-                  wall_time_s=float(wall_time_s), why=why, error_kind=error_kind,
-                  status="passed" if ok else "failed", note=note)
+    return Record(
+        name=name,
+        reference=reference,
+        source=source,
+        quantity=quantity,
+        value=v,
+        reference_value=r,
+        error=err,
+        tolerance=float(tolerance),
+        passed=ok,
+        wall_time_s=float(wall_time_s),
+        why=why,
+        error_kind=error_kind,
+        status="passed" if ok else "failed",
+        note=note,
+    )
 
 
 def skipped(name: str, quantity: str, *, reference: str, source: str, why: str, note: str) -> Record:
     """A record that could not be measured for a stated reason (neither passed nor failed)."""
-    return Record(name=name, reference=reference, source=source, quantity=quantity, value=None,
-                  reference_value=None, error=None, tolerance=None, passed=None, wall_time_s=0.0,
-                  why=why, status="skipped", note=note)
+    return Record(
+        name=name,
+        reference=reference,
+        source=source,
+        quantity=quantity,
+        value=None,
+        reference_value=None,
+        error=None,
+        tolerance=None,
+        passed=None,
+        wall_time_s=0.0,
+        why=why,
+        status="skipped",
+        note=note,
+    )
 
 
 @dataclass
@@ -83,8 +118,8 @@ class Check:
     topic: str
     fn: Callable
     summary: str
-    quick: bool          # part of --quick
-    default: bool        # part of the default set (a check that is neither runs only by name)
+    quick: bool  # part of --quick
+    default: bool  # part of the default set (a check that is neither runs only by name)
 
 
 CHECKS: dict[str, Check] = {}
@@ -92,11 +127,13 @@ CHECKS: dict[str, Check] = {}
 
 def check(name: str, topic: str, summary: str, *, quick: bool = True, default: bool = True):
     """Register ``fn(ctx) -> list[Record]`` as the check ``name``."""
+
     def deco(fn):
         if name in CHECKS:
             raise ValueError(f"check {name!r} registered twice")
         CHECKS[name] = Check(name, topic, fn, summary, quick, default)
         return fn
+
     return deco
 
 
@@ -108,20 +145,39 @@ class Context:
     quick: bool = False
     log: Callable[[str], None] = print
     figures: list = field(default_factory=list)
-    cache: dict = field(default_factory=dict)      # results shared by checks of one run
+    cache: dict = field(default_factory=dict)  # results shared by checks of one run
 
-    def curves(self, title: str, series: list[dict], xlabel: str, ylabel: str, equal: bool = False,
-               logx: bool = False, logy: bool = False):
+    def curves(
+        self,
+        title: str,
+        series: list[dict],
+        xlabel: str,
+        ylabel: str,
+        equal: bool = False,
+        logx: bool = False,
+        logy: bool = False,
+    ):
         """Our curve(s) over the reference curve(s): series items {label, x, y, role} with role
         "reference" (a line) or "ours" (markers and a thin line)."""
-        self.figures.append({"kind": "curves", "title": title, "series": series, "xlabel": xlabel,
-                             "ylabel": ylabel, "equal": equal, "logx": logx, "logy": logy})
+        self.figures.append(
+            {
+                "kind": "curves",
+                "title": title,
+                "series": series,
+                "xlabel": xlabel,
+                "ylabel": ylabel,
+                "equal": equal,
+                "logx": logx,
+                "logy": logy,
+            }
+        )
 
     def convergence(self, title: str, series: list[dict], xlabel: str, ylabel: str):
         """Error against mesh size, log-log: series items {label, h, error, rate} (rate: the
         observed order printed in the legend)."""
-        self.figures.append({"kind": "convergence", "title": title, "series": series,
-                             "xlabel": xlabel, "ylabel": ylabel})
+        self.figures.append(
+            {"kind": "convergence", "title": title, "series": series, "xlabel": xlabel, "ylabel": ylabel}
+        )
 
 
 @contextmanager

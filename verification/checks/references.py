@@ -27,7 +27,6 @@ from pathlib import Path
 
 from solidshell.errors import InputError
 
-
 ENV = "SOLIDSHELL_REFERENCE_DIR"
 
 
@@ -37,8 +36,9 @@ def reference_dir() -> Path:
     env = os.environ.get(ENV)
     p = Path(env) if env else Path(resources.files("reference"))
     if not p.is_dir():
-        raise InputError(f"reference data folder {p} not found ({ENV} must name a folder laid out like "
-                         "the package reference/)")
+        raise InputError(
+            f"reference data folder {p} not found ({ENV} must name a folder laid out like the package reference/)"
+        )
     return p
 
 
@@ -85,9 +85,13 @@ def plates() -> dict:
 IGNORE = {"seconds", "python", "generated_by"}
 REGENERATED = {
     "elastica_strip.json": {"script": "elastica.py", "rtol": 1e-9, "atol": 1e-9},
-    "plates.json": {"script": "kirchhoff_plate.py", "rtol": 1e-6, "atol": 1e-12,
-                    # extrapolated from the two finest meshes, which a quick regeneration leaves out
-                    "quick_ignore": {"morley_richardson"}},
+    "plates.json": {
+        "script": "kirchhoff_plate.py",
+        "rtol": 1e-6,
+        "atol": 1e-12,
+        # extrapolated from the two finest meshes, which a quick regeneration leaves out
+        "quick_ignore": {"morley_richardson"},
+    },
 }
 
 
@@ -129,9 +133,9 @@ def _regenerate(name: str, out: Path, quick: bool) -> None:
         import contextlib
         import io
 
-        with contextlib.redirect_stdout(io.StringIO()):     # its own convergence table
+        with contextlib.redirect_stdout(io.StringIO()):  # its own convergence table
             module("kirchhoff_plate").main(["--out", str(out)] + (["--quick"] if quick else []))
-    else:                                                   # pragma: no cover - table above
+    else:  # pragma: no cover - table above
         raise KeyError(name)
 
 
@@ -149,17 +153,29 @@ def check_references(quick: bool = False, log=print, names=None) -> list[dict]:
             out = Path(tmp) / name
             try:
                 _regenerate(name, out, quick)
-                diffs = compare_json(json.loads((ref / name).read_text()), json.loads(out.read_text()),
-                                     spec["rtol"], spec["atol"],
-                                     ignore=spec.get("quick_ignore", frozenset()) if quick else frozenset())
+                diffs = compare_json(
+                    json.loads((ref / name).read_text()),
+                    json.loads(out.read_text()),
+                    spec["rtol"],
+                    spec["atol"],
+                    ignore=spec.get("quick_ignore", frozenset()) if quick else frozenset(),
+                )
             except Exception as exc:  # noqa: BLE001 - a script that fails is a changed reference
                 diffs = [f"regeneration failed: {type(exc).__name__}: {exc}"]
-            row = {"file": f"reference/{name}", "script": f"reference/{spec['script']}",
-                   "rtol": spec["rtol"], "atol": spec["atol"], "passed": not diffs,
-                   "differences": diffs, "wall_time_s": time.perf_counter() - t0}
+            row = {
+                "file": f"reference/{name}",
+                "script": f"reference/{spec['script']}",
+                "rtol": spec["rtol"],
+                "atol": spec["atol"],
+                "passed": not diffs,
+                "differences": diffs,
+                "wall_time_s": time.perf_counter() - t0,
+            }
             rows.append(row)
-            log(f"{row['file']:<32} from {row['script']:<28} {'unchanged' if not diffs else 'CHANGED'}"
-                f" (rtol {spec['rtol']:g}, atol {spec['atol']:g}; {row['wall_time_s']:.1f} s)")
+            log(
+                f"{row['file']:<32} from {row['script']:<28} {'unchanged' if not diffs else 'CHANGED'}"
+                f" (rtol {spec['rtol']:g}, atol {spec['atol']:g}; {row['wall_time_s']:.1f} s)"
+            )
             for d in diffs[:10]:
                 log(f"    {d}")
     kratos = ref / "pedestal_kratos.json"
@@ -168,12 +184,25 @@ def check_references(quick: bool = False, log=print, names=None) -> list[dict]:
         # installed, by the script the file names
         try:
             import KratosMultiphysics  # noqa: F401
+
             have = True
         except ImportError:
             have = False
-        log(f"reference/pedestal_kratos.json{'':<3} not regenerated: "
-            + ("run its generating script (KratosMultiphysics is installed)" if have
-               else "KratosMultiphysics is not installed"))
-        rows.append({"file": "reference/pedestal_kratos.json", "script": None, "passed": None,
-                     "differences": [], "wall_time_s": 0.0})
+        log(
+            f"reference/pedestal_kratos.json{'':<3} not regenerated: "
+            + (
+                "run its generating script (KratosMultiphysics is installed)"
+                if have
+                else "KratosMultiphysics is not installed"
+            )
+        )
+        rows.append(
+            {
+                "file": "reference/pedestal_kratos.json",
+                "script": None,
+                "passed": None,
+                "differences": [],
+                "wall_time_s": 0.0,
+            }
+        )
     return rows

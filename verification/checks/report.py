@@ -51,7 +51,7 @@ def draw(fig: dict, path: Path) -> Path:
     ax.set_ylabel(fig["ylabel"])
     ax.set_title(fig["title"], fontsize=10)
     ax.grid(True, which="both", lw=0.3)
-    if fig.get("equal"):          # a tall equal-aspect plot leaves room on the right
+    if fig.get("equal"):  # a tall equal-aspect plot leaves room on the right
         ax.legend(fontsize=8, loc="center left", bbox_to_anchor=(1.02, 0.5))
     else:
         ax.legend(fontsize=8)
@@ -77,30 +77,40 @@ def markdown(run: dict, figures: dict) -> str:
     m = run["machine"]
     recs = run["records"]
     n_pass = sum(r.status == "passed" for r in recs)
-    L = ["# solidshell verification report", "",
-         f"`solidshell verify{' --quick' if run['quick'] else ''}` at {m['time_utc']}: {len(recs)} records, "
-         f"{n_pass} passed, {run['failed']} failed, {run['skipped']} skipped, in {run['wall_time_s']:.1f} s "
-         f"(Python {m['python']}, {m['cpus']} CPUs, load average "
-         f"{', '.join(f'{x:.2f}' for x in m['load_average']) if m['load_average'] else '?'}).", "",
-         "Every record compares one measured quantity with an independent reference; `error` is relative "
-         "(|value - ref| / |ref|) unless the tolerance column says abs; `why` says where the tolerance comes from.",
-         ""]
+    L = [
+        "# solidshell verification report",
+        "",
+        f"`solidshell verify{' --quick' if run['quick'] else ''}` at {m['time_utc']}: {len(recs)} records, "
+        f"{n_pass} passed, {run['failed']} failed, {run['skipped']} skipped, in {run['wall_time_s']:.1f} s "
+        f"(Python {m['python']}, {m['cpus']} CPUs, load average "
+        f"{', '.join(f'{x:.2f}' for x in m['load_average']) if m['load_average'] else '?'}).",
+        "",
+        "Every record compares one measured quantity with an independent reference; `error` is relative "
+        "(|value - ref| / |ref|) unless the tolerance column says abs; `why` says where the tolerance comes from.",
+        "",
+    ]
     L += ["| check | records | failed | skipped | wall [s] |", "|---|---|---|---|---|"]
     for c in run["checks"]:
-        L.append(f"| [{c['name']}](#{c['name']}) | {c['records']} | {c['failed']} | {c['skipped']} | "
-                 f"{c['wall_time_s']:.1f} |")
+        L.append(
+            f"| [{c['name']}](#{c['name']}) | {c['records']} | {c['failed']} | {c['skipped']} | "
+            f"{c['wall_time_s']:.1f} |"
+        )
     L.append("")
     for c in run["checks"]:
         L += [f"## {c['name']}", "", c["summary"] + ".", ""]
         rows = [r for r in recs if r.check == c["name"]]
-        L += ["| record | quantity | value | reference | error | tolerance | result | reference (source) | why |",
-              "|---|---|---|---|---|---|---|---|---|"]
+        L += [
+            "| record | quantity | value | reference | error | tolerance | result | reference (source) | why |",
+            "|---|---|---|---|---|---|---|---|---|",
+        ]
         for r in rows:
             tol = "" if r.tolerance is None else f"{r.tolerance:g}" + (" abs" if r.error_kind == "abs" else "")
             res = r.status + (f" ({r.note})" if r.note else "")
             err = "" if r.error is None else f"{r.error:.2e}"
-            L.append(f"| {r.name} | {r.quantity} | {_num(r.value)} | {_num(r.reference_value)} | {err} | {tol} | "
-                     f"{res} | {r.reference} ({r.source}) | {r.why} |")
+            L.append(
+                f"| {r.name} | {r.quantity} | {_num(r.value)} | {_num(r.reference_value)} | {err} | {tol} | "
+                f"{res} | {r.reference} ({r.source}) | {r.why} |"
+            )
         L.append("")
         for p in figures.get(c["name"], []):
             L += [f"![{c['name']}]({p})", ""]
@@ -122,9 +132,16 @@ def write_report(run: dict, out: Path) -> list[Path]:
         p = draw(fig, figdir / f"{fig['check']}-{k}.png")
         figures[fig["check"]].append(f"figures/{p.name}")
         files.append(p)
-    data = {"quick": run["quick"], "wall_time_s": run["wall_time_s"], "machine": run["machine"],
-            "failed": run["failed"], "skipped": run["skipped"], "checks": run["checks"],
-            "records": [r.to_dict() for r in run["records"]], "figures": figures}
+    data = {
+        "quick": run["quick"],
+        "wall_time_s": run["wall_time_s"],
+        "machine": run["machine"],
+        "failed": run["failed"],
+        "skipped": run["skipped"],
+        "checks": run["checks"],
+        "records": [r.to_dict() for r in run["records"]],
+        "figures": figures,
+    }
     files.insert(0, _write(out / "verification.json", json.dumps(data, indent=1, default=float)))
     files.insert(1, _write(out / "report.md", markdown(run, figures)))
     return files

@@ -9,6 +9,7 @@ import traceback
 from pathlib import Path
 
 from solidshell.errors import InputError, IOFailure
+
 from .record import CHECKS, Context, Record
 
 DEFAULT_OUT = "verification-out"
@@ -62,9 +63,21 @@ def line(r: Record) -> str:
 
 
 def _error_record(name: str, note: str, why: str) -> Record:
-    return Record(name=f"{name}/error", reference="-", source="-", quantity="-", value=None,
-                  reference_value=None, error=None, tolerance=None, passed=False, wall_time_s=0.0,
-                  status="error", note=note, why=why)
+    return Record(
+        name=f"{name}/error",
+        reference="-",
+        source="-",
+        quantity="-",
+        value=None,
+        reference_value=None,
+        error=None,
+        tolerance=None,
+        passed=False,
+        wall_time_s=0.0,
+        status="error",
+        note=note,
+        why=why,
+    )
 
 
 def failed(r: Record) -> bool:
@@ -86,10 +99,15 @@ def run_checks(checks, quick: bool = False, log=print) -> dict:
             recs = list(c.fn(ctx))
         except Exception as exc:  # noqa: BLE001 - a broken check is a failed check, not a crash
             fr = traceback.extract_tb(exc.__traceback__)[-1]
-            recs = [_error_record(c.name, " ".join(f"{type(exc).__name__}: {exc}".split()),
-                                  f"{type(exc).__name__} raised at {Path(fr.filename).name}:{fr.lineno} in {fr.name}")]
+            recs = [
+                _error_record(
+                    c.name,
+                    " ".join(f"{type(exc).__name__}: {exc}".split()),
+                    f"{type(exc).__name__} raised at {Path(fr.filename).name}:{fr.lineno} in {fr.name}",
+                )
+            ]
         else:
-            if not recs:            # a check that measured nothing has verified nothing
+            if not recs:  # a check that measured nothing has verified nothing
                 recs = [_error_record(c.name, "the check returned no records", "a check returns >= 1 record")]
         wall = time.perf_counter() - t0
         for r in recs:
@@ -98,25 +116,48 @@ def run_checks(checks, quick: bool = False, log=print) -> dict:
         for f in ctx.figures[n_fig:]:
             f["check"] = c.name
         records += recs
-        per_check.append({"name": c.name, "topic": c.topic, "summary": c.summary, "wall_time_s": wall,
-                          "records": len(recs), "failed": sum(failed(r) for r in recs),
-                          "skipped": sum(r.status == "skipped" for r in recs)})
+        per_check.append(
+            {
+                "name": c.name,
+                "topic": c.topic,
+                "summary": c.summary,
+                "wall_time_s": wall,
+                "records": len(recs),
+                "failed": sum(failed(r) for r in recs),
+                "skipped": sum(r.status == "skipped" for r in recs),
+            }
+        )
     total = time.perf_counter() - t_all
     n_fail = sum(failed(r) for r in records)
     n_skip = sum(r.status == "skipped" for r in records)
-    log(f"{len(records)} records from {len(checks)} checks: {len(records) - n_fail - n_skip} passed, "
-        f"{n_fail} failed, {n_skip} skipped; {total:.1f} s")
-    return {"quick": quick, "records": records, "checks": per_check, "figures": ctx.figures,
-            "wall_time_s": total, "failed": n_fail, "skipped": n_skip, "machine": machine()}
+    log(
+        f"{len(records)} records from {len(checks)} checks: {len(records) - n_fail - n_skip} passed, "
+        f"{n_fail} failed, {n_skip} skipped; {total:.1f} s"
+    )
+    return {
+        "quick": quick,
+        "records": records,
+        "checks": per_check,
+        "figures": ctx.figures,
+        "wall_time_s": total,
+        "failed": n_fail,
+        "skipped": n_skip,
+        "machine": machine(),
+    }
 
 
 def machine() -> dict:
     try:
         load = os.getloadavg()
-    except OSError:     # pragma: no cover - not on this platform
+    except OSError:  # pragma: no cover - not on this platform
         load = None
-    return {"python": platform.python_version(), "platform": platform.platform(), "cpus": os.cpu_count(),
-            "load_average": load, "time_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())}
+    return {
+        "python": platform.python_version(),
+        "platform": platform.platform(),
+        "cpus": os.cpu_count(),
+        "load_average": load,
+        "time_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+    }
 
 
 def verify(names=None, quick: bool = False, out_dir=DEFAULT_OUT, log=print, write: bool = True) -> dict:
@@ -146,7 +187,7 @@ def fenicsx(out_dir, reuse: bool = False, log=print) -> dict:
     from ..fenicsx import crosscheck, jobs
 
     try:
-        jobs.check_dolfinx()                     # before anything is written
+        jobs.check_dolfinx()  # before anything is written
         out = prepare_out(out_dir)
         rows = crosscheck.main(out, reuse=reuse)
     except jobs.DolfinxMissing as e:

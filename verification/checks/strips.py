@@ -28,6 +28,7 @@ def strip_problem(n: int, cut: str, membrane: str = "full", kind: str = "quad"):
     from solidshell.mesh import ShellMesh
     from solidshell.meshing import build_mesh
     from solidshell.model import Model
+
     from .common import split_quads
 
     mesh = build_mesh("strip", f"{n}x1", length=5.0, width=1.0)
@@ -53,8 +54,15 @@ def solve_strip(n: int, cut: str, method: str = "newton", membrane: str = "full"
     cnt = np.bincount(inv)
     cx = np.bincount(inv, weights=x[:, 0]) / cnt
     cz = np.bincount(inv, weights=x[:, 2]) / cnt
-    return {"tip_x": float(x[tip, 0].mean()), "tip_z": float(x[tip, 2].mean()), "s": st, "cx": cx,
-            "cz": cz, "result": res, "wall": wall}
+    return {
+        "tip_x": float(x[tip, 0].mean()),
+        "tip_z": float(x[tip, 2].mean()),
+        "s": st,
+        "cx": cx,
+        "cz": cz,
+        "result": res,
+        "wall": wall,
+    }
 
 
 def shape_error(sol, ref):
@@ -76,37 +84,66 @@ def _solved(ctx, n, cut):
 def check_strip(ctx):
     ref = references.elastica_strip()["strip"]
     recs, series = [], []
-    cases = [("warp", 10), ("warp", 20), ("weft", 20)] if ctx.quick else \
-        [("warp", 10), ("warp", 20), ("weft", 10), ("weft", 20)]
+    cases = (
+        [("warp", 10), ("warp", 20), ("weft", 20)]
+        if ctx.quick
+        else [("warp", 10), ("warp", 20), ("weft", 10), ("weft", 20)]
+    )
     for cut, n in cases:
         sol = _solved(ctx, n, cut)
         tol = 5e-3 if n >= 20 else 2e-2
-        recs.append(measure(
-            f"strip/{cut}/{n}x1/tip_z", "tip height z [cm]", sol["tip_z"], ref[cut]["tip_z"], tol,
-            wall_time_s=sol["wall"], reference=f"heavy elastica, {cut} (B = {ref[cut]['B']} gf cm^2)",
-            source=ELASTICA_SRC,
-            why=("measured 0.12 %, O(h^2) down to a 1e-4 floor (shell extensibility); 0.5 % still catches "
-                 "warp/weft swapped (2.5 %) or 1 % of weight lost (0.3 %)" if n >= 20 else
-                 "measured 0.45 %; the paper's 10x1 is visibly off the reference too (Fig. 4b)"),
-            note="" if sol["result"].converged else "NOT converged"))
-        recs.append(measure(
-            f"strip/{cut}/{n}x1/shape", "max centreline distance from the elastica / L", shape_error(sol, ref[cut]) / 5.0,
-            0.0, 6e-3 if n >= 20 else 2e-2, error_kind="abs", wall_time_s=sol["wall"],
-            reference="heavy elastica curve (101 stations)", source=ELASTICA_SRC,
-            why="measured 2.4e-3 / 2.6e-3 L (warp / weft, 20x1) and 9.5e-3 / 1.0e-2 L (10x1), O(h^2); about "
-                "2x margin, and the warp and weft tips lie 6e-2 L apart"))
-        series.append({"label": f"{cut}: {n}x1 solid-shell", "x": sol["cx"].tolist(), "y": sol["cz"].tolist(),
-                       "role": "ours"})
+        recs.append(
+            measure(
+                f"strip/{cut}/{n}x1/tip_z",
+                "tip height z [cm]",
+                sol["tip_z"],
+                ref[cut]["tip_z"],
+                tol,
+                wall_time_s=sol["wall"],
+                reference=f"heavy elastica, {cut} (B = {ref[cut]['B']} gf cm^2)",
+                source=ELASTICA_SRC,
+                why=(
+                    "measured 0.12 %, O(h^2) down to a 1e-4 floor (shell extensibility); 0.5 % still catches "
+                    "warp/weft swapped (2.5 %) or 1 % of weight lost (0.3 %)"
+                    if n >= 20
+                    else "measured 0.45 %; the paper's 10x1 is visibly off the reference too (Fig. 4b)"
+                ),
+                note="" if sol["result"].converged else "NOT converged",
+            )
+        )
+        recs.append(
+            measure(
+                f"strip/{cut}/{n}x1/shape",
+                "max centreline distance from the elastica / L",
+                shape_error(sol, ref[cut]) / 5.0,
+                0.0,
+                6e-3 if n >= 20 else 2e-2,
+                error_kind="abs",
+                wall_time_s=sol["wall"],
+                reference="heavy elastica curve (101 stations)",
+                source=ELASTICA_SRC,
+                why="measured 2.4e-3 / 2.6e-3 L (warp / weft, 20x1) and 9.5e-3 / 1.0e-2 L (10x1), O(h^2); about "
+                "2x margin, and the warp and weft tips lie 6e-2 L apart",
+            )
+        )
+        series.append(
+            {"label": f"{cut}: {n}x1 solid-shell", "x": sol["cx"].tolist(), "y": sol["cz"].tolist(), "role": "ours"}
+        )
     for cut in ("warp", "weft"):
-        series.insert(0, {"label": f"{cut}: elastica", "x": ref[cut]["curve"]["x"], "y": ref[cut]["curve"]["z"],
-                          "role": "reference"})
-    ctx.curves("5x1 cm wool strip under self-weight, side view (paper Fig. 4b)", series, "x [cm]", "z [cm]",
-               equal=True)
+        series.insert(
+            0,
+            {
+                "label": f"{cut}: elastica",
+                "x": ref[cut]["curve"]["x"],
+                "y": ref[cut]["curve"]["z"],
+                "role": "reference",
+            },
+        )
+    ctx.curves("5x1 cm wool strip under self-weight, side view (paper Fig. 4b)", series, "x [cm]", "z [cm]", equal=True)
     return recs
 
 
-@check("strip-refinement", "strips", "warp strip 10x1 ... 160x1: observed order and limit vs the elastica",
-       quick=False)
+@check("strip-refinement", "strips", "warp strip 10x1 ... 160x1: observed order and limit vs the elastica", quick=False)
 def check_strip_refinement(ctx):
     ref = references.elastica_strip()["strip"]["warp"]
     ns = (10, 20, 40, 80, 160)
@@ -118,23 +155,59 @@ def check_strip_refinement(ctx):
     p3 = float(np.log2((e[0] - e[1]) / (e[1] - e[2])))
     d1, d2 = e[-3] - e[-2], e[-2] - e[-1]
     pf = float(np.log2(d1 / d2))
-    e_inf = e[-1] - d2 / (2.0 ** pf - 1.0)
+    e_inf = e[-1] - d2 / (2.0**pf - 1.0)
     recs = [
-        measure("strip-refinement/warp/order", "three-mesh order of the tip error, 10x1-20x1-40x1", p3, 2.0, 0.3,
-                error_kind="abs", wall_time_s=wall, reference="O(h^2) (bilinear interpolation)",
-                source=ELASTICA_SRC, why="measured 2.01; an order below 1.7 means a consistency error (e.g. in "
-                                         "the load lumping or the ANS tying)"),
-        measure("strip-refinement/warp/160x1", "relative tip-height error at 160x1", e[-1], 0.0, 3e-4,
-                error_kind="abs", wall_time_s=sols[-1]["wall"], reference="heavy elastica", source=ELASTICA_SRC,
-                why="the floor: measured 1.1e-4 (extensible shell with thickness vs inextensible elastica); "
-                    "3e-4 admits it and fails for a 0.1 % rigidity or load error"),
-        measure("strip-refinement/warp/limit", "Richardson limit of the relative error (40-80-160)", e_inf, 0.0,
-                3e-4, error_kind="abs", wall_time_s=wall, reference="heavy elastica", source=ELASTICA_SRC,
-                why="the mesh-converged model difference; ~1e-4 (axial strain of the strip under its weight)"),
+        measure(
+            "strip-refinement/warp/order",
+            "three-mesh order of the tip error, 10x1-20x1-40x1",
+            p3,
+            2.0,
+            0.3,
+            error_kind="abs",
+            wall_time_s=wall,
+            reference="O(h^2) (bilinear interpolation)",
+            source=ELASTICA_SRC,
+            why="measured 2.01; an order below 1.7 means a consistency error (e.g. in "
+            "the load lumping or the ANS tying)",
+        ),
+        measure(
+            "strip-refinement/warp/160x1",
+            "relative tip-height error at 160x1",
+            e[-1],
+            0.0,
+            3e-4,
+            error_kind="abs",
+            wall_time_s=sols[-1]["wall"],
+            reference="heavy elastica",
+            source=ELASTICA_SRC,
+            why="the floor: measured 1.1e-4 (extensible shell with thickness vs inextensible elastica); "
+            "3e-4 admits it and fails for a 0.1 % rigidity or load error",
+        ),
+        measure(
+            "strip-refinement/warp/limit",
+            "Richardson limit of the relative error (40-80-160)",
+            e_inf,
+            0.0,
+            3e-4,
+            error_kind="abs",
+            wall_time_s=wall,
+            reference="heavy elastica",
+            source=ELASTICA_SRC,
+            why="the mesh-converged model difference; ~1e-4 (axial strain of the strip under its weight)",
+        ),
     ]
-    ctx.convergence("Warp strip: tip height vs the heavy elastica", [
-        {"label": "|relative error|", "h": h, "error": [abs(x) for x in e], "rate": observed_order(h, e)[1]},
-        {"label": "|error - Richardson limit|", "h": h[:-1], "error": [abs(x - e_inf) for x in e[:-1]],
-         "rate": observed_order(h[:-1], [x - e_inf for x in e[:-1]])[-1]}],
-        "element length h [cm]", "relative error of tip z")
+    ctx.convergence(
+        "Warp strip: tip height vs the heavy elastica",
+        [
+            {"label": "|relative error|", "h": h, "error": [abs(x) for x in e], "rate": observed_order(h, e)[1]},
+            {
+                "label": "|error - Richardson limit|",
+                "h": h[:-1],
+                "error": [abs(x - e_inf) for x in e[:-1]],
+                "rate": observed_order(h[:-1], [x - e_inf for x in e[:-1]])[-1],
+            },
+        ],
+        "element length h [cm]",
+        "relative error of tip z",
+    )
     return recs

@@ -34,8 +34,8 @@ from pathlib import Path
 import numpy as np
 
 from .jobs import DolfinxMissing, check_dolfinx, make_job
-from .state import from_fenicsx_state, max_translation_change, to_fenicsx_state
 from .jobs import run_model as _run_model
+from .state import from_fenicsx_state, max_translation_change, to_fenicsx_state
 
 _REUSE = {"on": False}
 
@@ -45,15 +45,16 @@ def run_model(job, work, **kw):
     kw.setdefault("reuse", _REUSE["on"])
     return _run_model(job, work, **kw)
 
-OUT = Path(__file__).resolve().parents[1] / "out"      # verification/out (a checkout's; not in the wheel)
 
-STRIP_TOL = 2e-3      # issue 14: strip tip within 0.2 % of each other and of the elastica
-DC_TOL = 1e-2         # issue 14: pedestal DC within 1 % where both codes reach the same state
+OUT = Path(__file__).resolve().parents[1] / "out"  # verification/out (a checkout's; not in the wheel)
+
+STRIP_TOL = 2e-3  # issue 14: strip tip within 0.2 % of each other and of the elastica
+DC_TOL = 1e-2  # issue 14: pedestal DC within 1 % where both codes reach the same state
 # a restarted code is back in its own state when within 1e-6 cm of it: three orders above solidshell's
 # stopping test (disp_tol 1e-10 x max|D| ~ 1e-9 cm), six below the 1-2 cm between the codes' states
 RESTART_TOL_CM = 1e-6
-MPI_TOL = 1e-8        # 1 vs 2 ranks: the same equations solved to rtol 1e-9 -> agreement to round-off
-SHEAR_TOL = 2e-3      # end shear vs the elliptic-integral closed form, as for the strip
+MPI_TOL = 1e-8  # 1 vs 2 ranks: the same equations solved to rtol 1e-9 -> agreement to round-off
+SHEAR_TOL = 2e-3  # end shear vs the elliptic-integral closed form, as for the strip
 PEDESTAL_STEPS = {"initial": 0.02, "max": 0.2}
 # proximal continuation of the DOLFINx drape (model.py, solve()): the shift c starts at 2.6 x the
 # weight per area per cm and halves after every easy step; the end state is solved with c = 0
@@ -72,16 +73,24 @@ def _elastica():
     return references.module("elastica")
 
 
-def record(name, reference, source, quantity, value, reference_value, tolerance, wall_time_s,
-           relative=True, **extra):
+def record(name, reference, source, quantity, value, reference_value, tolerance, wall_time_s, relative=True, **extra):
     """One comparison row; error is relative to |reference_value| unless ``relative`` is False."""
     err = abs(value - reference_value)
     if relative:
         err /= abs(reference_value)
-    r = dict(name=name, reference=reference, source=source, quantity=quantity, value=float(value),
-             reference_value=float(reference_value), error=float(err), tolerance=float(tolerance),
-             passed=bool(np.isfinite(err) and err <= tolerance), wall_time_s=float(wall_time_s),
-             error_kind="rel" if relative else "abs")
+    r = dict(
+        name=name,
+        reference=reference,
+        source=source,
+        quantity=quantity,
+        value=float(value),
+        reference_value=float(reference_value),
+        error=float(err),
+        tolerance=float(tolerance),
+        passed=bool(np.isfinite(err) and err <= tolerance),
+        wall_time_s=float(wall_time_s),
+        error_kind="rel" if relative else "abs",
+    )
     r.update(extra)
     return r
 
@@ -107,9 +116,8 @@ def _fenicsx_strip(n, cut, work, ranks=1):
 
 
 def strip_problem(work, meshes_fx, meshes_ss, log):
-    from verification.strip import solve_strip
-
     from verification.checks import references
+    from verification.strip import solve_strip
 
     ref = references.elastica_strip()["strip"]
     recs, table = [], []
@@ -121,51 +129,118 @@ def strip_problem(work, meshes_fx, meshes_ss, log):
             r = sol["result"]
             ss[n] = (sol["tip_x"], sol["tip_z"])
             e = tip_position_error(sol["tip_x"], sol["tip_z"], rx, rz)
-            table.append(dict(problem=f"strip-{cut}", code="solidshell", mesh=f"{n}x1", tip_x=sol["tip_x"],
-                              tip_z=sol["tip_z"], tip_error_vs_elastica=e, converged=r.converged,
-                              iterations=r.info["iterations"], wall_time_s=sol["wall"]))
-            log(f"strip-{cut} solidshell {n}x1: tip ({sol['tip_x']:.5f}, {sol['tip_z']:.5f}) err {e:.2e} "
-                f"its {r.info['iterations']} {sol['wall']:.1f}s")
+            table.append(
+                dict(
+                    problem=f"strip-{cut}",
+                    code="solidshell",
+                    mesh=f"{n}x1",
+                    tip_x=sol["tip_x"],
+                    tip_z=sol["tip_z"],
+                    tip_error_vs_elastica=e,
+                    converged=r.converged,
+                    iterations=r.info["iterations"],
+                    wall_time_s=sol["wall"],
+                )
+            )
+            log(
+                f"strip-{cut} solidshell {n}x1: tip ({sol['tip_x']:.5f}, {sol['tip_z']:.5f}) err {e:.2e} "
+                f"its {r.info['iterations']} {sol['wall']:.1f}s"
+            )
         fx = {}
         for n in meshes_fx:
             res, tip = _fenicsx_strip(n, cut, work)
             if tip is None:
                 log(f"strip-{cut} fenicsx {n}x1: FAILED {res['status']}")
-                table.append(dict(problem=f"strip-{cut}", code="fenicsx", mesh=f"{n}x1", converged=False,
-                                  note=res["status"]))
+                table.append(
+                    dict(problem=f"strip-{cut}", code="fenicsx", mesh=f"{n}x1", converged=False, note=res["status"])
+                )
                 continue
             fx[n] = (tip[0], tip[2], res)
             e = tip_position_error(tip[0], tip[2], rx, rz)
-            table.append(dict(problem=f"strip-{cut}", code="fenicsx", mesh=f"{n}x1", tip_x=tip[0], tip_z=tip[2],
-                              tip_error_vs_elastica=e, converged=res["converged"],
-                              iterations=res["newton_iterations"], steps=res["steps"],
-                              wall_time_s=res["wall_time_s"], process_wall_time_s=res["process_wall_time_s"],
-                              n_dofs=res["n_dofs"], stable=res.get("stable")))
-            log(f"strip-{cut} fenicsx {n}x1: tip ({tip[0]:.5f}, {tip[2]:.5f}) err {e:.2e} "
-                f"steps {res['steps']} its {res['newton_iterations']} {res['wall_time_s']:.1f}s")
+            table.append(
+                dict(
+                    problem=f"strip-{cut}",
+                    code="fenicsx",
+                    mesh=f"{n}x1",
+                    tip_x=tip[0],
+                    tip_z=tip[2],
+                    tip_error_vs_elastica=e,
+                    converged=res["converged"],
+                    iterations=res["newton_iterations"],
+                    steps=res["steps"],
+                    wall_time_s=res["wall_time_s"],
+                    process_wall_time_s=res["process_wall_time_s"],
+                    n_dofs=res["n_dofs"],
+                    stable=res.get("stable"),
+                )
+            )
+            log(
+                f"strip-{cut} fenicsx {n}x1: tip ({tip[0]:.5f}, {tip[2]:.5f}) err {e:.2e} "
+                f"steps {res['steps']} its {res['newton_iterations']} {res['wall_time_s']:.1f}s"
+            )
         # records at the finest mesh of each code
         if fx:
             nf = max(fx)
             x, z, res = fx[nf]
             e = tip_position_error(x, z, rx, rz)
-            recs.append(record(f"strip-{cut} {nf}x1 tip position", "elastica (reference/elastica_strip.json)",
-                               "fenicsx", "tip position error / tip travel", e, 0.0, STRIP_TOL,
-                               res["wall_time_s"], relative=False))
-            recs.append(record(f"strip-{cut} {nf}x1 tip z", "elastica", "fenicsx", "tip_z [cm]", z, rz,
-                               STRIP_TOL, res["wall_time_s"]))
+            recs.append(
+                record(
+                    f"strip-{cut} {nf}x1 tip position",
+                    "elastica (reference/elastica_strip.json)",
+                    "fenicsx",
+                    "tip position error / tip travel",
+                    e,
+                    0.0,
+                    STRIP_TOL,
+                    res["wall_time_s"],
+                    relative=False,
+                )
+            )
+            recs.append(
+                record(
+                    f"strip-{cut} {nf}x1 tip z",
+                    "elastica",
+                    "fenicsx",
+                    "tip_z [cm]",
+                    z,
+                    rz,
+                    STRIP_TOL,
+                    res["wall_time_s"],
+                )
+            )
         if ss:
             ns = max(ss)
             x, z = ss[ns]
             e = tip_position_error(x, z, rx, rz)
-            recs.append(record(f"strip-{cut} {ns}x1 tip position", "elastica (reference/elastica_strip.json)",
-                               "solidshell", "tip position error / tip travel", e, 0.0, STRIP_TOL, 0.0,
-                               relative=False))
+            recs.append(
+                record(
+                    f"strip-{cut} {ns}x1 tip position",
+                    "elastica (reference/elastica_strip.json)",
+                    "solidshell",
+                    "tip position error / tip travel",
+                    e,
+                    0.0,
+                    STRIP_TOL,
+                    0.0,
+                    relative=False,
+                )
+            )
         if fx and ss:
             nf, ns = max(fx), max(ss)
             e = tip_position_error(fx[nf][0], fx[nf][1], ss[ns][0], ss[ns][1])
-            recs.append(record(f"strip-{cut} tip position, fenicsx {nf}x1 vs solidshell {ns}x1",
-                               "solidshell", "fenicsx", "tip position difference / tip travel", e, 0.0,
-                               STRIP_TOL, fx[nf][2]["wall_time_s"], relative=False))
+            recs.append(
+                record(
+                    f"strip-{cut} tip position, fenicsx {nf}x1 vs solidshell {ns}x1",
+                    "solidshell",
+                    "fenicsx",
+                    "tip position difference / tip travel",
+                    e,
+                    0.0,
+                    STRIP_TOL,
+                    fx[nf][2]["wall_time_s"],
+                    relative=False,
+                )
+            )
     return recs, table
 
 
@@ -181,39 +256,97 @@ def shear_problem(work, meshes_fx, meshes_ss, log, alpha=4):
     recs, table = [], []
     for n in meshes_ss:
         r = end_shear(n, alpha)
-        table.append(dict(problem=f"end-shear PL2/EI={alpha}", code="solidshell", mesh=f"{n}x1",
-                          w_over_L=r["w_over_L"], u_over_L=r["u_over_L"], w_rel_error=r["w_rel_error"],
-                          converged=r["converged"], iterations=r["iterations"], wall_time_s=r["wall_time_s"]))
+        table.append(
+            dict(
+                problem=f"end-shear PL2/EI={alpha}",
+                code="solidshell",
+                mesh=f"{n}x1",
+                w_over_L=r["w_over_L"],
+                u_over_L=r["u_over_L"],
+                w_rel_error=r["w_rel_error"],
+                converged=r["converged"],
+                iterations=r["iterations"],
+                wall_time_s=r["wall_time_s"],
+            )
+        )
         log(f"end-shear solidshell {n}x1: w/L {r['w_over_L']:.6f} (ref {w_ref}) its {r['iterations']}")
     if meshes_ss:
-        recs.append(record(f"end-shear PL2/EI={alpha} {meshes_ss[-1]}x1 w/L", "Mattiasson 1981", "solidshell",
-                           "w/L", r["w_over_L"], w_ref, SHEAR_TOL, r["wall_time_s"]))
+        recs.append(
+            record(
+                f"end-shear PL2/EI={alpha} {meshes_ss[-1]}x1 w/L",
+                "Mattiasson 1981",
+                "solidshell",
+                "w/L",
+                r["w_over_L"],
+                w_ref,
+                SHEAR_TOL,
+                r["wall_time_s"],
+            )
+        )
     mat = IsotropicShell(E=1.2e6, nu=0.0, h=0.1)
     last = None
     for n in meshes_fx:
         mesh = build_mesh("strip", f"{n}x1", length=L, width=1.0)
-        P = alpha * mat.C_b[0, 0] / L**2           # width 1: B = C_b[0,0]
-        job = make_job(f"end-shear-{alpha}-{n}x1", mesh, mat, gravity=False,
-                       line_load={"set": "tip", "force_per_length": [0.0, 0.0, -P / 1.0]})
+        P = alpha * mat.C_b[0, 0] / L**2  # width 1: B = C_b[0,0]
+        job = make_job(
+            f"end-shear-{alpha}-{n}x1",
+            mesh,
+            mat,
+            gravity=False,
+            line_load={"set": "tip", "force_per_length": [0.0, 0.0, -P / 1.0]},
+        )
         res = run_model(job, work)
         if not res.get("converged") or "U" not in res:
             log(f"end-shear fenicsx {n}x1: FAILED {res['status']}")
             continue
         u = np.asarray(res["U"])[mesh.node_set("tip")].mean(axis=0)
         w, uu = -u[2] / L, -u[0] / L
-        table.append(dict(problem=f"end-shear PL2/EI={alpha}", code="fenicsx", mesh=f"{n}x1", w_over_L=w,
-                          u_over_L=uu, w_rel_error=(w - w_ref) / w_ref, converged=res["converged"],
-                          iterations=res["newton_iterations"], steps=res["steps"],
-                          wall_time_s=res["wall_time_s"], n_dofs=res["n_dofs"]))
-        log(f"end-shear fenicsx {n}x1: w/L {w:.6f} u/L {uu:.6f} (ref {w_ref}, {u_ref}) "
-            f"its {res['newton_iterations']} {res['wall_time_s']:.1f}s")
+        table.append(
+            dict(
+                problem=f"end-shear PL2/EI={alpha}",
+                code="fenicsx",
+                mesh=f"{n}x1",
+                w_over_L=w,
+                u_over_L=uu,
+                w_rel_error=(w - w_ref) / w_ref,
+                converged=res["converged"],
+                iterations=res["newton_iterations"],
+                steps=res["steps"],
+                wall_time_s=res["wall_time_s"],
+                n_dofs=res["n_dofs"],
+            )
+        )
+        log(
+            f"end-shear fenicsx {n}x1: w/L {w:.6f} u/L {uu:.6f} (ref {w_ref}, {u_ref}) "
+            f"its {res['newton_iterations']} {res['wall_time_s']:.1f}s"
+        )
         last = (n, w, uu, res)
     if last:
         n, w, uu, res = last
-        recs.append(record(f"end-shear PL2/EI={alpha} {n}x1 w/L", "Mattiasson 1981", "fenicsx", "w/L", w, w_ref,
-                           SHEAR_TOL, res["wall_time_s"]))
-        recs.append(record(f"end-shear PL2/EI={alpha} {n}x1 u/L", "Mattiasson 1981", "fenicsx", "u/L", uu, u_ref,
-                           SHEAR_TOL, res["wall_time_s"]))
+        recs.append(
+            record(
+                f"end-shear PL2/EI={alpha} {n}x1 w/L",
+                "Mattiasson 1981",
+                "fenicsx",
+                "w/L",
+                w,
+                w_ref,
+                SHEAR_TOL,
+                res["wall_time_s"],
+            )
+        )
+        recs.append(
+            record(
+                f"end-shear PL2/EI={alpha} {n}x1 u/L",
+                "Mattiasson 1981",
+                "fenicsx",
+                "u/L",
+                uu,
+                u_ref,
+                SHEAR_TOL,
+                res["wall_time_s"],
+            )
+        )
     return recs, table
 
 
@@ -241,15 +374,26 @@ def _restart_fenicsx(job, ss_mesh, U_ss, U_fx, work, ranks, dens, log):
         return dict(row, converged=False, note=rr.get("status"))
     Ur = np.asarray(rr["U"])
     ds_r = drape_summary(ss_mesh, Ur, pedestal_area=100.0)
-    row.update(drape_coefficient=ds_r["drape_coefficient"], fold_count=ds_r["fold_count"], converged=True,
-               stable=rr.get("stable"), negative_eigenvalues=rr.get("negative_eigenvalues"),
-               iterations=rr["newton_iterations"], steps=rr["steps"], wall_time_s=rr["wall_time_s"],
-               n_dofs=rr["n_dofs"], moved_from_start_cm=max_translation_change(Ur, U_ss),
-               distance_to_own_state_cm=max_translation_change(Ur, U_fx), **_provenance(rr))
-    log(f"square-pedestal fenicsx {dens} restarted from the solidshell state: DC {row['drape_coefficient']:.4f} "
+    row.update(
+        drape_coefficient=ds_r["drape_coefficient"],
+        fold_count=ds_r["fold_count"],
+        converged=True,
+        stable=rr.get("stable"),
+        negative_eigenvalues=rr.get("negative_eigenvalues"),
+        iterations=rr["newton_iterations"],
+        steps=rr["steps"],
+        wall_time_s=rr["wall_time_s"],
+        n_dofs=rr["n_dofs"],
+        moved_from_start_cm=max_translation_change(Ur, U_ss),
+        distance_to_own_state_cm=max_translation_change(Ur, U_fx),
+        **_provenance(rr),
+    )
+    log(
+        f"square-pedestal fenicsx {dens} restarted from the solidshell state: DC {row['drape_coefficient']:.4f} "
         f"folds {row['fold_count']} stable {row['stable']} steps {rr['steps']} its {rr['newton_iterations']} "
         f"{rr['wall_time_s']:.1f}s; moved {row['moved_from_start_cm']:.4f} cm, ends "
-        f"{row['distance_to_own_state_cm']:.2e} cm from DOLFINx's own state")
+        f"{row['distance_to_own_state_cm']:.2e} cm from DOLFINx's own state"
+    )
     return row
 
 
@@ -267,11 +411,22 @@ def _restart_record(row, code):
     if "distance_to_own_state_cm" not in row:
         return []
     other = "solidshell" if code == "fenicsx" else "fenicsx"
-    return [record(f"square-pedestal {row['mesh']}: {code} started from {other}'s state returns to its own state",
-                   f"{code} from the flat sheet", f"{code} from {other}'s state",
-                   "max nodal distance from its own state [cm]", row["distance_to_own_state_cm"], 0.0, RESTART_TOL_CM,
-                   row["wall_time_s"], relative=False, moved_from_start_cm=row["moved_from_start_cm"],
-                   fold_count=row["fold_count"], stable=row["stable"])]
+    return [
+        record(
+            f"square-pedestal {row['mesh']}: {code} started from {other}'s state returns to its own state",
+            f"{code} from the flat sheet",
+            f"{code} from {other}'s state",
+            "max nodal distance from its own state [cm]",
+            row["distance_to_own_state_cm"],
+            0.0,
+            RESTART_TOL_CM,
+            row["wall_time_s"],
+            relative=False,
+            moved_from_start_cm=row["moved_from_start_cm"],
+            fold_count=row["fold_count"],
+            stable=row["stable"],
+        )
+    ]
 
 
 def _restart_solidshell(dens, out, res, log):
@@ -287,20 +442,31 @@ def _restart_solidshell(dens, out, res, log):
     r = run_scene("square-pedestal", mesh=dens, solver="static", progress=False, U0=U0, predictor=False)
     wall = time.perf_counter() - t0
     s = r.summary
-    row = dict(problem="square-pedestal", code="solidshell from fenicsx state", mesh=dens,
-               converged=s.get("converged"), stable=s.get("positive_definite"), iterations=s.get("iterations"),
-               wall_time_s=s.get("wall_time_s", wall))
+    row = dict(
+        problem="square-pedestal",
+        code="solidshell from fenicsx state",
+        mesh=dens,
+        converged=s.get("converged"),
+        stable=s.get("positive_definite"),
+        iterations=s.get("iterations"),
+        wall_time_s=s.get("wall_time_s", wall),
+    )
     if not s.get("converged"):
         log(f"square-pedestal solidshell {dens} restart from DOLFINx: FAILED {s.get('message')}")
         return dict(row, note=s.get("message"))
     ds = drape_summary(r.mesh, r.U, pedestal_area=100.0)
-    row.update(drape_coefficient=ds["drape_coefficient"], fold_count=ds["fold_count"],
-               moved_from_start_cm=max_translation_change(r.U, U0),
-               distance_to_own_state_cm=max_translation_change(r.U, out.U))
-    log(f"square-pedestal solidshell {dens} restarted from the DOLFINx state: DC {row['drape_coefficient']:.4f} "
+    row.update(
+        drape_coefficient=ds["drape_coefficient"],
+        fold_count=ds["fold_count"],
+        moved_from_start_cm=max_translation_change(r.U, U0),
+        distance_to_own_state_cm=max_translation_change(r.U, out.U),
+    )
+    log(
+        f"square-pedestal solidshell {dens} restarted from the DOLFINx state: DC {row['drape_coefficient']:.4f} "
         f"folds {row['fold_count']} pos.def. {row['stable']} its {row['iterations']} {row['wall_time_s']:.1f}s; "
         f"moved {row['moved_from_start_cm']:.4f} cm, ends {row['distance_to_own_state_cm']:.2e} cm from "
-        f"solidshell's own state")
+        f"solidshell's own state"
+    )
     return row
 
 
@@ -321,50 +487,81 @@ def pedestal_problem(work, meshes, log, ranks=1, restart=True, restart_both=()):
         t_ss = time.perf_counter() - t0
         s = out.summary
         ds_ss = drape_summary(out.mesh, out.U, pedestal_area=ped_area)
-        row_ss = dict(problem="square-pedestal", code="solidshell", mesh=dens,
-                      drape_coefficient=ds_ss["drape_coefficient"], fold_count=ds_ss["fold_count"],
-                      converged=s.get("converged"), stable=s.get("positive_definite"),
-                      iterations=s.get("iterations"),
-                      wall_time_s=s.get("wall_time_s", s.get("solver_wall_time_s", t_ss)))
+        row_ss = dict(
+            problem="square-pedestal",
+            code="solidshell",
+            mesh=dens,
+            drape_coefficient=ds_ss["drape_coefficient"],
+            fold_count=ds_ss["fold_count"],
+            converged=s.get("converged"),
+            stable=s.get("positive_definite"),
+            iterations=s.get("iterations"),
+            wall_time_s=s.get("wall_time_s", s.get("solver_wall_time_s", t_ss)),
+        )
         if s.get("sequence"):
             # mesh sequencing (square-pedestal.toml, sequence = "auto"): "iterations" are the fine
             # mesh's own; the coarse levels' come on top
-            row_ss["sequence"] = [dict(mesh=q["mesh"], iterations=q["iterations"], wall_time_s=q["wall_time_s"])
-                                  for q in s["sequence"]]
+            row_ss["sequence"] = [
+                dict(mesh=q["mesh"], iterations=q["iterations"], wall_time_s=q["wall_time_s"]) for q in s["sequence"]
+            ]
             row_ss["iterations_all_levels"] = int(sum(q["iterations"] or 0 for q in s["sequence"]))
         table.append(row_ss)
-        log(f"square-pedestal solidshell {dens}: DC {ds_ss['drape_coefficient']:.4f} folds {ds_ss['fold_count']} "
-            f"pos.def. {s.get('positive_definite')} its {s.get('iterations')} {t_ss:.1f}s")
+        log(
+            f"square-pedestal solidshell {dens}: DC {ds_ss['drape_coefficient']:.4f} folds {ds_ss['fold_count']} "
+            f"pos.def. {s.get('positive_definite')} its {s.get('iterations')} {t_ss:.1f}s"
+        )
         mesh = build_mesh("square_on_square", dens, sheet=20.0, pedestal=10.0)
         if not np.array_equal(np.asarray(mesh.nodes), np.asarray(out.mesh.nodes)):
             # states are exchanged node by node: both codes must number the same mesh alike
             raise RuntimeError(f"square-pedestal {dens}: the scene's mesh and the job's mesh differ")
         # a hanging plate bends in two directions at once (Gaussian curvature stretches it): the
         # load path from the flat sheet needs smaller first increments than the strip
-        job = make_job(f"square-pedestal-{dens}", mesh, Fabric.wool(), steps=PEDESTAL_STEPS,
-                       snes={"max_it": 30}, prox=PEDESTAL_PROX)
+        job = make_job(
+            f"square-pedestal-{dens}",
+            mesh,
+            Fabric.wool(),
+            steps=PEDESTAL_STEPS,
+            snes={"max_it": 30},
+            prox=PEDESTAL_PROX,
+        )
         res = run_model(job, work, ranks=ranks, timeout=5400)
         if not res.get("converged") or "U" not in res:
             log(f"square-pedestal fenicsx {dens}: FAILED {res['status']}")
-            table.append(dict(problem="square-pedestal", code="fenicsx", mesh=dens, converged=False,
-                              note=res["status"]))
+            table.append(
+                dict(problem="square-pedestal", code="fenicsx", mesh=dens, converged=False, note=res["status"])
+            )
             continue
         U = np.asarray(res["U"])
         ds_fx = drape_summary(mesh, U, pedestal_area=ped_area)
         x = np.asarray(mesh.nodes) + U
         inside = int(np.sum((np.abs(x[:, 0]) < 5.0 - 1e-9) & (np.abs(x[:, 1]) < 5.0 - 1e-9) & (x[:, 2] < -1e-9)))
         dist = boundary_distance(ds_fx["projected_boundary"], ds_ss["projected_boundary"])
-        row = dict(problem="square-pedestal", code="fenicsx", mesh=dens,
-                   drape_coefficient=ds_fx["drape_coefficient"], fold_count=ds_fx["fold_count"],
-                   converged=res["converged"], stable=res.get("stable"),
-                   negative_eigenvalues=res.get("negative_eigenvalues"), iterations=res["newton_iterations"],
-                   steps=res["steps"], wall_time_s=res["wall_time_s"], n_dofs=res["n_dofs"],
-                   nodes_inside_pedestal=inside, boundary_distance_cm=dist, **_provenance(res))
+        row = dict(
+            problem="square-pedestal",
+            code="fenicsx",
+            mesh=dens,
+            drape_coefficient=ds_fx["drape_coefficient"],
+            fold_count=ds_fx["fold_count"],
+            converged=res["converged"],
+            stable=res.get("stable"),
+            negative_eigenvalues=res.get("negative_eigenvalues"),
+            iterations=res["newton_iterations"],
+            steps=res["steps"],
+            wall_time_s=res["wall_time_s"],
+            n_dofs=res["n_dofs"],
+            nodes_inside_pedestal=inside,
+            boundary_distance_cm=dist,
+            **_provenance(res),
+        )
         table.append(row)
-        log(f"square-pedestal fenicsx {dens}: DC {ds_fx['drape_coefficient']:.4f} folds {ds_fx['fold_count']} "
+        log(
+            f"square-pedestal fenicsx {dens}: DC {ds_fx['drape_coefficient']:.4f} folds {ds_fx['fold_count']} "
             f"stable {res.get('stable')} steps {res['steps']} its {res['newton_iterations']} "
-            f"{res['wall_time_s']:.1f}s; boundary distance {dist:.3f} cm; nodes inside pedestal {inside}")
-        same = ds_fx["fold_count"] == ds_ss["fold_count"] and bool(res.get("stable")) == bool(s.get("positive_definite"))
+            f"{res['wall_time_s']:.1f}s; boundary distance {dist:.3f} cm; nodes inside pedestal {inside}"
+        )
+        same = ds_fx["fold_count"] == ds_ss["fold_count"] and bool(res.get("stable")) == bool(
+            s.get("positive_definite")
+        )
         if dens in restart_both or (restart and not same):
             # is solidshell's state an equilibrium of the DOLFINx model?  Start DOLFINx from it at
             # the full load and see where Newton goes
@@ -380,13 +577,27 @@ def pedestal_problem(work, meshes, log, ranks=1, restart=True, restart_both=()):
         # DC_TOL plus both series' own discretisation errors (converged_dc_records); the DC difference
         # on equal meshes is reported
         dc_fx, dc_ss = ds_fx["drape_coefficient"], ds_ss["drape_coefficient"]
-        recs.append(record(f"square-pedestal {dens}: same state (folds, both stable)", "solidshell", "fenicsx",
-                           "same state (1 = yes)", float(same), 1.0, 0.0, res["wall_time_s"], relative=False,
-                           drape_coefficient=dc_fx, drape_coefficient_reference=dc_ss,
-                           dc_relative_difference=(dc_fx - dc_ss) / dc_ss,
-                           fold_count=ds_fx["fold_count"], fold_count_reference=ds_ss["fold_count"],
-                           stable=res.get("stable"), stable_reference=s.get("positive_definite"),
-                           boundary_distance_cm=dist))
+        recs.append(
+            record(
+                f"square-pedestal {dens}: same state (folds, both stable)",
+                "solidshell",
+                "fenicsx",
+                "same state (1 = yes)",
+                float(same),
+                1.0,
+                0.0,
+                res["wall_time_s"],
+                relative=False,
+                drape_coefficient=dc_fx,
+                drape_coefficient_reference=dc_ss,
+                dc_relative_difference=(dc_fx - dc_ss) / dc_ss,
+                fold_count=ds_fx["fold_count"],
+                fold_count_reference=ds_ss["fold_count"],
+                stable=res.get("stable"),
+                stable_reference=s.get("positive_definite"),
+                boundary_distance_cm=dist,
+            )
+        )
     recs += converged_dc_records([t for t in table if t["code"] == "fenicsx" and "drape_coefficient" in t], log)
     return recs, table
 
@@ -408,20 +619,34 @@ def converged_dc_records(fx_rows, log, stored=None):
             return []
         stored = json.loads(STORED_CONVERGENCE.read_text())
     fx = fx_rows[-1]
-    lim = richardson([int(r["mesh"].split("x")[0]) for r in fx_rows[-3:]],
-                     [r["drape_coefficient"] for r in fx_rows[-3:]]) if len(fx_rows) >= 3 else None
+    lim = (
+        richardson([int(r["mesh"].split("x")[0]) for r in fx_rows[-3:]], [r["drape_coefficient"] for r in fx_rows[-3:]])
+        if len(fx_rows) >= 3
+        else None
+    )
     if lim is not None:
         log(f"fenicsx DC Richardson limit from {[r['mesh'] for r in fx_rows[-3:]]}: {lim[0]:.4f} (order {lim[1]:.2f})")
-    fx_series = dict(mesh=fx["mesh"], dc=fx["drape_coefficient"], limit=None if lim is None else lim[0],
-                     order=None if lim is None else lim[1], meshes=[r["mesh"] for r in fx_rows[-3:]],
-                     wall_time_s=fx["wall_time_s"])
+    fx_series = dict(
+        mesh=fx["mesh"],
+        dc=fx["drape_coefficient"],
+        limit=None if lim is None else lim[0],
+        order=None if lim is None else lim[1],
+        meshes=[r["mesh"] for r in fx_rows[-3:]],
+        wall_time_s=fx["wall_time_s"],
+    )
     recs = []
     for v in stored.get("variants", []):
         rows = dc_series_rows(fx_series, v)
         if rows:
-            log("; ".join(f"{r['name']}: {r['value']:.4f} vs {r['reference_value']:.4f} (error {r['error']:.2e}, "
-                          f"tolerance {r['tolerance']:.2e})" if r["passed"] is not None else f"{r['name']}: skipped"
-                          for r in rows))
+            log(
+                "; ".join(
+                    f"{r['name']}: {r['value']:.4f} vs {r['reference_value']:.4f} (error {r['error']:.2e}, "
+                    f"tolerance {r['tolerance']:.2e})"
+                    if r["passed"] is not None
+                    else f"{r['name']}: skipped"
+                    for r in rows
+                )
+            )
         recs += rows
     return recs
 
@@ -448,45 +673,72 @@ def dc_series_rows(fx, variant):
     if not rows:
         return []
     src, ref = "fenicsx", "solidshell (stored static_convergence.json)"
-    labels = [(f"square-pedestal DC, fenicsx {fx['mesh']} vs solidshell {rows[-1]['mesh']} ({name})",
-               "drape coefficient"),
-              (f"square-pedestal DC, fenicsx {fx['mesh']} vs solidshell Richardson limit ({name})",
-               "drape coefficient"),
-              (f"square-pedestal DC Richardson limits, fenicsx vs solidshell ({name})",
-               "drape coefficient (extrapolated)")]
+    labels = [
+        (f"square-pedestal DC, fenicsx {fx['mesh']} vs solidshell {rows[-1]['mesh']} ({name})", "drape coefficient"),
+        (f"square-pedestal DC, fenicsx {fx['mesh']} vs solidshell Richardson limit ({name})", "drape coefficient"),
+        (f"square-pedestal DC Richardson limits, fenicsx vs solidshell ({name})", "drape coefficient (extrapolated)"),
+    ]
     q_lim = variant.get("richardson_limit")
     why_missing = []
     if q_lim is None:
         why_missing.append(f"solidshell's {name} series has no Richardson limit (not monotone / under three meshes)")
     if fx.get("limit") is None:
-        why_missing.append(f"the DOLFINx series {', '.join(fx.get('meshes') or [fx['mesh']])} has no Richardson limit "
-                           "(needs three monotone meshes)")
+        why_missing.append(
+            f"the DOLFINx series {', '.join(fx.get('meshes') or [fx['mesh']])} has no Richardson limit "
+            "(needs three monotone meshes)"
+        )
     if why_missing:
         why = "; ".join(why_missing) + ": without both series' discretisation errors the DCs cannot be compared"
-        return [skipped_record(n, ref, src, q, why, fx["wall_time_s"], note="no Richardson limit")
-                for n, q in labels]
+        return [skipped_record(n, ref, src, q, why, fx["wall_time_s"], note="no Richardson limit") for n, q in labels]
     q_fin = rows[-1]["drape_coefficient"]
     d_ss, d_fx = abs(q_fin - q_lim), abs(fx["dc"] - fx["limit"])
     pairs = [(fx["dc"], q_fin), (fx["dc"], q_lim), (fx["limit"], q_lim)]
     out = []
     for (n, q), (value, reference_value) in zip(labels, pairs):
         tol = DC_TOL + (d_ss + d_fx) / abs(reference_value)
-        why = (f"like with like: each side's DC carries its series' own discretisation error (Richardson estimate "
-               f"|finest - limit|): solidshell {name} {rows[-1]['mesh']} {q_fin:.4f} -> {q_lim:.4f} "
-               f"(order {variant.get('observed_order', float('nan')):.2f}), d_ss = {d_ss:.4f}; DOLFINx {fx['mesh']} "
-               f"{fx['dc']:.4f} -> {fx['limit']:.4f} (order {fx['order']:.2f}), d_fx = {d_fx:.4f}; tolerance = "
-               f"{DC_TOL:g} (issue 14, two models of one shell) + (d_ss + d_fx) / reference = {tol:.4f}")
-        out.append(record(n, ref, src, q, value, reference_value, tol, fx["wall_time_s"], why=why,
-                          d_solidshell=d_ss, d_fenicsx=d_fx))
+        why = (
+            f"like with like: each side's DC carries its series' own discretisation error (Richardson estimate "
+            f"|finest - limit|): solidshell {name} {rows[-1]['mesh']} {q_fin:.4f} -> {q_lim:.4f} "
+            f"(order {variant.get('observed_order', float('nan')):.2f}), d_ss = {d_ss:.4f}; DOLFINx {fx['mesh']} "
+            f"{fx['dc']:.4f} -> {fx['limit']:.4f} (order {fx['order']:.2f}), d_fx = {d_fx:.4f}; tolerance = "
+            f"{DC_TOL:g} (issue 14, two models of one shell) + (d_ss + d_fx) / reference = {tol:.4f}"
+        )
+        out.append(
+            record(
+                n,
+                ref,
+                src,
+                q,
+                value,
+                reference_value,
+                tol,
+                fx["wall_time_s"],
+                why=why,
+                d_solidshell=d_ss,
+                d_fenicsx=d_fx,
+            )
+        )
     return out
 
 
 def skipped_record(name, reference, source, quantity, why, wall_time_s=0.0, note=""):
     """A comparison that could not be made (its reason in ``why``, in short in ``note``): no value,
     neither passed nor failed."""
-    return dict(name=name, reference=reference, source=source, quantity=quantity, value=None, reference_value=None,
-                error=None, tolerance=None, passed=None, status="skipped", wall_time_s=float(wall_time_s), why=why,
-                note=note)
+    return dict(
+        name=name,
+        reference=reference,
+        source=source,
+        quantity=quantity,
+        value=None,
+        reference_value=None,
+        error=None,
+        tolerance=None,
+        passed=None,
+        status="skipped",
+        wall_time_s=float(wall_time_s),
+        why=why,
+        note=note,
+    )
 
 
 def richardson(n, q):
@@ -502,13 +754,14 @@ def richardson(n, q):
     r = d1 / d2
 
     def f(p):
-        return (h[0]**p - h[1]**p) / (h[1]**p - h[2]**p) - r
+        return (h[0] ** p - h[1] ** p) / (h[1] ** p - h[2] ** p) - r
+
     try:
         p = brentq(f, 0.05, 8.0)
     except ValueError:
         return None
-    C = d2 / (h[1]**p - h[2]**p)
-    return float(q[2] - C * h[2]**p), float(p)
+    C = d2 / (h[1] ** p - h[2] ** p)
+    return float(q[2] - C * h[2] ** p), float(p)
 
 
 # ----------------------------------------------------------------------------- MPI
@@ -520,14 +773,34 @@ def mpi_problem(work, log, n=20, cut="warp", pedestal="12x4x4"):
         return [], []
     U1, U2 = np.asarray(r1["U"]), np.asarray(r2["U"])
     diff = float(np.max(np.abs(U1 - U2)) / np.max(np.abs(U1)))
-    log(f"mpi strip-{cut} {n}x1: max |U_2ranks - U_1rank| / max|U| = {diff:.2e}; its {r1['newton_iterations']} "
-        f"vs {r2['newton_iterations']}; {r1['wall_time_s']:.1f}s vs {r2['wall_time_s']:.1f}s")
-    rec = record(f"strip-{cut} {n}x1, 2 MPI ranks vs 1", "fenicsx 1 rank", "fenicsx 2 ranks",
-                 "max nodal displacement difference / max displacement", diff, 0.0, MPI_TOL,
-                 r2["wall_time_s"], relative=False)
-    table = [dict(problem=f"strip-{cut} mpi", code="fenicsx", mesh=f"{n}x1", ranks=k, tip_x=t[0], tip_z=t[2],
-                  iterations=r["newton_iterations"], wall_time_s=r["wall_time_s"])
-             for k, r, t in ((1, r1, t1), (2, r2, t2))]
+    log(
+        f"mpi strip-{cut} {n}x1: max |U_2ranks - U_1rank| / max|U| = {diff:.2e}; its {r1['newton_iterations']} "
+        f"vs {r2['newton_iterations']}; {r1['wall_time_s']:.1f}s vs {r2['wall_time_s']:.1f}s"
+    )
+    rec = record(
+        f"strip-{cut} {n}x1, 2 MPI ranks vs 1",
+        "fenicsx 1 rank",
+        "fenicsx 2 ranks",
+        "max nodal displacement difference / max displacement",
+        diff,
+        0.0,
+        MPI_TOL,
+        r2["wall_time_s"],
+        relative=False,
+    )
+    table = [
+        dict(
+            problem=f"strip-{cut} mpi",
+            code="fenicsx",
+            mesh=f"{n}x1",
+            ranks=k,
+            tip_x=t[0],
+            tip_z=t[2],
+            iterations=r["newton_iterations"],
+            wall_time_s=r["wall_time_s"],
+        )
+        for k, r, t in ((1, r1, t1), (2, r2, t2))
+    ]
     recs = [rec]
     if pedestal:
         recs += mpi_pedestal(work, log, pedestal, table)
@@ -543,65 +816,105 @@ def mpi_pedestal(work, log, dens, table):
     from solidshell.meshing import build_mesh
 
     mesh = build_mesh("square_on_square", dens, sheet=20.0, pedestal=10.0)
-    job = make_job(f"square-pedestal-{dens}", mesh, Fabric.wool(), steps=PEDESTAL_STEPS,
-                   snes={"max_it": 30}, prox=PEDESTAL_PROX)
+    job = make_job(
+        f"square-pedestal-{dens}", mesh, Fabric.wool(), steps=PEDESTAL_STEPS, snes={"max_it": 30}, prox=PEDESTAL_PROX
+    )
     res = {k: run_model(job, work, ranks=k, timeout=5400) for k in (1, 2)}
     if not all(r.get("converged") and "U" in r for r in res.values()):
         log(f"mpi square-pedestal {dens}: FAILED ({res[1].get('status')} / {res[2].get('status')})")
         return []
-    dc = {k: drape_summary(mesh, np.asarray(r["U"]), pedestal_area=100.0)["drape_coefficient"]
-          for k, r in res.items()}
+    dc = {k: drape_summary(mesh, np.asarray(r["U"]), pedestal_area=100.0)["drape_coefficient"] for k, r in res.items()}
     diff = float(np.max(np.abs(np.asarray(res[1]["U"]) - np.asarray(res[2]["U"]))))
-    log(f"mpi square-pedestal {dens}: DC {dc[1]:.6f} (1 rank) vs {dc[2]:.6f} (2 ranks); max |dU| {diff:.2e} cm; "
-        f"its {res[1]['newton_iterations']} vs {res[2]['newton_iterations']}")
+    log(
+        f"mpi square-pedestal {dens}: DC {dc[1]:.6f} (1 rank) vs {dc[2]:.6f} (2 ranks); max |dU| {diff:.2e} cm; "
+        f"its {res[1]['newton_iterations']} vs {res[2]['newton_iterations']}"
+    )
     for k in (1, 2):
-        table.append(dict(problem="square-pedestal mpi", code="fenicsx", mesh=dens, ranks=k,
-                          drape_coefficient=dc[k], fold_count=drape_summary(mesh, np.asarray(res[k]["U"]),
-                                                                            pedestal_area=100.0)["fold_count"],
-                          converged=True, stable=res[k].get("stable"), steps=res[k]["steps"],
-                          iterations=res[k]["newton_iterations"], wall_time_s=res[k]["wall_time_s"],
-                          n_dofs=res[k]["n_dofs"]))
-    return [record(f"square-pedestal {dens} DC, 2 MPI ranks vs 1", "fenicsx 1 rank", "fenicsx 2 ranks",
-                   "drape coefficient", dc[2], dc[1], 1e-6, res[2]["wall_time_s"], max_abs_dU_cm=diff)]
+        table.append(
+            dict(
+                problem="square-pedestal mpi",
+                code="fenicsx",
+                mesh=dens,
+                ranks=k,
+                drape_coefficient=dc[k],
+                fold_count=drape_summary(mesh, np.asarray(res[k]["U"]), pedestal_area=100.0)["fold_count"],
+                converged=True,
+                stable=res[k].get("stable"),
+                steps=res[k]["steps"],
+                iterations=res[k]["newton_iterations"],
+                wall_time_s=res[k]["wall_time_s"],
+                n_dofs=res[k]["n_dofs"],
+            )
+        )
+    return [
+        record(
+            f"square-pedestal {dens} DC, 2 MPI ranks vs 1",
+            "fenicsx 1 rank",
+            "fenicsx 2 ranks",
+            "drape coefficient",
+            dc[2],
+            dc[1],
+            1e-6,
+            res[2]["wall_time_s"],
+            max_abs_dU_cm=diff,
+        )
+    ]
 
 
 # ----------------------------------------------------------------------------- report
 def write_report(out_dir: Path, records, table, meta):
     out_dir.mkdir(parents=True, exist_ok=True)
-    (out_dir / "fenicsx_crosscheck.json").write_text(json.dumps(dict(meta=meta, records=records, runs=table),
-                                                                indent=1, default=float))
-    lines = ["# Cross-check: solidshell vs an independent DOLFINx Naghdi shell (issue 14)", "",
-             f"DOLFINx {meta.get('dolfinx')}; generated by `python -m verification.fenicsx.crosscheck`. "
-             f"Load average at start {meta.get('load_start')}, at end {meta.get('load_end')} (2 cores, shared); "
-             f"a wall time marked (reused) is that of the earlier run that computed the result (--reuse).", "",
-             "## Comparisons", "",
-             "| name | source | reference | quantity | value | reference value | error | tolerance | passed |",
-             "|---|---|---|---|---|---|---|---|---|"]
+    (out_dir / "fenicsx_crosscheck.json").write_text(
+        json.dumps(dict(meta=meta, records=records, runs=table), indent=1, default=float)
+    )
+    lines = [
+        "# Cross-check: solidshell vs an independent DOLFINx Naghdi shell (issue 14)",
+        "",
+        f"DOLFINx {meta.get('dolfinx')}; generated by `python -m verification.fenicsx.crosscheck`. "
+        f"Load average at start {meta.get('load_start')}, at end {meta.get('load_end')} (2 cores, shared); "
+        f"a wall time marked (reused) is that of the earlier run that computed the result (--reuse).",
+        "",
+        "## Comparisons",
+        "",
+        "| name | source | reference | quantity | value | reference value | error | tolerance | passed |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
     for r in records:
         verdict = "skipped" if r["passed"] is None else "yes" if r["passed"] else "NO"
-        cells = [("-" if r[k] is None else format(r[k], f)) for k, f in
-                 (("value", ".6g"), ("reference_value", ".6g"), ("error", ".2e"), ("tolerance", ".3g"))]
-        lines.append(f"| {r['name']} | {r['source']} | {r['reference']} | {r['quantity']} | {' | '.join(cells)} | "
-                     f"{verdict} |")
+        cells = [
+            ("-" if r[k] is None else format(r[k], f))
+            for k, f in (("value", ".6g"), ("reference_value", ".6g"), ("error", ".2e"), ("tolerance", ".3g"))
+        ]
+        lines.append(
+            f"| {r['name']} | {r['source']} | {r['reference']} | {r['quantity']} | {' | '.join(cells)} | {verdict} |"
+        )
     notes = [r for r in records if r.get("why")]
     if notes:
         lines += ["", "Why the tolerances and skips of the rows that state one:", ""]
         lines += [f"* {r['name']}: {r['why']}" for r in notes]
-    lines += ["", "## Runs", "", "| problem | code | mesh | result | converged | stable | steps | Newton its | "
-              "solver wall [s] | dofs |", "|---|---|---|---|---|---|---|---|---|---|"]
+    lines += [
+        "",
+        "## Runs",
+        "",
+        "| problem | code | mesh | result | converged | stable | steps | Newton its | solver wall [s] | dofs |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+    ]
     for t in table:
         if "drape_coefficient" in t:
             res = f"DC {t['drape_coefficient']:.4f}, {t['fold_count']} folds"
             if "boundary_distance_cm" in t:
                 res += f", boundary distance {t['boundary_distance_cm']:.3f} cm"
             if "moved_from_start_cm" in t:
-                res += (f"; moved max\\|ΔU\\| {t['moved_from_start_cm']:.3f} cm from the other code's state, "
-                        f"ends {t['distance_to_own_state_cm']:.2e} cm from its own")
+                res += (
+                    f"; moved max\\|ΔU\\| {t['moved_from_start_cm']:.3f} cm from the other code's state, "
+                    f"ends {t['distance_to_own_state_cm']:.2e} cm from its own"
+                )
             if "ranks" in t:
                 res += f", {t['ranks']} rank(s)"
             if "sequence" in t:
-                res += "; sequenced " + " -> ".join(f"{q['mesh']} ({q['iterations']} its, {q['wall_time_s']:.0f} s)"
-                                                    for q in t["sequence"])
+                res += "; sequenced " + " -> ".join(
+                    f"{q['mesh']} ({q['iterations']} its, {q['wall_time_s']:.0f} s)" for q in t["sequence"]
+                )
         elif "tip_z" in t:
             res = f"tip ({t['tip_x']:.5f}, {t['tip_z']:.5f})"
             if "tip_error_vs_elastica" in t:
@@ -618,9 +931,11 @@ def write_report(out_dir: Path, records, table, meta):
             wts += " (reused)"
         if wt is not None and t.get("load_average"):
             wts += " (load {:.1f}-{:.1f})".format(*t["load_average"])
-        lines.append(f"| {t['problem']} | {t['code']} | {t['mesh']} | {res} | {t.get('converged', '')} | "
-                     f"{t.get('stable', '')} | {t.get('steps', '')} | {t.get('iterations', '')} | "
-                     f"{wts} | {t.get('n_dofs', '')} |")
+        lines.append(
+            f"| {t['problem']} | {t['code']} | {t['mesh']} | {res} | {t.get('converged', '')} | "
+            f"{t.get('stable', '')} | {t.get('steps', '')} | {t.get('iterations', '')} | "
+            f"{wts} | {t.get('n_dofs', '')} |"
+        )
     (out_dir / "fenicsx_crosscheck.md").write_text("\n".join(lines) + "\n")
 
 
@@ -636,8 +951,15 @@ def _log(msg):
     print(msg, flush=True)
 
 
-def main(out_dir, problems=("strip", "shear", "pedestal", "mpi"), quick=False, log=_log, reuse=False,
-         pedestal_meshes=PEDESTAL_MESHES, restart_both=RESTART_MESHES):
+def main(
+    out_dir,
+    problems=("strip", "shear", "pedestal", "mpi"),
+    quick=False,
+    log=_log,
+    reuse=False,
+    pedestal_meshes=PEDESTAL_MESHES,
+    restart_both=RESTART_MESHES,
+):
     """Run the cross-check; returns the comparison records (raises DolfinxMissing without DOLFINx).
     ``restart_both``: pedestal meshes on which each code is also started from the other's state."""
     out = Path(out_dir)
@@ -656,8 +978,9 @@ def main(out_dir, problems=("strip", "shear", "pedestal", "mpi"), quick=False, l
         records += r
         table += t
     if "pedestal" in problems:
-        r, t = pedestal_problem(work, ["12x4x4"] if quick else list(pedestal_meshes), log,
-                                restart_both=tuple(restart_both))
+        r, t = pedestal_problem(
+            work, ["12x4x4"] if quick else list(pedestal_meshes), log, restart_both=tuple(restart_both)
+        )
         records += r
         table += t
     if "mpi" in problems:
@@ -672,30 +995,47 @@ def main(out_dir, problems=("strip", "shear", "pedestal", "mpi"), quick=False, l
 def cli(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", default=str(OUT / "fenicsx"))
-    ap.add_argument("--problems", nargs="+", default=["strip", "shear", "pedestal", "mpi"],
-                    choices=["strip", "shear", "pedestal", "mpi"])
+    ap.add_argument(
+        "--problems",
+        nargs="+",
+        default=["strip", "shear", "pedestal", "mpi"],
+        choices=["strip", "shear", "pedestal", "mpi"],
+    )
     ap.add_argument("--quick", action="store_true", help="coarser meshes only (about a tenth of the time)")
-    ap.add_argument("--pedestal-meshes", nargs="+", default=list(PEDESTAL_MESHES),
-                    help="square-pedestal meshes (default %(default)s; docs/fenicsx.md has the DOLFINx run times)")
-    ap.add_argument("--reuse", action="store_true",
-                    help="reuse converged DOLFINx results of identical jobs in OUT/fenicsx_work")
-    ap.add_argument("--restart-both", nargs="*", default=list(RESTART_MESHES), metavar="MESH",
-                    help="start each code from the other's pedestal state (DC, folds, stability reached and "
-                         "max |dU|) on these meshes (default %(default)s; the option alone: none)")
+    ap.add_argument(
+        "--pedestal-meshes",
+        nargs="+",
+        default=list(PEDESTAL_MESHES),
+        help="square-pedestal meshes (default %(default)s; docs/fenicsx.md has the DOLFINx run times)",
+    )
+    ap.add_argument(
+        "--reuse", action="store_true", help="reuse converged DOLFINx results of identical jobs in OUT/fenicsx_work"
+    )
+    ap.add_argument(
+        "--restart-both",
+        nargs="*",
+        default=list(RESTART_MESHES),
+        metavar="MESH",
+        help="start each code from the other's pedestal state (DC, folds, stability reached and "
+        "max |dU|) on these meshes (default %(default)s; the option alone: none)",
+    )
     a = ap.parse_args(argv)
     rb = a.restart_both
     try:
-        recs = main(a.out, tuple(a.problems), a.quick, reuse=a.reuse, pedestal_meshes=a.pedestal_meshes,
-                    restart_both=rb)
+        recs = main(
+            a.out, tuple(a.problems), a.quick, reuse=a.reuse, pedestal_meshes=a.pedestal_meshes, restart_both=rb
+        )
     except DolfinxMissing as exc:
         print(str(exc), file=sys.stderr)
         return 3
     bad = [r["name"] for r in recs if r["passed"] is False]
     skip = [r["name"] for r in recs if r["passed"] is None]
     done = len(recs) - len(skip)
-    print(f"{done - len(bad)}/{done} comparisons within tolerance"
-          + (f", {len(skip)} skipped (reason in the report)" if skip else "")
-          + f"; report in {a.out}/fenicsx_crosscheck.md")
+    print(
+        f"{done - len(bad)}/{done} comparisons within tolerance"
+        + (f", {len(skip)} skipped (reason in the report)" if skip else "")
+        + f"; report in {a.out}/fenicsx_crosscheck.md"
+    )
     return 0 if not bad else 1
 
 

@@ -30,42 +30,60 @@ def check_dolfinx(python: str = SYSTEM_PYTHON) -> str:
     if not (os.path.isfile(python) and os.access(python, os.X_OK)):
         raise DolfinxMissing(f"DOLFINx not available: no system python at {python}")
     try:
-        p = subprocess.run([python, "-c", "import dolfinx, sys; sys.stdout.write(dolfinx.__version__)"],
-                           capture_output=True, text=True, timeout=120)
+        p = subprocess.run(
+            [python, "-c", "import dolfinx, sys; sys.stdout.write(dolfinx.__version__)"],
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
     except (OSError, subprocess.TimeoutExpired) as exc:
         raise DolfinxMissing(f"DOLFINx not available: {python} could not run ({exc.__class__.__name__})") from None
     if p.returncode != 0:
-        raise DolfinxMissing(f"DOLFINx not available under {python} (import dolfinx failed); "
-                             f"install it with verification/fenicsx/install_and_run.sh")
+        raise DolfinxMissing(
+            f"DOLFINx not available under {python} (import dolfinx failed); "
+            f"install it with verification/fenicsx/install_and_run.sh"
+        )
     return p.stdout.strip()
 
 
 def mesh_dict(mesh) -> dict:
     """A solidshell ShellMesh as plain lists (nodes, quads, tris, node sets)."""
-    return {"nodes": np.asarray(mesh.nodes, dtype=float).tolist(),
-            "quads": np.asarray(mesh.quads, dtype=int).tolist() if mesh.quads is not None else [],
-            "tris": np.asarray(mesh.tris, dtype=int).tolist() if mesh.tris is not None and len(mesh.tris) else [],
-            "node_sets": {k: np.asarray(mesh.node_set(k), dtype=int).tolist() for k in mesh.node_sets}}
+    return {
+        "nodes": np.asarray(mesh.nodes, dtype=float).tolist(),
+        "quads": np.asarray(mesh.quads, dtype=int).tolist() if mesh.quads is not None else [],
+        "tris": np.asarray(mesh.tris, dtype=int).tolist() if mesh.tris is not None and len(mesh.tris) else [],
+        "node_sets": {k: np.asarray(mesh.node_set(k), dtype=int).tolist() for k in mesh.node_sets},
+    }
 
 
 def section_dict(mat) -> dict:
     """The rigidities of a solidshell section (one source of truth: solidshell.material)."""
-    return {"C_m": np.asarray(mat.C_m).tolist(), "C_b": np.asarray(mat.C_b).tolist(),
-            "C_t": np.asarray(mat.C_t).tolist(), "warp_angle_rad": float(mat.warp_angle_rad),
-            "weight_per_area": float(mat.weight_per_area)}
+    return {
+        "C_m": np.asarray(mat.C_m).tolist(),
+        "C_b": np.asarray(mat.C_b).tolist(),
+        "C_t": np.asarray(mat.C_t).tolist(),
+        "warp_angle_rad": float(mat.warp_angle_rad),
+        "weight_per_area": float(mat.weight_per_area),
+    }
 
 
 def make_job(name, mesh, mat, clamped="clamped", gravity=True, line_load=None, **extra) -> dict:
-    job = {"name": name, "mesh": mesh_dict(mesh), "section": section_dict(mat), "clamped": clamped,
-           "gravity": bool(gravity)}
+    job = {
+        "name": name,
+        "mesh": mesh_dict(mesh),
+        "section": section_dict(mat),
+        "clamped": clamped,
+        "gravity": bool(gravity),
+    }
     if line_load is not None:
         job["line_load"] = line_load
     job.update(extra)
     return job
 
 
-def run_model(job: dict, work_dir, ranks: int = 1, timeout: float = 3600.0,
-              python: str = SYSTEM_PYTHON, reuse: bool = False) -> dict:
+def run_model(
+    job: dict, work_dir, ranks: int = 1, timeout: float = 3600.0, python: str = SYSTEM_PYTHON, reuse: bool = False
+) -> dict:
     """Write the job, run model.py (under mpirun for ranks > 1), read the result.
 
     ``reuse``: return the stored converged result of an identical job in ``work_dir`` instead.

@@ -61,12 +61,13 @@ def _fail(msg: str, code: int = 2):
 
 
 try:
+    import dolfinx
+    import dolfinx.fem.petsc as fpetsc
     import ufl
+    from dolfinx import fem
+    from dolfinx import mesh as dmesh
     from mpi4py import MPI
     from petsc4py import PETSc
-    import dolfinx
-    from dolfinx import fem, mesh as dmesh
-    import dolfinx.fem.petsc as fpetsc
 except ImportError as exc:  # the one-line message crosscheck.py also gives
     _fail(f"DOLFINx is not available under {sys.executable} ({exc.name} missing)", 3)
 
@@ -255,9 +256,9 @@ class Shell:
         def marker(x):
             out = np.zeros(x.shape[1], dtype=bool)
             for i in range(0, x.shape[1], 2048):
-                xi = x[:2, i:i + 2048].T
+                xi = x[:2, i : i + 2048].T
                 dist = np.min(np.linalg.norm(xi[:, None, :] - X[None, :, :], axis=2), axis=1)
-                out[i:i + 2048] = dist < tol
+                out[i : i + 2048] = dist < tol
             return out
 
         fdim = self.msh.topology.dim - 1
@@ -329,8 +330,12 @@ def make_snes(shell, opts):
         popts["shell_snes_linesearch_type"] = opts.get("linesearch", "basic")
     # rtol on the residual of the load increment; stol stops a Newton that has reached round-off
     # (its correction below 1e-10 of the state), where the residual can no longer fall by rtol
-    snes.setTolerances(rtol=opts.get("rtol", 1e-8), atol=opts.get("atol", 1e-14),
-                       stol=opts.get("stol", 1e-10), max_it=opts.get("max_it", 25))
+    snes.setTolerances(
+        rtol=opts.get("rtol", 1e-8),
+        atol=opts.get("atol", 1e-14),
+        stol=opts.get("stol", 1e-10),
+        max_it=opts.get("max_it", 25),
+    )
     ksp = snes.getKSP()
     ksp.setType("preonly")
     pc = ksp.getPC()
@@ -377,7 +382,7 @@ def _loadavg():
 
 def solve(job):
     t_start = time.perf_counter()
-    load_start = _loadavg()      # wall times mean little without the machine's load (shared cores)
+    load_start = _loadavg()  # wall times mean little without the machine's load (shared cores)
     shell = Shell(job)
     t_setup = time.perf_counter() - t_start
     _say(f"{job.get('name', '?')}: {shell.n_dofs} dofs, forms compiled in {t_setup:.1f} s")
@@ -458,17 +463,33 @@ def solve(job):
     x_prev.copy(shell.w.vector)
     shell.w.x.scatter_forward()
     converged = status == "converged"
-    result = dict(converged=converged, status=status, load_factor=lam, steps=len(history),
-                  failed_steps=n_fail, newton_iterations=n_newton, linear_solves=n_lin,
-                  wall_time_s=wall, setup_time_s=t_setup, n_dofs=int(shell.n_dofs),
-                  n_cells=int(shell.msh.topology.index_map(2).size_global), ranks=COMM.size,
-                  history=history, energy=shell.energy(), load_average=[load_start, _loadavg()],
-                  dolfinx_version=dolfinx.__version__)
+    result = dict(
+        converged=converged,
+        status=status,
+        load_factor=lam,
+        steps=len(history),
+        failed_steps=n_fail,
+        newton_iterations=n_newton,
+        linear_solves=n_lin,
+        wall_time_s=wall,
+        setup_time_s=t_setup,
+        n_dofs=int(shell.n_dofs),
+        n_cells=int(shell.msh.topology.index_map(2).size_global),
+        ranks=COMM.size,
+        history=history,
+        energy=shell.energy(),
+        load_average=[load_start, _loadavg()],
+        dolfinx_version=dolfinx.__version__,
+    )
     if job.get("stability", True):
         t1 = time.perf_counter()
         neg, zero, pos = inertia(shell, A)
-        result.update(negative_eigenvalues=neg, zero_eigenvalues=zero, stable=(neg == 0 and zero == 0),
-                      stability_time_s=time.perf_counter() - t1)
+        result.update(
+            negative_eigenvalues=neg,
+            zero_eigenvalues=zero,
+            stable=(neg == 0 and zero == 0),
+            stability_time_s=time.perf_counter() - t1,
+        )
     U, D = shell.nodal_state()
     if COMM.rank == 0:
         result["U"] = U.tolist()
@@ -485,9 +506,12 @@ def main(argv):
     if COMM.rank == 0:
         with open(argv[2], "w") as fh:
             json.dump(res, fh)
-        print(f"fenicsx model: {job.get('name', '?')}: converged={res['converged']} steps={res['steps']} "
-              f"newton={res['newton_iterations']} wall={res['wall_time_s']:.2f}s dofs={res['n_dofs']} "
-              f"ranks={res['ranks']}" + (f" negative_eigs={res.get('negative_eigenvalues')}"), flush=True)
+        print(
+            f"fenicsx model: {job.get('name', '?')}: converged={res['converged']} steps={res['steps']} "
+            f"newton={res['newton_iterations']} wall={res['wall_time_s']:.2f}s dofs={res['n_dofs']} "
+            f"ranks={res['ranks']}" + (f" negative_eigs={res.get('negative_eigenvalues')}"),
+            flush=True,
+        )
     return 0 if res["converged"] else 1
 
 

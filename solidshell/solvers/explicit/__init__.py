@@ -22,13 +22,20 @@ from ..blas import single_threaded_blas
 from . import checkpoint
 from .integrator import Integrator, scaled_mass
 from .kernels import central_step as _central_step  # noqa: F401  (the hot loop's compiled step)
-from .settings import RELAX_KEYS as _RELAX_KEYS
-from .settings import RUN_KEYS as _RUN_KEYS
 from .settings import ExplicitSettings, RelaxSettings, parse_settings
 from .state import State
 
-__all__ = ["run", "run_relax", "scaled_mass", "SMALL_MESH_ELEMENTS", "Integrator", "State", "checkpoint",
-           "ExplicitSettings", "RelaxSettings"]
+__all__ = [
+    "run",
+    "run_relax",
+    "scaled_mass",
+    "SMALL_MESH_ELEMENTS",
+    "Integrator",
+    "State",
+    "checkpoint",
+    "ExplicitSettings",
+    "RelaxSettings",
+]
 
 SMALL_MESH_ELEMENTS = 1000
 """Below this many elements the loop runs the force kernel on one thread by default: a step then
@@ -46,10 +53,13 @@ def threads_for(problem: SolverProblem, threads):
     import numba
 
     model = problem.model
-    n_elem = model.mesh.n_elements if isinstance(model, Model) else 0   # a model of its own: small
+    n_elem = model.mesh.n_elements if isinstance(model, Model) else 0  # a model of its own: small
     old = numba.get_num_threads()
-    new = (1 if n_elem < SMALL_MESH_ELEMENTS else old) if threads is None else \
-        min(int(threads), numba.config.NUMBA_NUM_THREADS)
+    new = (
+        (1 if n_elem < SMALL_MESH_ELEMENTS else old)
+        if threads is None
+        else min(int(threads), numba.config.NUMBA_NUM_THREADS)
+    )
     numba.set_num_threads(new)
     try:
         yield new

@@ -39,7 +39,7 @@ def moved_beyond(D, Dsel, limit2):
         a = D[6 * i] - Dsel[i, 0]
         b = D[6 * i + 1] - Dsel[i, 1]
         c = D[6 * i + 2] - Dsel[i, 2]
-        if not a * a + b * b + c * c <= limit2:   # NaN moves too
+        if not a * a + b * b + c * c <= limit2:  # NaN moves too
             return True
     return False
 
@@ -96,7 +96,7 @@ class Candidates:
         near = np.zeros(self.N, dtype=bool)
         for b in self.bodies:
             gap, _ = b.penetration(x)
-            near |= ~(gap > self.margin)     # NaN gaps stay candidates
+            near |= ~(gap > self.margin)  # NaN gaps stay candidates
         self.nodes = np.flatnonzero(near)
         self.Dsel[:] = D6[:, :3]
         self.selections += 1

@@ -31,15 +31,15 @@ def save(path, state: State, extra: dict | None = None) -> None:
     arrays = {k: np.asarray(getattr(state, k)) for k in FIELDS}
     arrays["frame_t"] = np.asarray(state.frame_t, dtype=float)
     arrays["frame_k"] = np.asarray(state.frame_k, dtype=np.int64)
-    for i, u in enumerate(state.frame_U):   # one array each: frames of a remeshed run differ in size
+    for i, u in enumerate(state.frame_U):  # one array each: frames of a remeshed run differ in size
         arrays[f"frame_U{i}"] = np.asarray(u)
     for k, v in state.fingerprint.items():
         arrays[_FP + k] = np.asarray(v)
     for k, v in (extra or {}).items():
         arrays[_EXTRA + k] = np.asarray(v)
     arrays["version"] = np.asarray(VERSION)
-    with atomic_path(path) as tmp:      # a run killed mid-write leaves a temporary the run
-        with open(tmp, "wb") as fh:      # folder knows as this file's (rundir), not a stray file
+    with atomic_path(path) as tmp:  # a run killed mid-write leaves a temporary the run
+        with open(tmp, "wb") as fh:  # folder knows as this file's (rundir), not a stray file
             np.savez(fh, **arrays)
 
 
@@ -47,12 +47,13 @@ def load(path) -> tuple[State, dict]:
     """(state, extra) read from ``path``; InputError naming the file and the reason if unreadable."""
     try:
         with np.load(path, allow_pickle=False) as z:
-            data = {k: z[k] for k in z.files}   # reads every member now: a truncated file fails here
+            data = {k: z[k] for k in z.files}  # reads every member now: a truncated file fails here
     except FileNotFoundError:
         raise InputError(f"restart file {path} does not exist") from None
     except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile) as exc:
-        raise InputError(f"cannot read restart file {path}: truncated or not a checkpoint "
-                         f"({type(exc).__name__})") from None
+        raise InputError(
+            f"cannot read restart file {path}: truncated or not a checkpoint ({type(exc).__name__})"
+        ) from None
     version = int(data["version"]) if "version" in data else None
     if version != VERSION:
         raise InputError(f"restart file {path} has checkpoint version {version}, this solver writes {VERSION}")
@@ -65,8 +66,8 @@ def load(path) -> tuple[State, dict]:
     kw["frame_k"] = list(data["frame_k"])
     kw["frame_U"] = [data[f"frame_U{i}"] for i in range(n_frames)]
     st = State(**kw).typed()
-    st.fingerprint = {k[len(_FP):]: str(v) for k, v in data.items() if k.startswith(_FP)}
-    extra = {k[len(_EXTRA):]: v for k, v in data.items() if k.startswith(_EXTRA)}
+    st.fingerprint = {k[len(_FP) :]: str(v) for k, v in data.items() if k.startswith(_FP)}
+    extra = {k[len(_EXTRA) :]: v for k, v in data.items() if k.startswith(_EXTRA)}
     return st, extra
 
 
@@ -119,7 +120,7 @@ def fingerprint(problem: SolverProblem, settings: dict, mass: np.ndarray) -> dic
             membrane = np.asarray(membrane, dtype=str)
         nodes, elements = mesh.nodes, [mesh.quads, mesh.tris, mesh.directors]
         section = [model.material, model.quasi, model.mu, membrane]
-    else:   # a model of its own (interfaces.ExplicitModel): its class, and Eq. (24)'s flags if it has them
+    else:  # a model of its own (interfaces.ExplicitModel): its class, and Eq. (24)'s flags if it has them
         q = isinstance(model, QuasiStrainModel)
         nodes, elements = model.n_nodes, [None, None, None]
         section = [type(model).__name__, model.quasi if q else None, model.mu if q else None, None]
@@ -143,5 +144,7 @@ def check_fingerprint(saved: dict, now: dict, path) -> None:
     """InputError naming every item whose digest differs between a checkpoint and this run."""
     diff = [k for k in sorted(set(saved) | set(now)) if saved.get(k) != now.get(k)]
     if diff:
-        raise InputError(f"restart file {path} does not match this run: {', '.join(diff)} differ(s) "
-                         f"(a checkpoint only continues the run that wrote it)")
+        raise InputError(
+            f"restart file {path} does not match this run: {', '.join(diff)} differ(s) "
+            f"(a checkpoint only continues the run that wrote it)"
+        )

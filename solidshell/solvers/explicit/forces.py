@@ -32,7 +32,7 @@ class Forces:
         self.k_pen, self.k_t, self.fric_of = k_pen, k_t, list(fric_of)
         self.n_fric = sum(1 for mu in self.fric_of if mu > 0.0)
         self.quasi = isinstance(model, QuasiStrainModel) and bool(model.quasi)
-        self.q_mu = float(model.mu) if self.quasi else None   # Eq. (24)'s threshold
+        self.q_mu = float(model.mu) if self.quasi else None  # Eq. (24)'s threshold
         self.fused = fused
         self._all = np.arange(self.N)
         # every body one of the kernels' (contact_kernels): one compiled pass over the nodes
@@ -45,7 +45,7 @@ class Forces:
             self.mus = np.array(self.fric_of, dtype=float)
             self.k_pen = np.ascontiguousarray(k_pen, dtype=float)
             self._kt = np.ascontiguousarray(k_t, dtype=float) if k_t is not None else np.zeros(0)
-            self._ft = np.zeros((self.n_fric, self.N, 3))     # the friction forces of one pass
+            self._ft = np.zeros((self.n_fric, self.N, 3))  # the friction forces of one pass
             self._no_anchor = np.zeros((0, self.N, 3))
 
     def internal(self, D, want_energy):
@@ -152,12 +152,13 @@ class Forces:
                 FT = np.zeros((self.n_fric, idx.size, 3))
             else:
                 new.fill(np.nan)
-                FT = self._ft[:, :idx.size]
+                FT = self._ft[:, : idx.size]
             anc = anchors
         else:
             FT, anc, new = self._ft[:, :0], self._no_anchor, self._no_anchor
-        ec, et, nact, nslip, pen = ck.contact_pass(self.codes, self.params, self.offsets, self.mus, self.X0, D,
-                                                   idx, self.k_pen, self._kt, anc, new, C, FT)
+        ec, et, nact, nslip, pen = ck.contact_pass(
+            self.codes, self.params, self.offsets, self.mus, self.X0, D, idx, self.k_pen, self._kt, anc, new, C, FT
+        )
         if friction:
             return C, ec, et, nact, nslip, pen, FT, idx, new
         return C, ec, et, nact, nslip, pen
@@ -193,7 +194,7 @@ class Forces:
                 Cp = self.contact(Dp_)[0]
                 Cm = self.contact(Dm_)[0]
             cols.append(-(np.asarray(Cp) - np.asarray(Cm)).reshape(N, 6)[:, :3] / (2 * eps))
-        B = np.stack(cols, axis=2)                    # (N, 3 rows i, 3 cols j): d(-C_i)/dx_j
+        B = np.stack(cols, axis=2)  # (N, 3 rows i, 3 cols j): d(-C_i)/dx_j
         nodes = np.flatnonzero(np.any(B != 0.0, axis=(1, 2)))
         ii, jj = np.meshgrid(np.arange(3), np.arange(3), indexing="ij")
         rows = (6 * nodes[:, None, None] + ii[None]).ravel()

@@ -63,7 +63,7 @@ def lanes_scatter(X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we, bounds
     L1."""
     for ch in prange(bounds.size - 1):
         for b in range(bounds[ch], bounds[ch + 1]):
-            s = b if keep else np.int64(ch)     # (the parallel index is unsigned)
+            s = b if keep else np.int64(ch)  # (the parallel index is unsigned)
             lanes._block(b, s, X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we)
             _scatter_block(b, s, dest, fe, F, 4)
 
@@ -73,7 +73,7 @@ def lanes_ans_scatter(X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we, bo
     """lanes_scatter for assumed-membrane quads (lanes_ans._block, the same layout and contract)."""
     for ch in prange(bounds.size - 1):
         for b in range(bounds[ch], bounds[ch + 1]):
-            s = b if keep else np.int64(ch)     # (the parallel index is unsigned)
+            s = b if keep else np.int64(ch)  # (the parallel index is unsigned)
             lanes_ans._block(b, s, X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we)
             _scatter_block(b, s, dest, fe, F, 4)
 
@@ -83,7 +83,7 @@ def lanes_tri_scatter(X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we, bo
     """lanes_scatter for triangles (lanes_tri._block: the same layout, 3 nodes, fe rows of 18 LANES)."""
     for ch in prange(bounds.size - 1):
         for b in range(bounds[ch], bounds[ch + 1]):
-            s = b if keep else np.int64(ch)     # (the parallel index is unsigned)
+            s = b if keep else np.int64(ch)  # (the parallel index is unsigned)
             lanes_tri._block(b, s, X, Xn, U, conn, Cmb, Cs, Cz, rz, quasi, mu, xs, fe, we)
             _scatter_block(b, s, dest, fe, F, 3)
 
@@ -104,14 +104,14 @@ def chunk_plan(conn, M, N, chunks=CHUNKS):
     B, _, L = conn.shape
     bounds = np.round(np.linspace(0, B, chunks + 1)).astype(np.int64)
     chunk_of_block = np.searchsorted(bounds, np.arange(B), side="right") - 1
-    e = np.arange(B * L).reshape(B, L)                       # element number of (b, k)
+    e = np.arange(B * L).reshape(B, L)  # element number of (b, k)
     real = e < M
     ch = np.broadcast_to(chunk_of_block[:, None, None], conn.shape)
     mask = np.broadcast_to(real[:, None, :], conn.shape)
     owner = np.full(N, chunks, dtype=np.int64)
     np.minimum.at(owner, conn[mask], ch[mask])
     foreign = mask & (owner[conn] != ch)
-    pairs = np.unique(ch[foreign] * N + conn[foreign])     # (chunk, node) in order
+    pairs = np.unique(ch[foreign] * N + conn[foreign])  # (chunk, node) in order
     slot_node = pairs % N
     dest = np.where(mask, 6 * conn, -1).astype(np.int64)
     dest[foreign] = 6 * N + 6 * np.searchsorted(pairs, ch[foreign] * N + conn[foreign])
@@ -189,14 +189,14 @@ class FusedForces:
         self.X = np.ascontiguousarray(model.mesh.nodes, dtype=float)
         self.Xn = np.ascontiguousarray(model.mesh.directors, dtype=float)
         self.quasi, self.mu = bool(model.quasi), float(model.mu)
-        self.parts = []          # (kind, block, packed lanes or None, offset, size) in block order
+        self.parts = []  # (kind, block, packed lanes or None, offset, size) in block order
         base = 0
         for b in model.blocks:
             M, nn = b.conn.shape
             kernel = None
             if not use_lanes:
                 pass
-            elif b.module is quad4 and lanes_ans.covers(b.c):     # the assumed-membrane quad
+            elif b.module is quad4 and lanes_ans.covers(b.c):  # the assumed-membrane quad
                 mod, kernel = lanes_ans, lanes_ans_scatter
             elif _uses_lanes(b):
                 mod, kernel = lanes, lanes_scatter
@@ -217,28 +217,32 @@ class FusedForces:
         for kind, b, pk, o, size in self.parts:
             if kind == "lanes":
                 pk["bounds"], dest, slot_node = chunk_plan(pk["conn"], pk["M"], N)
-                pk["dest"] = np.where(dest >= 6 * N, dest + 6 * slots, dest)   # this part's slots after earlier parts'
+                pk["dest"] = np.where(dest >= 6 * N, dest + 6 * slots, dest)  # this part's slots after earlier parts'
                 pk["slot_node"] = slot_node
                 pk["slot0"] = 6 * N + 6 * slots
                 slots += slot_node.size
         self.views = []
         for kind, b, pk, o, size in self.parts:
             if kind == "lanes":
-                self.views.append((self.fe[o:o + size].reshape(pk["B"], 6 * pk["nn"] * lanes.LANES),
-                                   np.zeros((pk["B"], lanes.LANES))))
+                self.views.append(
+                    (
+                        self.fe[o : o + size].reshape(pk["B"], 6 * pk["nn"] * lanes.LANES),
+                        np.zeros((pk["B"], lanes.LANES)),
+                    )
+                )
                 # the stepping pass's scratch and element forces: one block's per chunk, reused
                 # block after block while in L1 (one per block streamed ~1150 B per element
                 # through memory every step); internal() keeps every block's forces (views)
                 nch = pk["bounds"].size - 1
                 pk["xs"] = np.zeros((nch, 12 * pk["nn"] * lanes.LANES))
                 pk["fe"] = np.zeros((nch, 6 * pk["nn"] * lanes.LANES))
-                pk["xs_blocks"] = None     # internal()'s scratch, made at its first call
+                pk["xs_blocks"] = None  # internal()'s scratch, made at its first call
             else:
                 M, nn = b.conn.shape
-                self.views.append((self.fe[o:o + size].reshape(M, nn, 6), np.zeros(M)))
+                self.views.append((self.fe[o : o + size].reshape(M, nn, 6), np.zeros(M)))
         self.needs_current = any(kind == "core" for kind, *_ in self.parts)
-        self.F_all = np.zeros(6 * N + 6 * slots)    # the dofs, then the chunks' slots
-        self.F = self.F_all[:6 * N]
+        self.F_all = np.zeros(6 * N + 6 * slots)  # the dofs, then the chunks' slots
+        self.F = self.F_all[: 6 * N]
         self._zero = np.zeros(0)
 
     # ------------------------------------------------------------ element pass
@@ -256,8 +260,25 @@ class FusedForces:
                 if keep and pk["xs_blocks"] is None:
                     pk["xs_blocks"] = np.zeros((pk["B"], pk["xs"].shape[1]))
                 xs, fk = (pk["xs_blocks"], fe) if keep else (pk["xs"], pk["fe"])
-                pk["kernel"](self.X, self.Xn, D6, pk["conn"], pk["Cmb"], pk["Cs"], pk["Cz"], pk["r_z"],
-                             self.quasi, self.mu, xs, fk, we, pk["bounds"], pk["dest"], self.F_all, keep)
+                pk["kernel"](
+                    self.X,
+                    self.Xn,
+                    D6,
+                    pk["conn"],
+                    pk["Cmb"],
+                    pk["Cs"],
+                    pk["Cz"],
+                    pk["r_z"],
+                    self.quasi,
+                    self.mu,
+                    xs,
+                    fk,
+                    we,
+                    pk["bounds"],
+                    pk["dest"],
+                    self.F_all,
+                    keep,
+                )
             else:
                 core.energy_force(*b.args(xo, xn, Uc, self.quasi, self.mu), fe, we, nth)
 
@@ -265,7 +286,7 @@ class FusedForces:
         """Strain energy of the last element pass, summed as Model.energy_and_force sums it."""
         W = 0.0
         for (kind, b, pk, _, _), (_, we) in zip(self.parts, self.views):
-            W += (we.ravel()[:pk["M"]] if kind == "lanes" else we).sum()
+            W += (we.ravel()[: pk["M"]] if kind == "lanes" else we).sum()
         return float(W)
 
     # ------------------------------------------------------------ public
@@ -303,9 +324,25 @@ class FusedForces:
                 residual(self.F, dofs.P, Cv, has_C, R)
             else:
                 dt = co.dt
-                self.last_power = residual_power(self.F, dofs.P, Cv, has_C, R, D, Dp, dofs.invM, dofs.Mf,
-                                                 dofs.fixed_mask, 1.0 / dt, 0.5 * dt)
+                self.last_power = residual_power(
+                    self.F, dofs.P, Cv, has_C, R, D, Dp, dofs.invM, dofs.Mf, dofs.fixed_mask, 1.0 / dt, 0.5 * dt
+                )
             return 0.0, True, (self.energy() if want_energy else None)
-        vMv, finite = update(self.F, dofs.P, Cv, has_C, R, Dn1, D, Dp, co.cF, co.cD, co.cDp, dofs.fixed_mask,
-                             dofs.presc_full, dofs.Mf, 0.5 / co.dt)
+        vMv, finite = update(
+            self.F,
+            dofs.P,
+            Cv,
+            has_C,
+            R,
+            Dn1,
+            D,
+            Dp,
+            co.cF,
+            co.cD,
+            co.cDp,
+            dofs.fixed_mask,
+            dofs.presc_full,
+            dofs.Mf,
+            0.5 / co.dt,
+        )
         return vMv, finite, (self.energy() if want_energy else None)

@@ -29,13 +29,7 @@ from .candidates import Candidates, contact_power, default_margin
 from .forces import Forces
 from .fused import FusedForces
 from .kernels import Coefficients, Dofs, dot, norm
-from .settings import (
-    FIRE_ALPHA_START,
-    RESTART_NEUTRAL,
-    ExplicitSettings,
-    RelaxSettings,
-    parse_settings,
-)
+from .settings import FIRE_ALPHA_START, RESTART_NEUTRAL, ExplicitSettings, RelaxSettings, parse_settings
 from .state import State
 
 STATUSES = ("running", "done", "steady", "diverged", "nonfinite", "failed", "walltime", "interrupted")
@@ -60,17 +54,17 @@ class Integrator:
     (``relax`` says which); ``progress(fraction, text)`` is called within a second and then at least
     every 0.5 s while stepping."""
 
-    def __init__(self, problem: SolverProblem, settings, progress=no_progress, *, relax: bool = False,
-                 _start=True):
-        self.s = s = parse_settings(settings, relax) if not isinstance(settings, (ExplicitSettings, RelaxSettings)) \
-            else settings
+    def __init__(self, problem: SolverProblem, settings, progress=no_progress, *, relax: bool = False, _start=True):
+        self.s = s = (
+            parse_settings(settings, relax) if not isinstance(settings, (ExplicitSettings, RelaxSettings)) else settings
+        )
         self.relax = s.relax
         self.progress_cb = progress or no_progress
         self.wall0 = time.perf_counter()
         self.status, self.message, self.warnings, self.info_dt = "running", "", [], {}
         self.restarted_from, self.steps_done, self.t_loop = None, 0, 0.0
-        self.checkpoint_extra = None   # callable -> dict of arrays saved with each checkpoint
-        self.snaps = None              # the snapshot times kept (_snap_filter), None until _prepare
+        self.checkpoint_extra = None  # callable -> dict of arrays saved with each checkpoint
+        self.snaps = None  # the snapshot times kept (_snap_filter), None until _prepare
         self._setup(problem)
         if _start:
             self.progress_cb(0.0, "estimating the critical time step")
@@ -94,12 +88,13 @@ class Integrator:
         self.damper = damping.make(self.damping)
         self.damper_rewrites = bool(self.damper.rewrites_step)
         self.damper_power = bool(self.damper.wants_power)
-        self.step_power = None   # (P, v.M.v, R.M^-1.R) of this step when the fused pass formed them
+        self.step_power = None  # (P, v.M.v, R.M^-1.R) of this step when the fused pass formed them
         self.M = M = scaled_mass(self.model, s.mass_scaling, s.mass_scaling_mode)
         self.free_mask = ~problem.fixed
         if np.any(M[self.free_mask] <= 0.0):
-            raise InputError(f"{int(np.sum(M[self.free_mask] <= 0))} free dof(s) have zero mass: the explicit "
-                             f"scheme needs M > 0")
+            raise InputError(
+                f"{int(np.sum(M[self.free_mask] <= 0))} free dof(s) have zero mass: the explicit scheme needs M > 0"
+            )
         self.P = problem.loads.ravel().copy()
         self.fixed_idx = np.flatnonzero(problem.fixed.ravel())
         self.free_idx = np.flatnonzero(self.free_mask.ravel())
@@ -109,10 +104,11 @@ class Integrator:
         self.presc_full[self.fixed_idx] = self.presc
         self.bodies = list(problem.contact or [])
         self.fric_of = [float(b.friction) for b in self.bodies]
-        self.n_fric = sum(1 for mu in self.fric_of if mu > 0.0)   # 0: the frictionless path
+        self.n_fric = sum(1 for mu in self.fric_of if mu > 0.0)  # 0: the frictionless path
         # the step's contact only at the nodes near a body (candidates.py), into buffers of its own
-        self.cand = Candidates(self.bodies, mesh.nodes, default_margin(mesh)) if self.bodies and mesh is not None \
-            else None
+        self.cand = (
+            Candidates(self.bodies, mesh.nodes, default_margin(mesh)) if self.bodies and mesh is not None else None
+        )
         self._C = np.zeros(6 * self.N)
         self._anchor_bufs = [np.full((self.n_fric, self.N, 3), np.nan) for _ in range(2)]
         self._all_nodes = np.arange(self.N)
@@ -120,9 +116,17 @@ class Integrator:
         self.invM = np.zeros_like(self.Mf)
         self.invM[self.free_idx] = 1.0 / self.Mf[self.free_idx]
         self.Pn = norm(self.P[self.free_idx])
-        self.dofs = Dofs(Mf=self.Mf, invM=self.invM, P=self.P, fixed_idx=self.fixed_idx, presc=self.presc,
-                         fixed_mask=self.fixed_mask, presc_full=self.presc_full, free_idx=self.free_idx)
-        self.alpha = self.damper.alpha0(s)   # the viscous alpha [1/s] of Eq. (23) at the start
+        self.dofs = Dofs(
+            Mf=self.Mf,
+            invM=self.invM,
+            P=self.P,
+            fixed_idx=self.fixed_idx,
+            presc=self.presc,
+            fixed_mask=self.fixed_mask,
+            presc_full=self.presc_full,
+            free_idx=self.free_idx,
+        )
+        self.alpha = self.damper.alpha0(s)  # the viscous alpha [1/s] of Eq. (23) at the start
         self.damping_view = _DampingView(self)
         # the preallocated element/node passes for the library's Model (fused.py), also the force
         # the critical-step estimates differentiate; other models (e.g. a user's with its own
@@ -179,19 +183,60 @@ class Integrator:
         mi0, qf0 = self.forces.interp_flags(D0)
         quasi = self.quasi
         st = State(
-            D=D0.copy(), D_prev=Dm, step=0, dt=dt, n_base=0, t_base=0.0, omega_el=lim.omega_el, method=lim.method,
-            dt_initial=dt, mode=(lim.mode if lim.mode is not None else np.zeros(6 * self.N)), rechecks=0,
-            reductions=0, dtc_min=lim.dt_crit, D0=D0, Ek0=Ek0, Es0=Es0, Ec0=Ec0, E_init=Ek0 + Es0,
-            closed_change=0.0, w_ext_closed=0.0, remesh_energy_jump=0.0, segments=0, close_E=Ek0 + Es0 + Ec0,
-            close_W=0.0, close_PD=dot(self.P, D0), damp_sum=0.0, ekin_max=Ek0, balance_err=0.0, contact_work=0.0, w_int=0.0,
-            w_int_prev=0.0, es_prev=Es0, qflags=qf0, q_jump=0.0, q_samples=0, q_corners=0,
-            q_F=(F0.copy() if quasi else np.zeros(0)), q_D=(D0.copy() if quasi else np.zeros(0)),
-            anchors=anchors0, fric_work=0.0, max_slip=0, max_interp=mi0, t_max_interp=0.0, max_contact=0,
-            max_pen=0.0, ek_prev_half=0.0, resets=0, last_ekin=Ek0,
-            fire_a=float(self.s.fire_alpha_start if self.relax else FIRE_ALPHA_START), fire_n=0,
+            D=D0.copy(),
+            D_prev=Dm,
+            step=0,
+            dt=dt,
+            n_base=0,
+            t_base=0.0,
+            omega_el=lim.omega_el,
+            method=lim.method,
+            dt_initial=dt,
+            mode=(lim.mode if lim.mode is not None else np.zeros(6 * self.N)),
+            rechecks=0,
+            reductions=0,
+            dtc_min=lim.dt_crit,
+            D0=D0,
+            Ek0=Ek0,
+            Es0=Es0,
+            Ec0=Ec0,
+            E_init=Ek0 + Es0,
+            closed_change=0.0,
+            w_ext_closed=0.0,
+            remesh_energy_jump=0.0,
+            segments=0,
+            close_E=Ek0 + Es0 + Ec0,
+            close_W=0.0,
+            close_PD=dot(self.P, D0),
+            damp_sum=0.0,
+            ekin_max=Ek0,
+            balance_err=0.0,
+            contact_work=0.0,
+            w_int=0.0,
+            w_int_prev=0.0,
+            es_prev=Es0,
+            qflags=qf0,
+            q_jump=0.0,
+            q_samples=0,
+            q_corners=0,
+            q_F=(F0.copy() if quasi else np.zeros(0)),
+            q_D=(D0.copy() if quasi else np.zeros(0)),
+            anchors=anchors0,
+            fric_work=0.0,
+            max_slip=0,
+            max_interp=mi0,
+            t_max_interp=0.0,
+            max_contact=0,
+            max_pen=0.0,
+            ek_prev_half=0.0,
+            resets=0,
+            last_ekin=Ek0,
+            fire_a=float(self.s.fire_alpha_start if self.relax else FIRE_ALPHA_START),
+            fire_n=0,
             damper_alpha=float(self.alpha),
             last_rel_res=(norm((self.P - F0 + C0)[self.free_idx]) / self.Pn if self.Pn > 0 else 0.0),
-            frame_dt=self._frame_interval())
+            frame_dt=self._frame_interval(),
+        )
         st.fingerprint = self.fingerprint
         return st
 
@@ -211,8 +256,12 @@ class Integrator:
         self.frame_every = s.frame_every
         prog_every = s.progress_every or max(1, n_steps // 100)
         self.progress = observers.Progress(self.progress_cb, prog_every, s)
-        self.ckpt = observers.Checkpointer(s.checkpoint, s.checkpoint_every, s.checkpoint_wall,
-                                           lambda: self.checkpoint_extra() if self.checkpoint_extra else {})
+        self.ckpt = observers.Checkpointer(
+            s.checkpoint,
+            s.checkpoint_every,
+            s.checkpoint_wall,
+            lambda: self.checkpoint_extra() if self.checkpoint_extra else {},
+        )
         self.recheck_margin = 0.5 * (1.0 + s.safety)
         self._set_step(st.dt)
         self._snap_filter()
@@ -236,8 +285,9 @@ class Integrator:
         self.snaps = [x for x in snaps if x <= self.s.t_end * (1 + 1e-9)] if late else snaps
         if late and "snapshots_after_t_end_dropped" not in self.info_dt:
             self.info_dt["snapshots_after_t_end_dropped"] = late
-            self.warnings.append(f"snapshot time(s) {', '.join(f'{x:g}' for x in late)} s after t_end = "
-                                 f"{self.s.t_end:g} s dropped")
+            self.warnings.append(
+                f"snapshot time(s) {', '.join(f'{x:g}' for x in late)} s after t_end = {self.s.t_end:g} s dropped"
+            )
         self.end_step, self.snap_steps = self._schedule()
 
     def _schedule(self):
@@ -247,9 +297,10 @@ class Integrator:
             if s.max_steps is not None:
                 return s.max_steps, {}
             return st.n_base + int(math.ceil((s.t_max - st.t_base) / st.dt * (1.0 - 1e-12))), {}
-        return (st.n_base + int(round((s.t_end - st.t_base) / st.dt)),
-                {st.n_base + int(round((x - st.t_base) / st.dt)): x for x in self.snaps
-                 if x >= st.t_base - 0.5 * st.dt})
+        return (
+            st.n_base + int(round((s.t_end - st.t_base) / st.dt)),
+            {st.n_base + int(round((x - st.t_base) / st.dt)): x for x in self.snaps if x >= st.t_base - 0.5 * st.dt},
+        )
 
     def _set_step(self, dt) -> None:
         self.state.dt = dt
@@ -271,12 +322,12 @@ class Integrator:
         if self.status != "running":
             return self.status
         st = self.state
-        stop_at = math.inf if n_steps is None else st.step + int(n_steps)   # end_step may move (re-checks)
+        stop_at = math.inf if n_steps is None else st.step + int(n_steps)  # end_step may move (re-checks)
         t0 = time.perf_counter()
         with np.errstate(over="ignore", invalid="ignore"), observers.deferred_interrupt() as sigint:
             try:
                 status = self._loop(stop_at, sigint)
-            except KeyboardInterrupt:   # raised outside the loop's own handler (e.g. a callback)
+            except KeyboardInterrupt:  # raised outside the loop's own handler (e.g. a callback)
                 status = "interrupted"
         self.t_loop += time.perf_counter() - t0
         if status == "running" and st.step >= self.end_step:
@@ -336,8 +387,9 @@ class Integrator:
                 # a damper that rewrites the whole step (FIRE) needs only R, except on a fresh
                 # run's first step, which is the scheme's own
                 r_only = self.damper_rewrites and not (n == 0 and self.fresh)
-                vMv, finite, Es = fused.step(D, Dp, Dn1, R, C, self.dofs, self.coef, sample, r_only,
-                                             r_only and self.damper_power)
+                vMv, finite, Es = fused.step(
+                    D, Dp, Dn1, R, C, self.dofs, self.coef, sample, r_only, r_only and self.damper_power
+                )
                 F = fused.F
                 self.step_power = fused.last_power
         except (FloatingPointError, ZeroDivisionError, SolverError) as exc:
@@ -371,12 +423,13 @@ class Integrator:
         nodes, C, new = None, None, None
         if cand is not None and cand.enabled:
             if cand.update(D):
-                self._C.fill(0.0)   # the previous candidates' entries
+                self._C.fill(0.0)  # the previous candidates' entries
             nodes, C = cand.nodes, self._C
             new = self._anchor_bufs[1] if st.anchors is self._anchor_bufs[0] else self._anchor_bufs[0]
         if self.n_fric:
-            C, f["Ec"], f["nact"], pen, f["fr"], f["Et"], f["anchors"], f["nslip"] = \
-                self.forces.contact_friction(D, st.anchors, nodes, C, new)
+            C, f["Ec"], f["nact"], pen, f["fr"], f["Et"], f["anchors"], f["nslip"] = self.forces.contact_friction(
+                D, st.anchors, nodes, C, new
+            )
         else:
             C, f["Ec"], f["nact"], pen = self.forces.contact(D, nodes, C)
         f["C"] = C
@@ -387,9 +440,11 @@ class Integrator:
 
     def _nonfinite(self, n) -> str:
         st = self.state
-        self.message = (f"the solution became non-finite at step {n + 1} (t = {self.time_of(n + 1):.6g} s) with "
-                        f"dt = {st.dt:.6g} s, critical step {self.lim.dt_crit:.6g} s; returning the last good "
-                        f"(finite, energy-balanced) state, t = {st.good_t:.6g} s")
+        self.message = (
+            f"the solution became non-finite at step {n + 1} (t = {self.time_of(n + 1):.6g} s) with "
+            f"dt = {st.dt:.6g} s, critical step {self.lim.dt_crit:.6g} s; returning the last good "
+            f"(finite, energy-balanced) state, t = {st.good_t:.6g} s"
+        )
         return "nonfinite"
 
     def _work(self, n, vMv, f, Dn1, Dp) -> None:
@@ -414,13 +469,15 @@ class Integrator:
         if self.quasi:
             n_int, qf = self.forces.interp_and_branches(D)
             ledger.book_jumps(st, Es, qf)
-        Efric = -st.fric_work if self.n_fric else 0.0   # work done against friction (>= 0 in slip)
+        Efric = -st.fric_work if self.n_fric else 0.0  # work done against friction (>= 0 in slip)
         err = ledger.balance_error(st, Ek, Es, Wext, Edamp, Ecn, Efric, self.E_floor)
         if err > self.s.max_energy_error:
-            self.message = (f"energy balance error {err:.3g} > {self.s.max_energy_error:g} at step {n} (t = {t:.6g} "
-                            f"s): the run is creating energy (unstable step {st.dt:.6g} s vs critical "
-                            f"{self.lim.dt_crit:.6g} s, or a non-physical state); returning the last good state, "
-                            f"t = {st.good_t:.6g} s")
+            self.message = (
+                f"energy balance error {err:.3g} > {self.s.max_energy_error:g} at step {n} (t = {t:.6g} "
+                f"s): the run is creating energy (unstable step {st.dt:.6g} s vs critical "
+                f"{self.lim.dt_crit:.6g} s, or a non-physical state); returning the last good state, "
+                f"t = {st.good_t:.6g} s"
+            )
             return True
         st.good_t = t
         st.good_D[:] = D
@@ -432,8 +489,17 @@ class Integrator:
         if self.n_fric:
             st.max_slip = max(st.max_slip, f["nslip"])
         st.last_ekin = Ek
-        st.last = dict(Ek=Ek, Es=Es, Wext=Wext, Edamp=Edamp, Ec=Ecn, t=t, Efric=Efric,
-                       Et=(f["Et"] if self.n_fric else 0.0), interp=ni)
+        st.last = dict(
+            Ek=Ek,
+            Es=Es,
+            Wext=Wext,
+            Edamp=Edamp,
+            Ec=Ecn,
+            t=t,
+            Efric=Efric,
+            Et=(f["Et"] if self.n_fric else 0.0),
+            interp=ni,
+        )
         return False
 
     def _frames(self, n, D) -> None:
@@ -442,7 +508,7 @@ class Integrator:
             self._keep(t, D, -1)
         elif self.frame_every and n > 0 and n % self.frame_every == 0:
             self._keep(t, D, -1)
-        elif t >= self.frame_next_t:   # inf without interval frames; >= the interval > 0 else
+        elif t >= self.frame_next_t:  # inf without interval frames; >= the interval > 0 else
             self._keep(t, D, int(t / self.state.frame_dt))
             self.frame_next_t = observers.next_frame_time(self.state)
 
@@ -451,8 +517,10 @@ class Integrator:
         rel_ke = observers.steady(st, self.s, self.P, vMv, self.E_floor)
         if rel_ke is None:
             return False
-        self.message = (f"steady state at t = {self.time_of(n):.6g} s after {n} steps: E_kin/W_ext = {rel_ke:.3g} "
-                        f"< {self.s.tol_kinetic:g}, residual {st.last_rel_res:.3g} < {self.s.tol_residual:g}")
+        self.message = (
+            f"steady state at t = {self.time_of(n):.6g} s after {n} steps: E_kin/W_ext = {rel_ke:.3g} "
+            f"< {self.s.tol_kinetic:g}, residual {st.last_rel_res:.3g} < {self.s.tol_residual:g}"
+        )
         return True
 
     def _friction_work(self, f, Dn1, Dp) -> None:
@@ -510,20 +578,30 @@ class Integrator:
         st = self.state
         if status == "done":
             if self.relax:
-                self.message = (f"no steady state within {self.end_step} steps (t = {self.time_of(self.end_step):.6g} "
-                                f"s): last residual {st.last_rel_res:.3g} (tol {self.s.tol_residual:g})")
+                self.message = (
+                    f"no steady state within {self.end_step} steps (t = {self.time_of(self.end_step):.6g} "
+                    f"s): last residual {st.last_rel_res:.3g} (tol {self.s.tol_residual:g})"
+                )
             else:
-                self.message = (f"reached t_end = {self.time_of(self.end_step):.6g} s in {self.end_step} steps of "
-                                f"{st.dt:.6g} s" + (f" ({st.reductions} step reduction(s) after re-checking the "
-                                                    f"critical step)" if st.reductions else ""))
+                self.message = (
+                    f"reached t_end = {self.time_of(self.end_step):.6g} s in {self.end_step} steps of "
+                    f"{st.dt:.6g} s"
+                    + (
+                        f" ({st.reductions} step reduction(s) after re-checking the critical step)"
+                        if st.reductions
+                        else ""
+                    )
+                )
                 self._keep(self.time_of(self.end_step), st.D, -1)
                 self.ckpt.write(st)
         elif status == "steady":
             if not st.frame_t or st.frame_t[-1] != self.time_of(st.step):
                 self._keep(self.time_of(st.step), st.D, -1)
         elif status == "interrupted":
-            self.message = (f"interrupted at t = {self.time_of(st.step):.6g} s after {st.step} steps; returning "
-                            f"the last completed step")
+            self.message = (
+                f"interrupted at t = {self.time_of(st.step):.6g} s after {st.step} steps; returning "
+                f"the last completed step"
+            )
             self.ckpt.write(st)
         if status in ("running", "done", "steady", "walltime", "interrupted"):
             self._read_books()
@@ -550,9 +628,14 @@ class Integrator:
         v = (st.D - st.D_prev) / st.dt
         F, Es = self.forces.internal(st.D, True)
         C, Ec, _ = self.forces.contact_energy(st.D, st.anchors)
-        return {"kinetic": 0.5 * dot(self.Mf * v, v), "kinetic_central": 0.5 * self._trial_vMv(F, C),
-                "strain": float(Es), "contact": float(Ec),
-                "external_work": ledger.external_work(st, self.P, st.D), "damping_dissipation": float(st.damp_sum)}
+        return {
+            "kinetic": 0.5 * dot(self.Mf * v, v),
+            "kinetic_central": 0.5 * self._trial_vMv(F, C),
+            "strain": float(Es),
+            "contact": float(Ec),
+            "external_work": ledger.external_work(st, self.P, st.D),
+            "damping_dissipation": float(st.damp_sum),
+        }
 
     def _trial_vMv(self, F, C) -> float:
         """v_n.M.v_n of the central velocity of the step the scheme would take from D_n (Eq. 23),
@@ -573,13 +656,27 @@ class Integrator:
         ok = (status == "done" and not self.relax) or status == "steady"
         info = report.info(self, ok)
         self.progress_cb(1.0, self.message.replace("\n", " "))
-        return SolveResult(U=D.reshape(self.shape).copy(), converged=bool(ok), message=self.message, info=info,
-                           frames=list(zip(st.frame_t, st.frame_U)))
+        return SolveResult(
+            U=D.reshape(self.shape).copy(),
+            converged=bool(ok),
+            message=self.message,
+            info=info,
+            frames=list(zip(st.frame_t, st.frame_U)),
+        )
 
     # ------------------------------------------------------------------ continuing a state
     @classmethod
-    def from_state(cls, problem: SolverProblem, state: State, settings, *, reestimate_step: bool = True, new_segment: bool = True,
-                   progress=no_progress, relax: bool = False) -> Integrator:
+    def from_state(
+        cls,
+        problem: SolverProblem,
+        state: State,
+        settings,
+        *,
+        reestimate_step: bool = True,
+        new_segment: bool = True,
+        progress=no_progress,
+        relax: bool = False,
+    ) -> Integrator:
         """Continue ``state`` on ``problem`` (possibly another mesh: D, D_prev and anchors already on
         its dofs).  reestimate_step: the critical step is estimated anew at the state (Lanczos) and,
         when dt changes, the velocity kept; else state.dt is reused exactly.  new_segment: the ledger
@@ -591,8 +688,16 @@ class Integrator:
         return integ
 
     @classmethod
-    def resume(cls, problem: SolverProblem, state: State, settings, *, source="the checkpoint", progress=no_progress,
-               relax: bool = False) -> Integrator:
+    def resume(
+        cls,
+        problem: SolverProblem,
+        state: State,
+        settings,
+        *,
+        source="the checkpoint",
+        progress=no_progress,
+        relax: bool = False,
+    ) -> Integrator:
         """Continue a checkpointed ``state`` (``checkpoint.load``) bit for bit: refused (InputError
         naming the differing items) unless it was written by a run of this very problem and these
         settings (``state.fingerprint``)."""
@@ -607,15 +712,22 @@ class Integrator:
         self.progress_cb(0.0, f"continuing at t = {st.t:.4g} s, step {st.step}")
         self.state = st
         if self.damper.varies_alpha:
-            self.alpha = float(st.damper_alpha)   # the estimate the run had reached
+            self.alpha = float(st.damper_alpha)  # the estimate the run had reached
         if reestimate_step:
             # warm-started from the state's top mode when it has one (e.g. carried over a remesh),
             # then to the re-checks' tolerance; forward differences from the state's force, half
             # the evaluations of the central ones: this estimate was 30-43 % of the remeshing
             # (docs/adaptivity.md)
             warm = bool(np.any(st.mode))
-            lim = stepcontrol.estimate(self.dynamics, st.D, self.s, self.alpha, v0=st.mode if warm else None,
-                                       difference="forward", tol=stepcontrol.WARM_TOL if warm else None)
+            lim = stepcontrol.estimate(
+                self.dynamics,
+                st.D,
+                self.s,
+                self.alpha,
+                v0=st.mode if warm else None,
+                difference="forward",
+                tol=stepcontrol.WARM_TOL if warm else None,
+            )
         else:
             lim = stepcontrol.limit(st.omega_el, st.method, self.dynamics, self.s, self.alpha)
         self._bind(lim)
@@ -640,12 +752,14 @@ class Integrator:
         n6 = 6 * self.N
         bad = [k for k, a in (("D", st.D), ("D_prev", st.D_prev)) if np.asarray(a).size != n6]
         if not self.n_fric:
-            st.anchors = np.zeros((0, self.N, 3))   # nothing to remap without a frictional body
+            st.anchors = np.zeros((0, self.N, 3))  # nothing to remap without a frictional body
         elif np.asarray(st.anchors).shape != (self.n_fric, self.N, 3):
             bad.append(f"anchors {np.asarray(st.anchors).shape} (want {(self.n_fric, self.N, 3)})")
         if bad:
-            raise InputError(f"the state does not fit this problem ({self.N} nodes, {self.n_fric} frictional "
-                             f"bodies): {', '.join(bad)}")
+            raise InputError(
+                f"the state does not fit this problem ({self.N} nodes, {self.n_fric} frictional "
+                f"bodies): {', '.join(bad)}"
+            )
         st.D = np.array(st.D, dtype=float).ravel()
         st.D_prev = np.array(st.D_prev, dtype=float).ravel()
         if np.asarray(st.mode).size != n6:
@@ -656,7 +770,7 @@ class Integrator:
         branch references there."""
         st = self.state
         ledger.close_segment(st)
-        st.D0 = st.D.copy()   # the new segment's external work starts here
+        st.D0 = st.D.copy()  # the new segment's external work starts here
         e = self.energies()
         ledger.open_segment(st, e["kinetic_central"], e["strain"], e["contact"], st.D, dot(self.P, st.D))
         F, Es = self.forces.internal(st.D, True)

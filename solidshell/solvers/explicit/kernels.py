@@ -18,14 +18,14 @@ from numba import njit
 class Dofs:
     """The flat (6N,) dof arrays of one explicit problem that a step reads (built once per problem)."""
 
-    Mf: np.ndarray           # lumped (scaled) masses
-    invM: np.ndarray         # 1 / Mf on the free dofs, 0 on the fixed ones
-    P: np.ndarray            # dead loads [force]
-    fixed_idx: np.ndarray    # indices of the fixed dofs
-    presc: np.ndarray        # their prescribed values [length], in fixed_idx's order
-    fixed_mask: np.ndarray   # (6N,) bool, True on the fixed dofs
-    presc_full: np.ndarray   # the prescribed values on all dofs (0 on the free ones)
-    free_idx: np.ndarray     # indices of the free dofs
+    Mf: np.ndarray  # lumped (scaled) masses
+    invM: np.ndarray  # 1 / Mf on the free dofs, 0 on the fixed ones
+    P: np.ndarray  # dead loads [force]
+    fixed_idx: np.ndarray  # indices of the fixed dofs
+    presc: np.ndarray  # their prescribed values [length], in fixed_idx's order
+    fixed_mask: np.ndarray  # (6N,) bool, True on the fixed dofs
+    presc_full: np.ndarray  # the prescribed values on all dofs (0 on the free ones)
+    free_idx: np.ndarray  # indices of the free dofs
 
 
 @dataclass(frozen=True)
@@ -33,9 +33,9 @@ class Coefficients:
     """Eq. (23)'s coefficients for the step dt [s] and alpha [1/s] (:func:`coefficients`)."""
 
     dt: float
-    cF: np.ndarray           # (6N,) multiplies (P - F + C)
-    cD: float                # multiplies D_n
-    cDp: float               # multiplies D_n-1
+    cF: np.ndarray  # (6N,) multiplies (P - F + C)
+    cD: float  # multiplies D_n
+    cDp: float  # multiplies D_n-1
 
     @classmethod
     def of(cls, invM, dt: float, alpha: float) -> Coefficients:
@@ -88,9 +88,11 @@ def coefficients(invM, dt: float, alpha: float):
     """(cF, cD, cDp) of Eq. (23) with lumped inverse mass invM (zero on fixed dofs), step dt [s] and
     Rayleigh alpha [1/s]: D_n+1 = cF (P - F + C) + cD D_n + cDp D_n-1."""
     lhs = 1.0 / dt**2 + alpha / (2.0 * dt)
-    return (invM / lhs,                                   # multiplies (P - F + C)
-            (2.0 / dt**2) / lhs,                          # multiplies D_n
-            (alpha / (2.0 * dt) - 1.0 / dt**2) / lhs)     # multiplies D_n-1
+    return (
+        invM / lhs,  # multiplies (P - F + C)
+        (2.0 / dt**2) / lhs,  # multiplies D_n
+        (alpha / (2.0 * dt) - 1.0 / dt**2) / lhs,
+    )  # multiplies D_n-1
 
 
 def step(Dn1, D, Dp, R, dofs: Dofs, co: Coefficients):

@@ -28,8 +28,11 @@ def energy_floor(P, Mf, free_idx, X0, omega_el) -> float:
     no load at all, the energy of a 1e-9 L vibration at omega_max (far above round-off)."""
     N = X0.shape[0]
     L_char = float(np.ptp(X0, axis=0).max()) if N > 1 else 1.0
-    return max(1e-9 * float(np.abs(P).sum()) * L_char,
-               0.5 * float(Mf[free_idx].sum()) * (1e-9 * L_char * omega_el) ** 2, 1e-300)
+    return max(
+        1e-9 * float(np.abs(P).sum()) * L_char,
+        0.5 * float(Mf[free_idx].sum()) * (1e-9 * L_char * omega_el) ** 2,
+        1e-300,
+    )
 
 
 def book_jumps(st, Es, qf) -> None:

@@ -48,7 +48,7 @@ class Checkpointer:
 
     def __init__(self, path, every, wall, extra=None):
         self.path, self.every, self.wall = path, every, wall
-        self.extra = extra          # callable -> dict of extra arrays (an adaptive driver's state)
+        self.extra = extra  # callable -> dict of extra arrays (an adaptive driver's state)
         self.t_last = time.perf_counter()
 
     def due(self, step: int) -> bool:
@@ -87,8 +87,13 @@ class Progress:
     def fraction(self, st: RunReadings, step: int, end_step: int) -> float:
         f = step / max(end_step, 1)
         if self.s.relax:
-            f = max(f, min(self._log_progress(st.last_rel_res, self.s.tol_residual),
-                           self._log_progress(st.last_rel_ke, self.s.tol_kinetic)))
+            f = max(
+                f,
+                min(
+                    self._log_progress(st.last_rel_res, self.s.tol_residual),
+                    self._log_progress(st.last_rel_ke, self.s.tol_kinetic),
+                ),
+            )
         self.frac = max(self.frac, min(f, 1.0))
         return self.frac
 

@@ -12,20 +12,20 @@ import os
 from typing import Annotated, Any, Literal, Optional
 
 import numpy as np
-from pydantic import (
-    AfterValidator,
-    BeforeValidator,
-    Field,
-    ValidationInfo,
-    field_validator,
-    model_validator,
-)
+from pydantic import AfterValidator, BeforeValidator, Field, ValidationInfo, field_validator, model_validator
 
 from ...errors import InputError
 from ...settings import Finite, SettingsModel, StateArray, parse
 
-__all__ = ["ExplicitSettings", "RelaxSettings", "parse_settings", "RUN_KEYS", "RELAX_KEYS", "RESTART_NEUTRAL",
-           "RELAX_PRESETS"]
+__all__ = [
+    "ExplicitSettings",
+    "RelaxSettings",
+    "parse_settings",
+    "RUN_KEYS",
+    "RELAX_KEYS",
+    "RESTART_NEUTRAL",
+    "RELAX_PRESETS",
+]
 
 Pos = Annotated[Finite, Field(gt=0)]
 NonNeg = Annotated[Finite, Field(ge=0)]
@@ -60,40 +60,39 @@ default, and the (unused) state.fire_a of an explicit run, which has no FIRE set
 class _Common(SettingsModel):
     """Settings shared by run (explicit) and run_relax."""
 
-    dt: Optional[Pos] = None                     # [s]; default safety x the critical step
-    allow_unstable: bool = False                 # only for stability studies
-    safety: Pos = 0.9                            # dt = safety x dt_crit; < 1 unless allow_unstable
-    allow_reduce: bool = False                   # a dt above dt_crit is reduced (else refused)
-    alpha: NonNeg = 5.0                          # [1/s] Rayleigh mass-proportional damping, Eq. (20)
+    dt: Optional[Pos] = None  # [s]; default safety x the critical step
+    allow_unstable: bool = False  # only for stability studies
+    safety: Pos = 0.9  # dt = safety x dt_crit; < 1 unless allow_unstable
+    allow_reduce: bool = False  # a dt above dt_crit is reduced (else refused)
+    alpha: NonNeg = 5.0  # [1/s] Rayleigh mass-proportional damping, Eq. (20)
     mass_scaling: Pos = 1.0
     mass_scaling_mode: Literal["uniform", "director"] = "uniform"
-    sample_every: Optional[PosInt] = None        # steps between energy samples
-    U0: StateArray = None                        # (N, 6) initial displacements
-    V0: StateArray = None                        # (N, 6) initial velocities
-    critical_time_step: Optional[Pos] = None     # [s]: skip the estimate
+    sample_every: Optional[PosInt] = None  # steps between energy samples
+    U0: StateArray = None  # (N, 6) initial displacements
+    V0: StateArray = None  # (N, 6) initial velocities
+    critical_time_step: Optional[Pos] = None  # [s]: skip the estimate
     critical_step_method: Literal["lanczos", "power", "tangent"] = "lanczos"
     critical_step_tol: Pos = 1e-6
     contact_penalty_factor: Pos = 0.1
     checkpoint: PathStr = None
-    checkpoint_every: Optional[PosInt] = None    # steps; default every checkpoint_wall seconds
-    checkpoint_wall: Pos = 60.0                  # [s] of wall time
+    checkpoint_every: Optional[PosInt] = None  # steps; default every checkpoint_wall seconds
+    checkpoint_wall: Pos = 60.0  # [s] of wall time
     restart: PathStr = None
-    max_wall_time: Optional[Pos] = None          # [s]
-    frame_every: Optional[PosInt] = None         # steps
-    frame_interval: Optional[NonNeg] = None      # [s] simulated; relax 0.05, explicit 0 (off)
+    max_wall_time: Optional[Pos] = None  # [s]
+    frame_every: Optional[PosInt] = None  # steps
+    frame_interval: Optional[NonNeg] = None  # [s] simulated; relax 0.05, explicit 0 (off)
     max_frames: PosInt = 100
-    progress_every: Optional[PosInt] = None      # steps (the callback is also called every ~0.5 s)
+    progress_every: Optional[PosInt] = None  # steps (the callback is also called every ~0.5 s)
     threads: Optional[PosInt] = None
     max_energy_error: Pos = 0.5
-    recheck_every: NonNegInt = 10000             # steps; 0 = never
-    friction_stiffness: Pos = 1.0                # k_t / k
+    recheck_every: NonNegInt = 10000  # steps; 0 = never
+    friction_stiffness: Pos = 1.0  # k_t / k
 
     @field_validator("safety")
     @classmethod
     def _stable(cls, v: float, info: ValidationInfo) -> float:
         if v >= 1.0 and not info.data.get("allow_unstable", False):
-            raise ValueError("must be below 1 (the step would reach the stability limit) unless "
-                             "allow_unstable = true")
+            raise ValueError("must be below 1 (the step would reach the stability limit) unless allow_unstable = true")
         return v
 
     @property
@@ -105,7 +104,7 @@ class ExplicitSettings(_Common):
     """Settings of ``explicit.run``: t_end [s] is required."""
 
     t_end: Optional[Pos] = None
-    snapshots: Annotated[Optional[list[NonNeg]], BeforeValidator(_times)] = None   # [s]
+    snapshots: Annotated[Optional[list[NonNeg]], BeforeValidator(_times)] = None  # [s]
 
     @field_validator("t_end")
     @classmethod
@@ -134,19 +133,19 @@ class RelaxSettings(_Common):
     mass_scaling: Pos = 100.0
     damping: Literal["rayleigh", "kinetic", "fire", "modal"] = "rayleigh"
     # FIRE (damping = "fire"; Bitzek et al. 2006, their defaults; dt_max = the scheme's stable step)
-    fire_alpha_start: Annotated[Finite, Field(gt=0, lt=1)] = FIRE_ALPHA_START   # velocity mixing a after a freeze
-    fire_f_alpha: Annotated[Finite, Field(gt=0, le=1)] = 0.99      # a <- f_alpha a while P >= 0
-    fire_f_inc: Annotated[Finite, Field(ge=1)] = 1.1               # dt <- f_inc dt while P >= 0
-    fire_f_dec: Annotated[Finite, Field(gt=0, le=1)] = 0.5         # dt <- f_dec dt at a freeze
-    fire_n_min: NonNegInt = 5                                       # steps with P >= 0 before dt grows
-    fire_dt_min: Annotated[Finite, Field(gt=0, le=1)] = 0.02       # floor of dt / dt_max
+    fire_alpha_start: Annotated[Finite, Field(gt=0, lt=1)] = FIRE_ALPHA_START  # velocity mixing a after a freeze
+    fire_f_alpha: Annotated[Finite, Field(gt=0, le=1)] = 0.99  # a <- f_alpha a while P >= 0
+    fire_f_inc: Annotated[Finite, Field(ge=1)] = 1.1  # dt <- f_inc dt while P >= 0
+    fire_f_dec: Annotated[Finite, Field(gt=0, le=1)] = 0.5  # dt <- f_dec dt at a freeze
+    fire_n_min: NonNegInt = 5  # steps with P >= 0 before dt grows
+    fire_dt_min: Annotated[Finite, Field(gt=0, le=1)] = 0.02  # floor of dt / dt_max
     # modal damping (damping = "modal"): alpha = 2 zeta omega_min of M^-1 K at the current state
-    modal_zeta: Pos = 1.0                        # damping ratio of the slowest mode (1: critical)
-    modal_every: PosInt = 2000                   # steps between estimates of omega_min
-    tol_kinetic: Pos = 1e-6                      # E_kin / W_ext
-    tol_residual: Pos = 1e-3                     # |P - F + C|_free / |P|_free
-    check_every: PosInt = 100                    # steps between steady-state tests
-    t_max: Pos = 60.0                            # [s] simulated
+    modal_zeta: Pos = 1.0  # damping ratio of the slowest mode (1: critical)
+    modal_every: PosInt = 2000  # steps between estimates of omega_min
+    tol_kinetic: Pos = 1e-6  # E_kin / W_ext
+    tol_residual: Pos = 1e-3  # |P - F + C|_free / |P|_free
+    check_every: PosInt = 100  # steps between steady-state tests
+    t_max: Pos = 60.0  # [s] simulated
     max_steps: Optional[PosInt] = None
 
     @model_validator(mode="before")
@@ -155,7 +154,7 @@ class RelaxSettings(_Common):
         if isinstance(data, dict) and data.get("preset") is not None:
             name = data["preset"]
             if name not in RELAX_PRESETS:
-                return data   # the field's own check names the choices
+                return data  # the field's own check names the choices
             data = {**RELAX_PRESETS[name], **data}
         return data
 
@@ -166,8 +165,9 @@ class RelaxSettings(_Common):
 
 RUN_KEYS = frozenset(ExplicitSettings.model_fields)
 RELAX_KEYS = frozenset(RelaxSettings.model_fields)
-RESTART_NEUTRAL = frozenset({"checkpoint", "checkpoint_every", "checkpoint_wall", "restart", "progress_every",
-                             "max_wall_time", "threads"})
+RESTART_NEUTRAL = frozenset(
+    {"checkpoint", "checkpoint_every", "checkpoint_wall", "restart", "progress_every", "max_wall_time", "threads"}
+)
 """Settings that do not shape the computed run (a restart may change them)."""
 
 
@@ -180,6 +180,7 @@ def parse_settings(settings, relax: bool):
     name = "relax" if relax else "explicit"
     unknown = sorted(str(k) for k in d if k not in model.model_fields)
     if unknown:
-        raise InputError(f"unknown {name} setting(s): {', '.join(unknown)}; "
-                         f"known: {', '.join(sorted(model.model_fields))}")
+        raise InputError(
+            f"unknown {name} setting(s): {', '.join(unknown)}; known: {', '.join(sorted(model.model_fields))}"
+        )
     return parse(model, d, f"solver.{name}")

@@ -14,31 +14,70 @@ import numpy as np
 # name -> kind: "i" integer, "f" float, "a" array, "s" string
 FIELDS = {
     # position and time: D_n, D_n-1, the step n and the step dt, t = t_base + (n - n_base) dt
-    "D": "a", "D_prev": "a", "step": "i", "dt": "f", "n_base": "i", "t_base": "f",
+    "D": "a",
+    "D_prev": "a",
+    "step": "i",
+    "dt": "f",
+    "n_base": "i",
+    "t_base": "f",
     # step control: the estimate the run started from, re-checks, reductions, the smallest dt_crit
     # of the current mesh (start or remesh estimate and re-checks since)
-    "omega_el": "f", "method": "s", "dt_initial": "f", "mode": "a", "rechecks": "i", "reductions": "i",
+    "omega_el": "f",
+    "method": "s",
+    "dt_initial": "f",
+    "mode": "a",
+    "rechecks": "i",
+    "reductions": "i",
     "dtc_min": "f",
     # energy ledger: the current segment's references, totals carried across segments
-    "D0": "a", "Ek0": "f", "Es0": "f", "Ec0": "f", "E_init": "f", "closed_change": "f",
-    "w_ext_closed": "f", "remesh_energy_jump": "f", "segments": "i", "close_E": "f", "close_W": "f",
+    "D0": "a",
+    "Ek0": "f",
+    "Es0": "f",
+    "Ec0": "f",
+    "E_init": "f",
+    "closed_change": "f",
+    "w_ext_closed": "f",
+    "remesh_energy_jump": "f",
+    "segments": "i",
+    "close_E": "f",
+    "close_W": "f",
     "close_PD": "f",
-    "damp_sum": "f", "ekin_max": "f", "balance_err": "f", "contact_work": "f",
+    "damp_sum": "f",
+    "ekin_max": "f",
+    "balance_err": "f",
+    "contact_work": "f",
     # Eq. (24) jumps (zero / empty unless thickness_strain = "quasi")
-    "w_int": "f", "w_int_prev": "f", "es_prev": "f", "qflags": "a", "q_jump": "f", "q_samples": "i",
-    "q_corners": "i", "q_F": "a", "q_D": "a",
+    "w_int": "f",
+    "w_int_prev": "f",
+    "es_prev": "f",
+    "qflags": "a",
+    "q_jump": "f",
+    "q_samples": "i",
+    "q_corners": "i",
+    "q_F": "a",
+    "q_D": "a",
     # Coulomb friction anchors (n_fric, N, 3) and work (empty / zero without a frictional body)
-    "anchors": "a", "fric_work": "f", "max_slip": "i",
+    "anchors": "a",
+    "fric_work": "f",
+    "max_slip": "i",
     # watched maxima and the latest readings
-    "max_interp": "i", "t_max_interp": "f", "max_contact": "i", "max_pen": "f", "ek_prev_half": "f",
-    "resets": "i", "last_ekin": "f", "last_rel_res": "f",
+    "max_interp": "i",
+    "t_max_interp": "f",
+    "max_contact": "i",
+    "max_pen": "f",
+    "ek_prev_half": "f",
+    "resets": "i",
+    "last_ekin": "f",
+    "last_rel_res": "f",
     # dampers (damping/): FIRE's mixing a and steps since its last freeze; the viscous alpha [1/s] now
-    "fire_a": "f", "fire_n": "i", "damper_alpha": "f",
+    "fire_a": "f",
+    "fire_n": "i",
+    "damper_alpha": "f",
     # interval frames: the interval [s] (doubled at each thinning)
     "frame_dt": "f",
 }
-FRAMES = ("frame_t", "frame_U", "frame_k")   # lists: time [s], (N,6) U, interval index (-1: other)
-TRANSIENT = ("good_D", "good_t", "last", "last_rel_ke")   # not checkpointed (as before the split)
+FRAMES = ("frame_t", "frame_U", "frame_k")  # lists: time [s], (N,6) U, interval index (-1: other)
+TRANSIENT = ("good_D", "good_t", "last", "last_rel_ke")  # not checkpointed (as before the split)
 # ``fingerprint`` (name -> digest) is saved as items of its own (checkpoint.save)
 
 
@@ -48,7 +87,7 @@ class State:
     def __init__(self, **kw):
         self.frame_t, self.frame_U, self.frame_k = [], [], []
         self.good_D, self.good_t, self.last, self.last_rel_ke = None, 0.0, {}, math.inf
-        self.fingerprint = {}   # per-item digests of what shaped the run (checkpoint.fingerprint)
+        self.fingerprint = {}  # per-item digests of what shaped the run (checkpoint.fingerprint)
         self.__dict__.update(kw)
         missing = [k for k in FIELDS if k not in self.__dict__]
         if missing:
@@ -75,4 +114,3 @@ class State:
         self.frame_k = [int(k) for k in self.frame_k]
         self.frame_U = [np.array(u) for u in self.frame_U]
         return self
-

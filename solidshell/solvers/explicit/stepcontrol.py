@@ -26,11 +26,11 @@ from ..timestep import critical_time_step, estimate_omega_max
 class Dynamics:
     """What the critical-step estimates need of one problem."""
 
-    model: ExplicitModel           # its tangent serves method="tangent" (a library Model's only)
-    M: np.ndarray                  # (N,6) lumped masses after mass scaling
-    free_mask: np.ndarray          # (N,6) bool, True on the free dofs
-    bodies: list[ContactBody]      # the contact bodies (their penalty springs)
-    n_fric: int                    # how many of them have friction (their stick springs)
+    model: ExplicitModel  # its tangent serves method="tangent" (a library Model's only)
+    M: np.ndarray  # (N,6) lumped masses after mass scaling
+    free_mask: np.ndarray  # (N,6) bool, True on the free dofs
+    bodies: list[ContactBody]  # the contact bodies (their penalty springs)
+    n_fric: int  # how many of them have friction (their stick springs)
     force: Callable | None = None  # U (N,6) -> internal force to differentiate (None: model.internal_force)
 
 
@@ -38,16 +38,16 @@ class Dynamics:
 class StepLimit:
     """The critical step of one problem at one state."""
 
-    omega_el: float            # highest frequency of the sheet alone [rad/s]
-    omega: float               # with the penalty springs
-    dt_crit: float             # [s]
-    method: str                # lanczos | power | tangent | given
-    k_pen: np.ndarray | None   # (N,) normal penalty stiffness, None without contact
-    k_max: np.ndarray | None   # (N,) largest contact Hessian eigenvalue per node
-    k_t: np.ndarray | None     # (N,) tangential stick stiffness, None without friction
-    n_evals: int = 0           # force evaluations spent on the estimate
-    seconds: float = 0.0       # wall time of the estimate
-    mode: np.ndarray | None = None   # the top mode (warm start of the re-checks)
+    omega_el: float  # highest frequency of the sheet alone [rad/s]
+    omega: float  # with the penalty springs
+    dt_crit: float  # [s]
+    method: str  # lanczos | power | tangent | given
+    k_pen: np.ndarray | None  # (N,) normal penalty stiffness, None without contact
+    k_max: np.ndarray | None  # (N,) largest contact Hessian eigenvalue per node
+    k_t: np.ndarray | None  # (N,) tangential stick stiffness, None without friction
+    n_evals: int = 0  # force evaluations spent on the estimate
+    seconds: float = 0.0  # wall time of the estimate
+    mode: np.ndarray | None = None  # the top mode (warm start of the re-checks)
 
 
 WARM_TOL = 1e-4
@@ -66,10 +66,17 @@ def omega_sheet(model, M, free_mask, D, s, force=None, v0=None, difference="cent
     if s.critical_time_step is not None:
         return 2.0 / s.critical_time_step, "given", 0, None
     try:
-        est = estimate_omega_max(force or model.internal_force, M, free_mask, D.reshape(M.shape),
-                                 method=s.critical_step_method, tol=tol or s.critical_step_tol,
-                                 tangent=model.tangent if isinstance(model, Model) else None, v0=v0,
-                                 difference=difference)
+        est = estimate_omega_max(
+            force or model.internal_force,
+            M,
+            free_mask,
+            D.reshape(M.shape),
+            method=s.critical_step_method,
+            tol=tol or s.critical_step_tol,
+            tangent=model.tangent if isinstance(model, Model) else None,
+            v0=v0,
+            difference=difference,
+        )
     except ValueError as exc:
         raise InputError(f"cannot estimate the critical time step: {exc}") from None
     return est.omega_max, s.critical_step_method, est.n_force_evals, est.mode
@@ -87,8 +94,9 @@ def limit(omega_el, method, dyn: Dynamics, s, alpha, n_evals=0, seconds=0.0, mod
         omega = 2.0 / combined_critical_time_step(omega_el, k_max, M[:, 0])
         if n_fric:
             k_t = s.friction_stiffness * k_pen
-    return StepLimit(omega_el, omega, critical_time_step(omega, alpha), method, k_pen, k_max, k_t,
-                     n_evals, seconds, mode)
+    return StepLimit(
+        omega_el, omega, critical_time_step(omega, alpha), method, k_pen, k_max, k_t, n_evals, seconds, mode
+    )
 
 
 def estimate(dyn: Dynamics, D, s, alpha, v0=None, difference="central", tol=None) -> StepLimit:
@@ -110,7 +118,8 @@ def initial_step(lim: StepLimit, s, alpha, info: dict) -> float:
             raise InputError(
                 f"dt = {s.dt:.6g} s exceeds the critical time step {dt_crit:.6g} s "
                 f"(omega_max = {lim.omega:.6g} rad/s, alpha = {alpha:g} 1/s, mass scaling {s.mass_scaling:g} "
-                f"{s.mass_scaling_mode}); use dt <= {s.safety * dt_crit:.6g} s, mass scaling, or allow_reduce=True")
+                f"{s.mass_scaling_mode}); use dt <= {s.safety * dt_crit:.6g} s, mass scaling, or allow_reduce=True"
+            )
         info["dt_requested"] = s.dt
         return s.safety * dt_crit
     return s.dt
@@ -126,8 +135,14 @@ def recheck(dyn: Dynamics, D, mode, lim: StepLimit, alpha):
     estimate fails (e.g. an indefinite state: keep the step, the energy check still watches)."""
     M = dyn.M
     try:
-        est = estimate_omega_max(dyn.force or dyn.model.internal_force, M, dyn.free_mask, D.reshape(M.shape),
-                                 tol=WARM_TOL, v0=mode if np.any(mode) else None)
+        est = estimate_omega_max(
+            dyn.force or dyn.model.internal_force,
+            M,
+            dyn.free_mask,
+            D.reshape(M.shape),
+            tol=WARM_TOL,
+            v0=mode if np.any(mode) else None,
+        )
     except ValueError:
         return None, mode
     w = est.omega_max

@@ -31,8 +31,19 @@ __all__ = ["run", "solve_static"]
 
 # ============================================================================ the public function
 @single_threaded_blas
-def solve_static(model, fixed, loads, load_factors=None, method=None, prescribed=None, *,
-                 settings=None, contact=None, progress=None, **options) -> SolveResult:
+def solve_static(
+    model,
+    fixed,
+    loads,
+    load_factors=None,
+    method=None,
+    prescribed=None,
+    *,
+    settings=None,
+    contact=None,
+    progress=None,
+    **options,
+) -> SolveResult:
     """Static equilibrium of ``model`` under dead ``loads`` and ``prescribed`` fixed dofs.
 
     model : Model (energy, internal force, tangent; see solidshell.model)
@@ -65,8 +76,9 @@ def _settings(settings, load_factors, method, options) -> StaticSettings:
     """``settings`` (StaticSettings, dict or None) overridden by the explicit arguments, parsed."""
     run_only = [k for k in RUN_SETTINGS if k in options]
     if run_only:
-        raise InputError(f"solve_static: {run_only[0]!r} is a setting of a scene run (solidshell run, "
-                         "run_scene), not of one solve")
+        raise InputError(
+            f"solve_static: {run_only[0]!r} is a setting of a scene run (solidshell run, run_scene), not of one solve"
+        )
     if load_factors is not None:
         options["load_factors"] = np.atleast_1d(load_factors).tolist()
     if method is not None:
@@ -84,13 +96,24 @@ def _solve(model, fixed, loads, prescribed, contact, s, progress):
     progress(0.0, "static: setting up")
     sys, D = _setup(model, fixed, loads, prescribed, contact, s)
     o = s.level(float(s.L_f) if s.L_f is not None else free_length(model.mesh, sys.fixed_mask))
-    stats = dict(iterations=0, load_steps=0, cutbacks=0, load_factor=0.0, shifted_iterations=0,
-                 max_shift=0.0, min_multiplier=1.0, final_relative_residual=np.nan, D_last=D)
+    stats = dict(
+        iterations=0,
+        load_steps=0,
+        cutbacks=0,
+        load_factor=0.0,
+        shifted_iterations=0,
+        max_shift=0.0,
+        min_multiplier=1.0,
+        final_relative_residual=np.nan,
+        D_last=D,
+    )
     path, warnings = [], []
     D, ok, msg, rel, status = _equilibrium(sys, D, o, s, stats, progress, path, warnings)
     if ok:
-        msg = (f"{s.method}: converged to load factor {stats['load_factor']:.4g} in "
-               f"{stats['load_steps']} step(s), {stats['iterations']} iterations")
+        msg = (
+            f"{s.method}: converged to load factor {stats['load_factor']:.4g} in "
+            f"{stats['load_steps']} step(s), {stats['iterations']} iterations"
+        )
         if stats.get("saddle_eigenvalues"):
             msg += f", {len(stats['saddle_eigenvalues'])} saddle(s) left"
         if stats.get("criterion") == "zero load":
@@ -103,16 +126,19 @@ def _solve(model, fixed, loads, prescribed, contact, s, progress):
     if s.check_stability and np.all(np.isfinite(D)) and status != "interrupted":
         lam = stats["load_factor"]
         try:
-            pd, lmin = stability(sys, sys.apply_prescribed(D, lam) if ok else D, s.eig_max_dofs,
-                                 known=stats.get("stable_tangent") if ok else None)
+            pd, lmin = stability(
+                sys,
+                sys.apply_prescribed(D, lam) if ok else D,
+                s.eig_max_dofs,
+                known=stats.get("stable_tangent") if ok else None,
+            )
         except KeyboardInterrupt:
             pd, lmin = None, None
         info["positive_definite"] = pd
         info["min_tangent_eigenvalue"] = lmin
     info["wall_time_s"] = time.perf_counter() - t0
     progress(1.0, "static: done" if ok else "static: stopped")
-    return SolveResult(U=D.reshape(sys.n, 6).copy(), converged=bool(ok), message=msg, info=info,
-                       frames=path)
+    return SolveResult(U=D.reshape(sys.n, 6).copy(), converged=bool(ok), message=msg, info=info, frames=path)
 
 
 def _monotone(progress):
@@ -124,6 +150,7 @@ def _monotone(progress):
     def report(fraction, text=""):
         shown[0] = max(shown[0], min(float(fraction), 1.0))
         user(shown[0], text)
+
     return report
 
 
@@ -154,8 +181,7 @@ def _equilibrium(sys, D, o, s, stats, progress, path, warnings):
     message, rel, status or None)."""
     factors = s.factors()
     status = None
-    zero = (not np.any(sys.P) and sys.presc_fn is None and not np.any(sys.presc)
-            and not np.any(D))
+    zero = not np.any(sys.P) and sys.presc_fn is None and not np.any(sys.presc) and not np.any(D)
     try:
         if zero and not np.any(sys.potential_and_gradient(D, factors[-1])[1][sys.free]):
             # no load, nothing prescribed, no contact force at the start: the unloaded state is
@@ -171,8 +197,17 @@ def _equilibrium(sys, D, o, s, stats, progress, path, warnings):
         if ok and s.check_stability and s.max_saddle_escapes > 0 and not zero:
             lam = stats["load_factor"]
             progress(0.97, "static: checking stability")
-            D, ok2, msg2 = seek_minimum(sys, sys.apply_prescribed(D, lam), lam, o, stats, newton_level,
-                                        s.max_saddle_escapes, s.saddle_step, warnings)
+            D, ok2, msg2 = seek_minimum(
+                sys,
+                sys.apply_prescribed(D, lam),
+                lam,
+                o,
+                stats,
+                newton_level,
+                s.max_saddle_escapes,
+                s.saddle_step,
+                warnings,
+            )
             if stats.get("saddle_eigenvalues"):
                 _, G = sys.potential_and_gradient(D, lam)
                 rel = float(np.linalg.norm(G[sys.free])) / sys.reference_norm(G + lam * sys.P, lam)
@@ -263,7 +298,8 @@ def _load_stepping(sys, D, factors, o, s, stats, progress, path):
             stats.pop("rel0", None)
             lo, span = lam, trial - lam
             stats["on_iter"] = lambda q, r, lo=lo, span=span, t=trial: progress(
-                min(1.0, abs(lo + q * span) / scale), f"load factor {t:.4g}, residual {r:.1e}")
+                min(1.0, abs(lo + q * span) / scale), f"load factor {t:.4g}, residual {r:.1e}"
+            )
             Dn, ok, msg, rel = level(sys, D0, trial, o, stats)
             nit = stats["iterations"] - it0
             if ok:
@@ -284,8 +320,12 @@ def _load_stepping(sys, D, factors, o, s, stats, progress, path):
                 continue
             if not newton or cut >= s.max_cutbacks or abs(dl) * 0.25 < s.min_increment * scale:
                 stats["final_relative_residual"] = rel
-                return Dn, False, (f"load step to factor {trial:.4g} failed: {msg}"
-                                   + (f" after {cut} cut-backs" if cut else "")), rel
+                return (
+                    Dn,
+                    False,
+                    (f"load step to factor {trial:.4g} failed: {msg}" + (f" after {cut} cut-backs" if cut else "")),
+                    rel,
+                )
             cut += 1
             stats["cutbacks"] += 1
             dl = 0.25 * (trial - lam)
@@ -308,8 +348,7 @@ def _start(sys, D, hist, lam, trial, predict):
     if len(cands) == 1:
         return cands[0]
     pis = [sys.potential_and_gradient(cd, trial)[0] for cd in cands]
-    pis = [pi if np.isfinite(pi) and np.all(np.isfinite(cd)) else np.inf
-           for pi, cd in zip(pis, cands)]
+    pis = [pi if np.isfinite(pi) and np.all(np.isfinite(cd)) else np.inf for pi, cd in zip(pis, cands)]
     return cands[int(np.argmin(pis))]
 
 
@@ -371,5 +410,12 @@ def run(problem, settings: dict | None = None, progress=None) -> SolveResult:
         other = _other_solver_keys()
         settings = {k: v for k, v in settings.items() if k in StaticSettings.model_fields or k not in other}
     s = parse(StaticSettings, settings, "solver.static")
-    return solve_static(problem.model, problem.fixed, problem.loads, prescribed=problem.prescribed,
-                        contact=problem.contact, progress=progress, settings=s)
+    return solve_static(
+        problem.model,
+        problem.fixed,
+        problem.loads,
+        prescribed=problem.prescribed,
+        contact=problem.contact,
+        progress=progress,
+        settings=s,
+    )

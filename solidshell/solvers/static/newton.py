@@ -87,10 +87,10 @@ MAX_TRIALS = 40
 class _Tangent:
     """The factor of the last iteration, carried to the next."""
 
-    lu: object = None         # the positive-definite factor of the (shifted) tangent (sys.chol)
-    A: object = None          # the free tangent last assembled
-    sigma: float = 0.0        # its shift
-    cg_next: bool = False     # the last factor is unshifted and the last CG step (if any) was quick
+    lu: object = None  # the positive-definite factor of the (shifted) tangent (sys.chol)
+    A: object = None  # the free tangent last assembled
+    sigma: float = 0.0  # its shift
+    cg_next: bool = False  # the last factor is unshifted and the last CG step (if any) was quick
 
 
 @dataclass
@@ -99,11 +99,11 @@ class _Step:
 
     p: np.ndarray
     gp: float
-    sigma: float              # the shift of the factor behind it
-    inexact: bool = False     # a CG step, whose curvature p.K.p is pKp
+    sigma: float  # the shift of the factor behind it
+    inexact: bool = False  # a CG step, whose curvature p.K.p is pKp
     pKp: float = 0.0
     pmax: float = 0.0
-    acc: np.ndarray | None = None     # the curvilinear second-order term
+    acc: np.ndarray | None = None  # the curvilinear second-order term
 
 
 def newton_level(sys, D, lam, o, stats):
@@ -135,7 +135,7 @@ def newton_level(sys, D, lam, o, stats):
         if isinstance(step, str):
             return D, False, step, rel
         if not np.isfinite(step.gp) or step.gp >= 0.0:
-            if step.inexact:          # a CG step that does not descend: factorise this tangent
+            if step.inexact:  # a CG step that does not descend: factorise this tangent
                 t.cg_next = False
                 continue
             if step.gp == 0.0 and rel <= o.tol:
@@ -205,8 +205,7 @@ def _cg_step(sys, D, g, rel, o, stats, t):
     # on square-pedestal 48x16x4, docs/solvers.md section 5)
     t.A = None
     _, t.A = sys.free_tangent(D)
-    x, k, inexact, pKp = pcg(t.A.matvec(), g, t.lu.solve, min(PCG_FORCING, math.sqrt(rel)),
-                             o.pcg_iterations)
+    x, k, inexact, pKp = pcg(t.A.matvec(), g, t.lu.solve, min(PCG_FORCING, math.sqrt(rel)), o.pcg_iterations)
     sys.n_solves += k
     stats["cg_iterations"] = stats.get("cg_iterations", 0) + k
     t.cg_next = inexact and 2 * k <= o.pcg_iterations
@@ -229,8 +228,7 @@ def _factorise(sys, D, t, stats, assembled):
     scale = np.abs(t.A.diagonal())
     scale[scale == 0.0] = max(float(scale.max(initial=0.0)), 1.0)
     try:
-        t.lu, t.sigma, nf = shifted_factor(sys.chol, t.A, scale,
-                                           0.0 if t.sigma < 1e-7 else t.sigma / 10.0)
+        t.lu, t.sigma, nf = shifted_factor(sys.chol, t.A, scale, 0.0 if t.sigma < 1e-7 else t.sigma / 10.0)
     except RuntimeError as exc:
         return f"tangent could not be factorised ({exc})"
     sys.n_factor += nf
@@ -255,9 +253,8 @@ def _curvilinear(sys, D, lam, g, step, t, o):
         return None
     acc = np.zeros_like(D)
     acc[f] = -t.lu.solve(rpp)
-    sys.n_solves += 1         # back-substitution with the same factorisation
-    if not (np.all(np.isfinite(acc)) and
-            0.5 * np.linalg.norm(acc) <= ACCEL_RATIO * np.linalg.norm(step.p)):
+    sys.n_solves += 1  # back-substitution with the same factorisation
+    if not (np.all(np.isfinite(acc)) and 0.5 * np.linalg.norm(acc) <= ACCEL_RATIO * np.linalg.norm(step.p)):
         return None
     return acc
 
@@ -289,8 +286,7 @@ def _trust_step(sys, D, lam, Pi, g, step, o, stats):
             alpha *= 0.25
             continue
         dec = Pit - Pi
-        pred = (gp * (alpha - 0.5 * alpha * alpha) if not step.inexact
-                else gp * alpha + 0.5 * alpha * alpha * step.pKp)
+        pred = gp * (alpha - 0.5 * alpha * alpha) if not step.inexact else gp * alpha + 0.5 * alpha * alpha * step.pKp
         rho = dec / pred if pred < 0.0 else 0.0
         taken = alpha * pmax
         if abs(pred) <= ROUNDOFF * energy_scale(sys, D, lam, Pi):
@@ -316,8 +312,7 @@ def _trust_step(sys, D, lam, Pi, g, step, o, stats):
         radius = max(radius, o.radius_min)
         stats["radius"] = radius
         if accepted:
-            if step.sigma > 0.0 and alpha >= 1.0 and rho >= EXTEND_RHO and step.acc is None \
-                    and not step.inexact:
+            if step.sigma > 0.0 and alpha >= 1.0 and rho >= EXTEND_RHO and step.acc is None and not step.inexact:
                 return _extend(sys, D, lam, step, radius, (alpha, Dt, Pit, Gt), stats)
             return alpha, Dt, Pit, Gt
         alpha = min(1.0, radius / pmax)
@@ -353,8 +348,8 @@ def _armijo_step(sys, D, lam, Pi, g, step, o, stats):
             alpha *= 0.25
             continue
         if Pit - Pi <= ARMIJO * alpha * gp or (
-                abs(alpha * gp) <= ROUNDOFF * energy_scale(sys, D, lam, Pi)
-                and np.linalg.norm(Gt[f]) < gnorm):
+            abs(alpha * gp) <= ROUNDOFF * energy_scale(sys, D, lam, Pi) and np.linalg.norm(Gt[f]) < gnorm
+        ):
             return alpha, Dt, Pit, Gt
         den = 2.0 * (Pit - Pi - alpha * gp)
         a_new = -gp * alpha * alpha / den if den > 0 else 0.5 * alpha
@@ -388,8 +383,7 @@ def _displacement_converged(sys, D, lam, step, dmax, it, stats):
     rel = float(np.linalg.norm(G[f])) / sys.reference_norm(G + lam * sys.P, lam)
     stats["criterion"] = "displacement"
     stats["D_last"] = D
-    return (D, True, f"converged in {it} iterations (Newton correction {step.pmax / dmax:.1e} of |D|)",
-            rel)
+    return (D, True, f"converged in {it} iterations (Newton correction {step.pmax / dmax:.1e} of |D|)", rel)
 
 
 def _stalled(sys, D, lam, Pi, step, dmax, rel, it, stats):
@@ -398,9 +392,15 @@ def _stalled(sys, D, lam, Pi, step, dmax, rel, it, stats):
     residual has reached the round-off floor of the internal force -- that is convergence;
     otherwise the line search failed."""
     scale = max(dmax, 1e-300)
-    if (abs(step.gp) <= ROUNDOFF * energy_scale(sys, D, lam, Pi) and step.sigma == 0.0
-            and step.pmax <= 1e-6 * scale):
+    if abs(step.gp) <= ROUNDOFF * energy_scale(sys, D, lam, Pi) and step.sigma == 0.0 and step.pmax <= 1e-6 * scale:
         stats["criterion"] = "round-off"
-        return D, True, (f"converged at the round-off floor in {it} iterations (relative "
-                         f"residual {rel:.1e}, Newton correction {step.pmax / scale:.1e} of |D|)"), rel
+        return (
+            D,
+            True,
+            (
+                f"converged at the round-off floor in {it} iterations (relative "
+                f"residual {rel:.1e}, Newton correction {step.pmax / scale:.1e} of |D|)"
+            ),
+            rel,
+        )
     return D, False, "line search failed (no decrease of the potential along the Newton step)", rel

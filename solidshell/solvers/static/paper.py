@@ -54,8 +54,15 @@ def paper_level(sys, D, lam, o, stats):
             else:
                 dD = sys.ldl(A)[0].solve(r)
         except RuntimeError:
-            return D, False, (f"singular tangent K_t at iteration {it} (relative residual {rel:.2e}); "
-                              "the paper's scheme cannot proceed"), rel
+            return (
+                D,
+                False,
+                (
+                    f"singular tangent K_t at iteration {it} (relative residual {rel:.2e}); "
+                    "the paper's scheme cannot proceed"
+                ),
+                rel,
+            )
         sys.n_solves += 1
         sys.n_factor += 1
         if not np.all(np.isfinite(dD)):
@@ -69,5 +76,4 @@ def paper_level(sys, D, lam, o, stats):
         e_first = e_step if e_first is None else e_first
         e_ratio = e_step / e_first if e_first > 0 else 0.0
     stall = f"; no progress in the last {since_best} iterations" if since_best > 50 else ""
-    return D, False, (f"paper scheme stopped after {o.max_iter} iterations at relative residual "
-                      f"{rel:.2e}{stall}"), rel
+    return D, False, (f"paper scheme stopped after {o.max_iter} iterations at relative residual {rel:.2e}{stall}"), rel

@@ -44,11 +44,19 @@ import math
 import numpy as np
 
 from ...errors import InputError
-from ..linear import (CHOLESKY_KINDS, Cholesky, LowerCSC, arpack_start, as_csc, ldl_inertia,
-                      positive_definite_factor)
+from ..linear import CHOLESKY_KINDS, Cholesky, LowerCSC, arpack_start, as_csc, ldl_inertia, positive_definite_factor
 
-__all__ = ["ROUNDOFF", "System", "converged", "energy_scale", "free_length", "iteration_report",
-           "seek_minimum", "shifted_factor", "stability"]
+__all__ = [
+    "ROUNDOFF",
+    "System",
+    "converged",
+    "energy_scale",
+    "free_length",
+    "iteration_report",
+    "seek_minimum",
+    "shifted_factor",
+    "stability",
+]
 
 
 # ============================================================================ the discrete system
@@ -68,8 +76,11 @@ class System:
         if self.presc_fn is not None:
             self.presc = self._presc_at(1.0)
         else:
-            self.presc = (np.zeros(6 * n) if prescribed is None
-                          else np.asarray(prescribed, dtype=float).reshape(n, 6).ravel().copy())
+            self.presc = (
+                np.zeros(6 * n)
+                if prescribed is None
+                else np.asarray(prescribed, dtype=float).reshape(n, 6).ravel().copy()
+            )
         if not (np.all(np.isfinite(self.P)) and np.all(np.isfinite(self.presc))):
             raise InputError("loads and prescribed values must be finite")
         self.contact = list(contact or [])
@@ -89,8 +100,8 @@ class System:
         self.factorization = factorization
         self.chol = positive_definite_factor(factorization)
         self._ldl = None
-        self._lower = None          # the free-dof lower-triangle pattern (free_tangent)
-        self._kff_cache = None      # the gather map of Kff
+        self._lower = None  # the free-dof lower-triangle pattern (free_tangent)
+        self._kff_cache = None  # the gather map of Kff
         # step sizes are measured in length: a director dof (unit-free, Eq. 1) counts as the motion
         # h/2 |dU_n| of the shell's faces, so that every step control is the same in any unit
         # system (a max over raw dofs would mix cm and 1 and change with the length unit)
@@ -133,9 +144,9 @@ class System:
         blocks = [] if want_tangent else None
         k = self.k_contact
         for b in self.contact:
-            fb, eb = b.forces(x, k)              # penalty force k p n on the sheet, energy k p^2/2
+            fb, eb = b.forces(x, k)  # penalty force k p n on the sheet, energy k p^2/2
             e += eb
-            f[:, :3] -= fb                       # the gradient of the penalty energy is -k p n
+            f[:, :3] -= fb  # the gradient of the penalty energy is -k p n
             if want_tangent:
                 gap, nrm = b.penetration(x)
                 act = np.flatnonzero(gap < 0.0)
@@ -147,17 +158,19 @@ class System:
         """The contact tangent blocks as a (6N, 6N) CSR matrix, or None."""
         if not blocks:
             return None
-        import scipy.sparse as sp   # scipy.sparse only where a 6N x 6N matrix is formed: a small
-                                    # run on the free-tangent path does not import it at all
+        import scipy.sparse as sp  # scipy.sparse only where a 6N x 6N matrix is formed: a small
+
+        # run on the free-tangent path does not import it at all
         rows, cols, vals = [], [], []
         for act, nn in blocks:
             base = 6 * act
             r = (base[:, None, None] + np.arange(3)[None, :, None]).repeat(3, axis=2)
             c = (base[:, None, None] + np.arange(3)[None, None, :]).repeat(3, axis=1)
-            rows.append(r.ravel()); cols.append(c.ravel()); vals.append(nn.ravel())
+            rows.append(r.ravel())
+            cols.append(c.ravel())
+            vals.append(nn.ravel())
         m = 6 * self.n
-        return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-                             shape=(m, m))
+        return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(m, m))
 
     # -- evaluations
     def potential_and_gradient(self, D, lam):
@@ -229,8 +242,9 @@ class System:
         residual.  The internal force enters so that a problem driven by prescribed values alone
         (P = 0, reactions ~ 0 in a rigid motion) is still measured against the forces in play."""
         r = F[self.fixd] - lam * self.P[self.fixd]
-        return max(float(np.linalg.norm(lam * self.P)), float(np.linalg.norm(r)),
-                   float(np.linalg.norm(F[self.free])), 1e-300)
+        return max(
+            float(np.linalg.norm(lam * self.P)), float(np.linalg.norm(r)), float(np.linalg.norm(F[self.free])), 1e-300
+        )
 
     def Kff(self, K):
         """K restricted to the free dofs, CSC.  The tangents of a solve share one sparsity pattern,
@@ -242,13 +256,16 @@ class System:
         f = self.free
         K = K.tocsr()
         cache = self._kff_cache
-        if (cache is None or not np.array_equal(cache[0], K.indptr)
-                or not np.array_equal(cache[1], K.indices)):
-            probe = sp.csr_matrix((np.arange(1, K.nnz + 1, dtype=float), K.indices, K.indptr),
-                                  shape=K.shape)[f][:, f]
+        if cache is None or not np.array_equal(cache[0], K.indptr) or not np.array_equal(cache[1], K.indices):
+            probe = sp.csr_matrix((np.arange(1, K.nnz + 1, dtype=float), K.indices, K.indptr), shape=K.shape)[f][:, f]
             probe.sort_indices()
-            cache = (K.indptr.copy(), K.indices.copy(), probe.data.astype(np.int64) - 1,
-                     probe.indices.copy(), probe.indptr.copy())
+            cache = (
+                K.indptr.copy(),
+                K.indices.copy(),
+                probe.data.astype(np.int64) - 1,
+                probe.indices.copy(),
+                probe.indptr.copy(),
+            )
             self._kff_cache = cache
         _, _, gather, indices, indptr = cache
         n = f.size
@@ -306,6 +323,7 @@ def free_length(mesh, fixed_mask):
     Y = X[fixed_nodes]
     if len(X) * len(Y) > 2e7:
         from scipy.spatial import cKDTree
+
         d, _ = cKDTree(Y).query(X)
         return float(d.max())
     # direct distances: importing scipy.spatial costs more than this on the usual meshes
@@ -329,7 +347,7 @@ def stability(sys, D, eig_max_dofs, known=None):
     ``known``: the free tangent at D whose positive-definite Cholesky factor ``sys.chol`` holds
     (the last test of ``seek_minimum``): then neither the tangent nor its factor is formed again
     (a tangent and two factorisations saved at the end of every solve)."""
-    chol = sys.chol if sys.factorization in CHOLESKY_KINDS else Cholesky()   # reuse its analysis
+    chol = sys.chol if sys.factorization in CHOLESKY_KINDS else Cholesky()  # reuse its analysis
     if known is not None and chol is sys.chol:
         A, pd = known, True
     else:
@@ -346,16 +364,33 @@ def stability(sys, D, eig_max_dofs, known=None):
     lmin = None
     if _DENSE_EIG < n <= eig_max_dofs:
         from scipy.sparse.linalg import LinearOperator, eigsh
+
         try:
             if pd:
                 # A itself is positive definite: shift-invert about 0 with its Cholesky factor (A
                 # is only an operator here: ARPACK's mode 3 applies nothing but OPinv)
-                vals = eigsh(LinearOperator((n, n), matvec=lambda x: A @ x, dtype=float), k=1,
-                             sigma=0.0, which="LM", return_eigenvectors=False, tol=1e-8, v0=arpack_start(n),
-                             maxiter=2000, OPinv=LinearOperator((n, n), matvec=chol.solve, dtype=float))
+                vals = eigsh(
+                    LinearOperator((n, n), matvec=lambda x: A @ x, dtype=float),
+                    k=1,
+                    sigma=0.0,
+                    which="LM",
+                    return_eigenvectors=False,
+                    tol=1e-8,
+                    v0=arpack_start(n),
+                    maxiter=2000,
+                    OPinv=LinearOperator((n, n), matvec=chol.solve, dtype=float),
+                )
             else:
-                vals = eigsh(as_csc(A), k=1, sigma=-s, which="LM", return_eigenvectors=False,
-                             tol=1e-8, maxiter=2000, v0=arpack_start(n))
+                vals = eigsh(
+                    as_csc(A),
+                    k=1,
+                    sigma=-s,
+                    which="LM",
+                    return_eigenvectors=False,
+                    tol=1e-8,
+                    maxiter=2000,
+                    v0=arpack_start(n),
+                )
             lmin = float(vals[0])
         except Exception:  # noqa: BLE001 - a diagnostic, never fatal
             lmin = None
@@ -375,6 +410,7 @@ def _lowest_mode(A, k_max=6):
         w, V = np.linalg.eigh(A.toarray())
         return float(w[0]), V[:, 0]
     from scipy.sparse.linalg import eigsh
+
     s = 1e-10 * float(np.abs(A.diagonal()).mean())
     try:
         w, V = eigsh(A, k=min(k_max, n - 2), sigma=-s, which="LM", tol=1e-8, maxiter=5000, v0=arpack_start(n))
@@ -385,6 +421,7 @@ def _lowest_mode(A, k_max=6):
         pass
     try:
         from scipy.sparse.linalg import lobpcg
+
         X = np.random.default_rng(0).standard_normal((n, 2))
         w, V = lobpcg(A, X, largest=False, tol=1e-8, maxiter=2000)
         i = int(np.argmin(w))
@@ -407,7 +444,7 @@ def _leave_saddle(sys, D, lam, L_f, step_frac):
         return None, None
     diag = float(np.abs(A.diagonal()).max())
     if lmin >= -1e-13 * diag:
-        return None, lmin                  # singular, not indefinite: nothing to leave along
+        return None, lmin  # singular, not indefinite: nothing to leave along
     v = v / sys.maxnorm(v, free=True)
     Pi0, _ = sys.potential_and_gradient(D, lam)
     best, Dbest = Pi0, None
@@ -439,18 +476,32 @@ def seek_minimum(sys, D, lam, o, stats, settle, max_escapes, step_frac, warnings
         Dn, lmin = _leave_saddle(sys, D, lam, o.L_f, step_frac)
         if Dn is None:
             if lmin is not None and lmin >= 0.0:
-                return D, True, ""         # singular but not indefinite (a free mode): not a saddle
-            return D, False, (f"the equilibrium found is a saddle (min eigenvalue {lmin:.3g}) and no "
-                              "step along its negative-curvature direction lowers the energy")
+                return D, True, ""  # singular but not indefinite (a free mode): not a saddle
+            return (
+                D,
+                False,
+                (
+                    f"the equilibrium found is a saddle (min eigenvalue {lmin:.3g}) and no "
+                    "step along its negative-curvature direction lowers the energy"
+                ),
+            )
         stats["saddle_eigenvalues"].append(float(lmin))
-        warnings.append(f"static: left a saddle at load factor {lam:.4g} (tangent eigenvalue "
-                      f"{lmin:.3g}) along its negative-curvature direction")
+        warnings.append(
+            f"static: left a saddle at load factor {lam:.4g} (tangent eigenvalue "
+            f"{lmin:.3g}) along its negative-curvature direction"
+        )
         stats.pop("rel0", None)
         stats["on_iter"] = None
         D, ok, msg, _ = settle(sys, Dn, lam, o, stats)
         if not ok:
             return D, False, f"after leaving a saddle (eigenvalue {lmin:.3g}) Newton failed: {msg}"
     lm = stats["saddle_eigenvalues"][-1] if stats["saddle_eigenvalues"] else float("nan")
-    return D, False, (f"no stable equilibrium reached: still a saddle after leaving "
-                      f"{len(stats['saddle_eigenvalues'])} (last eigenvalue {lm:.3g}); raise "
-                      "max_saddle_escapes or check the supports")
+    return (
+        D,
+        False,
+        (
+            f"no stable equilibrium reached: still a saddle after leaving "
+            f"{len(stats['saddle_eigenvalues'])} (last eigenvalue {lm:.3g}); raise "
+            "max_saddle_escapes or check the supports"
+        ),
+    )

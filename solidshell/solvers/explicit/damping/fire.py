@@ -78,7 +78,7 @@ def update(Dn1, D, Dp, R, invM, Mf, fixed, presc, inv_dt_old, dt_new, c_v, c_f):
         w = c_v * v + c_f * a
         x = D[i] + dt_new * (w + half_new * a)
         Dn1[i] = x
-        if x - x != 0.0:   # inf - inf and nan - nan are nan
+        if x - x != 0.0:  # inf - inf and nan - nan are nan
             finite = False
         wMw += Mf[i] * w * w
     return wMw, finite
@@ -86,11 +86,11 @@ def update(Dn1, D, Dp, R, invM, Mf, fixed, presc, inv_dt_old, dt_new, c_v, c_f):
 
 class Fire(Damper):
     name = "fire"
-    rewrites_step = True   # correct() computes D_n+1 from R alone (but on a fresh run's first step)
-    wants_power = True     # correct() reads view.step_power (P, v.M.v, R.M^-1.R) when the step formed it
+    rewrites_step = True  # correct() computes D_n+1 from R alone (but on a fresh run's first step)
+    wants_power = True  # correct() reads view.step_power (P, v.M.v, R.M^-1.R) when the step formed it
 
     def alpha0(self, settings) -> float:
-        return 0.0   # no viscous damping: FIRE's mixing and freezes take the energy out
+        return 0.0  # no viscous damping: FIRE's mixing and freezes take the energy out
 
     def correct(self, view: DampingView, n, D, Dp, Dn1, R, vMv):
         """Rewrite the step into Dn1 (see the module docstring); (v_n.M.v_n of the step taken,
@@ -98,9 +98,10 @@ class Fire(Damper):
         st, s, dofs = view.state, view.settings, view.dofs
         dt = st.dt
         dt_max = min(s.dt if s.dt is not None else s.safety * view.dt_crit, s.safety * st.dtc_min)
-        pw = view.step_power      # formed with R by the fused residual pass, else one pass here
-        P, vMv_old, fMf = pw if pw is not None else \
-            power(D, Dp, R, dofs.invM, dofs.Mf, dofs.fixed_mask, 1.0 / dt, 0.5 * dt)
+        pw = view.step_power  # formed with R by the fused residual pass, else one pass here
+        P, vMv_old, fMf = (
+            pw if pw is not None else power(D, Dp, R, dofs.invM, dofs.Mf, dofs.fixed_mask, 1.0 / dt, 0.5 * dt)
+        )
         if n == 0 and view.fresh:
             # D_-1 is the start rule's Taylor point (v_-1/2 = V_0 - dt/2 A_0), not a velocity the
             # run had: the first step is the scheme's own
@@ -120,9 +121,10 @@ class Fire(Damper):
             st.fire_a = s.fire_alpha_start
             st.fire_n = 0
             st.resets += 1
-        wMw, finite = update(Dn1, D, Dp, R, dofs.invM, dofs.Mf, dofs.fixed_mask, dofs.presc_full,
-                             1.0 / dt, dt_new, c_v, c_f)
-        st.damp_sum += 0.5 * (vMv_old - wMw)   # >= 0: |(1 - a) v + a |v| F^| <= |v|
+        wMw, finite = update(
+            Dn1, D, Dp, R, dofs.invM, dofs.Mf, dofs.fixed_mask, dofs.presc_full, 1.0 / dt, dt_new, c_v, c_f
+        )
+        st.damp_sum += 0.5 * (vMv_old - wMw)  # >= 0: |(1 - a) v + a |v| F^| <= |v|
         if dt_new != dt:
-            view.change_step(n, dt_new)   # t_n stays where it is; the step n -> n+1 (and on) is dt_new
+            view.change_step(n, dt_new)  # t_n stays where it is; the step n -> n+1 (and on) is dt_new
         return wMw, finite

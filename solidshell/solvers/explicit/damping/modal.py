@@ -42,9 +42,16 @@ def omega_min(view: DampingView, D) -> float | None:
     m = view.dofs.Mf[idx]
     zero = 1e-10 * float(np.max(K.diagonal() / m))
     try:
-        lam = eigsh(K, k=6, M=sp.diags(m).tocsc(), sigma=-zero, which="LM", return_eigenvectors=False,
-                    v0=arpack_start(K.shape[0]))
-    except Exception:   # ArpackNoConvergence, a singular shift: keep the previous alpha
+        lam = eigsh(
+            K,
+            k=6,
+            M=sp.diags(m).tocsc(),
+            sigma=-zero,
+            which="LM",
+            return_eigenvectors=False,
+            v0=arpack_start(K.shape[0]),
+        )
+    except Exception:  # ArpackNoConvergence, a singular shift: keep the previous alpha
         return None
     pos = np.sort(lam[lam > zero])
     return float(math.sqrt(pos[0])) if pos.size else None
@@ -52,7 +59,7 @@ def omega_min(view: DampingView, D) -> float | None:
 
 class Modal(Damper):
     name = "modal"
-    varies_alpha = True     # alpha0 (the alpha setting) until the first estimate, at step 0 of a new run
+    varies_alpha = True  # alpha0 (the alpha setting) until the first estimate, at step 0 of a new run
 
     def correct(self, view: DampingView, n, D, Dp, Dn1, R, vMv):
         s = view.settings

@@ -207,10 +207,10 @@ def test_readme_commands_and_ci():
     blocks = [b.split("```", 1)[0].strip() for b in readme.split("```bash\n")[1:3]]
     assert blocks[0].startswith("python3.11 -m venv .venv && .venv/bin/pip install -e . && .venv/bin/solidshell ")
     assert "square-pedestal" in blocks[0]
-    # the suite, then the whole default verify (not --quick): a failed record fails CI (issue 34)
+    # static checks, the suite, then the whole default verify (not --quick): a failed record fails CI
     assert blocks[1] == (
-        "python3.11 -m venv .venv && .venv/bin/pip install -e '.[test,sweep]' && "
-        ".venv/bin/python -m pytest -q && .venv/bin/solidshell verify"
+        "python3.11 -m venv .venv && .venv/bin/pip install -e '.[test,sweep]' && .venv/bin/ruff check . && "
+        ".venv/bin/ruff format --check . && .venv/bin/mypy && .venv/bin/python -m pytest -q && .venv/bin/solidshell verify"
     )
     ci = (root / ".ci" / "run").read_text().strip().splitlines()
     assert ci[0] == "#!/usr/bin/env bash" and "set -euo pipefail" in ci and ci[-1] == blocks[1]

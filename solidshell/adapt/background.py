@@ -18,6 +18,7 @@ Labels are the paper's ``i0-c1-c2-...`` with c = k + 1.
 from __future__ import annotations
 
 import os
+from typing import NamedTuple
 
 import numpy as np
 
@@ -106,6 +107,110 @@ def _neighbours(side_edge, cnt):
     return nb.reshape(m, 4)
 
 
+def _checked_levels(mesh: ShellMesh, levels) -> int:
+    """``levels`` as an int after refusing a level-0 mesh with triangles, a level that is not an
+    integer >= 0, and a background mesh that would not fit in half the available memory."""
+    if len(mesh.tris):
+        raise InputError(
+            f"adaptivity needs a level-0 mesh of quadrilaterals only; this one has "
+            f"{len(mesh.tris)} triangle(s) (only quadrilateral level-0 meshes are supported)"
+        )
+    try:
+        levels_i = int(levels)
+    except (TypeError, ValueError):
+        raise InputError(f"adapt levels must be an integer >= 0, got {levels!r}") from None
+    if levels_i != levels or levels_i < 0:
+        raise InputError(f"adapt levels must be an integer >= 0, got {levels!r}")
+    n0 = len(mesh.quads)
+    est = estimate_background_bytes(n0, levels_i)
+    avail = _available_bytes()
+    if levels_i > MAX_LEVELS or est > avail // 2:
+        raise InputError(
+            f"adapt levels = {levels_i} on {n0} level-0 quads needs a background mesh of "
+            f"{n0 * 4**levels_i:.3g} elements, about {est / 2**30:.3g} GiB, more than half "
+            f"the {avail / 2**30:.3g} GiB available; use fewer levels"
+        )
+    return levels_i
+
+
+class _Split(NamedTuple):
+    """One 1-to-4 split of a level (:func:`_split_level`); new nodes: the ne mid-edge ones, then the m centres."""
+
+    nbr: np.ndarray  # (m,4) same-level element across each side of the split level (-1 on the boundary)
+    XM: np.ndarray  # (ne,3) mid-edge node positions
+    DM: np.ndarray  # (ne,3) mid-edge node directors
+    XC: np.ndarray  # (m,3) centre node positions
+    DC: np.ndarray  # (m,3) centre node directors
+    mid_parent: np.ndarray  # (ne+m,3) [A, B, E] of the mid-edge nodes, -1 for the centres
+    centre_parent: np.ndarray  # (ne+m,8) 4 corners and 4 mid-edge nodes of the centres, -1 for the mids
+    children: np.ndarray  # (4m,4) connectivity of the next level
+
+
+def _split_level(C, Xall, Dall, N: int, curves, L: float) -> _Split:
+    """Split the quads C (m,4) of one level, whose nodes are Xall, Dall (N,3), 1-to-4 (module
+    docstring); the new nodes are numbered from N.  ``curves``: boundary projection (within 1e-9 L)."""
+    m = len(C)
+    edges, side_edge, cnt, first_side = _edge_table(C)
+    nbr = _neighbours(side_edge, cnt)
+    ne = len(edges)
+    A, B = edges[:, 0], edges[:, 1]
+    XM = 0.5 * (Xall[A] + Xall[B])
+    DM = _unit(Dall[A] + Dall[B])
+    if curves is not None:
+        _project_boundary_mids(XM, Xall, A, B, cnt, curves, L)
+    # E: the corner two steps along from the side's first node in the first owning element
+    e_own, k_own = np.divmod(first_side, 4)
+    Ecorner = C[e_own, (k_own + 2) % 4]
+    mid = N + side_edge  # (m,4) node index of each side's mid node
+    cen = N + ne + np.arange(m)
+    # 8-node serendipity at xi = eta = 0: corners -1/4, mid-edge nodes 1/2
+    XC = -0.25 * Xall[C].sum(1) + 0.5 * XM[side_edge].sum(1)
+    DC = _unit(-0.25 * Dall[C].sum(1) + 0.5 * DM[side_edge].sum(1))
+    mp = np.full((ne + m, 3), -1, dtype=np.int64)
+    mp[:ne] = np.column_stack([A, B, Ecorner])
+    cp = np.full((ne + m, 8), -1, dtype=np.int64)
+    cp[ne:] = np.column_stack([C, mid])
+    # children k = [c_k, m_k, centre, m_(k-1)] (Fig. 15: child k starts at parent node k)
+    ch = np.empty((m, 4, 4), dtype=np.int64)
+    ch[:, :, 0] = C
+    ch[:, :, 1] = mid
+    ch[:, :, 2] = cen[:, None]
+    ch[:, :, 3] = np.roll(mid, 1, axis=1)
+    return _Split(nbr, XM, DM, XC, DC, mp, cp, ch.reshape(-1, 4))
+
+
+def _project_boundary_mids(XM, Xall, A, B, cnt, curves, L: float) -> None:
+    """Move the mid-edge nodes XM (in place) of the boundary edges (cnt == 1) whose two end nodes
+    A, B lie on ``curves`` (within 1e-9 L) onto the curve."""
+    bnd = np.flatnonzero(cnt == 1)
+    if bnd.size:
+        tol = 1e-9 * L
+        on = (np.linalg.norm(curves(Xall[A[bnd]]) - Xall[A[bnd]], axis=1) <= tol) & (
+            np.linalg.norm(curves(Xall[B[bnd]]) - Xall[B[bnd]], axis=1) <= tol
+        )
+        sel = bnd[on]
+        if sel.size:
+            XM[sel] = curves(XM[sel])
+
+
+def _inherited_node_sets(node_sets, N: int, node_level, mid_parent, centre_parent, levels: int) -> dict:
+    """{name: sorted background node indices} of the level-0 ``node_sets`` extended level by level:
+    a mid-edge node is in when both edge ends are, a centre when all four corners are."""
+    out = {}
+    for name, idx in node_sets.items():
+        inset = np.zeros(N, dtype=bool)
+        inset[idx] = True
+        for l in range(1, levels + 1):
+            nodes = np.flatnonzero(node_level == l)
+            mp = mid_parent[nodes]
+            ism = mp[:, 0] >= 0
+            inset[nodes[ism]] = inset[mp[ism, 0]] & inset[mp[ism, 1]]
+            cp = centre_parent[nodes[~ism], :4]
+            inset[nodes[~ism]] = inset[cp].all(1)
+        out[name] = np.flatnonzero(inset)
+    return out
+
+
 _VARIANT_CHUNK = 1 << 14
 """Elements per choose_variant call when a level's variants are chosen (transition_variants):
 ~40 MB of temporaries at most."""
@@ -135,102 +240,35 @@ class BackgroundMesh:
         from .transition import DEFAULT_TRANSITIONS, check_policy
 
         transitions = check_policy(DEFAULT_TRANSITIONS if transitions is None else transitions)
-        if len(mesh.tris):
-            raise InputError(
-                f"adaptivity needs a level-0 mesh of quadrilaterals only; this one has "
-                f"{len(mesh.tris)} triangle(s) (only quadrilateral level-0 meshes are supported)"
-            )
-        try:
-            levels_i = int(levels)
-        except (TypeError, ValueError):
-            raise InputError(f"adapt levels must be an integer >= 0, got {levels!r}") from None
-        if levels_i != levels or levels_i < 0:
-            raise InputError(f"adapt levels must be an integer >= 0, got {levels!r}")
-        n0 = len(mesh.quads)
-        est = estimate_background_bytes(n0, levels_i)
-        avail = _available_bytes()
-        if levels_i > MAX_LEVELS or est > avail // 2:
-            raise InputError(
-                f"adapt levels = {levels_i} on {n0} level-0 quads needs a background mesh of "
-                f"{n0 * 4**levels_i:.3g} elements, about {est / 2**30:.3g} GiB, more than half "
-                f"the {avail / 2**30:.3g} GiB available; use fewer levels"
-            )
+        levels_i = _checked_levels(mesh, levels)
         self = cls()
-        self.levels, self.n0, self.level0, self.transitions = levels_i, n0, mesh, transitions
-        X = [mesh.nodes.astype(float)]
-        D = [mesh.directors.astype(float)]
+        self.levels, self.n0, self.level0, self.transitions = levels_i, len(mesh.quads), mesh, transitions
         lev = [np.zeros(mesh.n_nodes, dtype=np.int64)]
         midp = [np.full((mesh.n_nodes, 3), -1, dtype=np.int64)]
         cenp = [np.full((mesh.n_nodes, 8), -1, dtype=np.int64)]
         conn = [mesh.quads.copy()]
         nbr = []
         N = mesh.n_nodes
-        Xall, Dall = X[0], D[0]
+        Xall, Dall = mesh.nodes.astype(float), mesh.directors.astype(float)
         L = mesh.characteristic_length()
         for l in range(levels_i):
-            C = conn[l]
-            m = len(C)
-            edges, side_edge, cnt, first_side = _edge_table(C)
-            nbr.append(_neighbours(side_edge, cnt))
-            ne = len(edges)
-            A, B = edges[:, 0], edges[:, 1]
-            XM = 0.5 * (Xall[A] + Xall[B])
-            DM = _unit(Dall[A] + Dall[B])
-            if curves is not None:
-                bnd = np.flatnonzero(cnt == 1)
-                if bnd.size:
-                    tol = 1e-9 * L
-                    on = (np.linalg.norm(curves(Xall[A[bnd]]) - Xall[A[bnd]], axis=1) <= tol) & (
-                        np.linalg.norm(curves(Xall[B[bnd]]) - Xall[B[bnd]], axis=1) <= tol
-                    )
-                    sel = bnd[on]
-                    if sel.size:
-                        XM[sel] = curves(XM[sel])
-            # E: the corner two steps along from the side's first node in the first owning element
-            e_own, k_own = np.divmod(first_side, 4)
-            Ecorner = C[e_own, (k_own + 2) % 4]
-            mid = N + side_edge  # (m,4) node index of each side's mid node
-            cen = N + ne + np.arange(m)
-            # 8-node serendipity at xi = eta = 0: corners -1/4, mid-edge nodes 1/2
-            XC = -0.25 * Xall[C].sum(1) + 0.5 * XM[side_edge].sum(1)
-            DC = _unit(-0.25 * Dall[C].sum(1) + 0.5 * DM[side_edge].sum(1))
-            X += [XM, XC]
-            D += [DM, DC]
-            lev += [np.full(ne + m, l + 1, dtype=np.int64)]
-            mp = np.full((ne + m, 3), -1, dtype=np.int64)
-            mp[:ne] = np.column_stack([A, B, Ecorner])
-            cp = np.full((ne + m, 8), -1, dtype=np.int64)
-            cp[ne:] = np.column_stack([C, mid])
-            midp.append(mp)
-            cenp.append(cp)
-            # children k = [c_k, m_k, centre, m_(k-1)] (Fig. 15: child k starts at parent node k)
-            ch = np.empty((m, 4, 4), dtype=np.int64)
-            ch[:, :, 0] = C
-            ch[:, :, 1] = mid
-            ch[:, :, 2] = cen[:, None]
-            ch[:, :, 3] = np.roll(mid, 1, axis=1)
-            conn.append(ch.reshape(-1, 4))
-            N += ne + m
-            Xall = np.concatenate([Xall, XM, XC])
-            Dall = np.concatenate([Dall, DM, DC])
+            sp = _split_level(conn[l], Xall, Dall, N, curves, L)
+            nbr.append(sp.nbr)
+            lev += [np.full(len(sp.mid_parent), l + 1, dtype=np.int64)]
+            midp.append(sp.mid_parent)
+            cenp.append(sp.centre_parent)
+            conn.append(sp.children)
+            N += len(sp.mid_parent)
+            Xall = np.concatenate([Xall, sp.XM, sp.XC])
+            Dall = np.concatenate([Dall, sp.DM, sp.DC])
         self.Xo, self.Xn = Xall, Dall
         self.node_level = np.concatenate(lev)
         self.mid_parent = np.concatenate(midp)
         self.centre_parent = np.concatenate(cenp)
         self.conn, self.nbr = conn, nbr
-        self.node_sets = {}
-        for name, idx in mesh.node_sets.items():
-            inset = np.zeros(N, dtype=bool)
-            inset[idx] = True
-            # by level: a mid-edge node when both edge ends are in, a centre when all four corners are
-            for l in range(1, levels_i + 1):
-                nodes = np.flatnonzero(self.node_level == l)
-                mp = self.mid_parent[nodes]
-                ism = mp[:, 0] >= 0
-                inset[nodes[ism]] = inset[mp[ism, 0]] & inset[mp[ism, 1]]
-                cp = self.centre_parent[nodes[~ism], :4]
-                inset[nodes[~ism]] = inset[cp].all(1)
-            self.node_sets[name] = np.flatnonzero(inset)
+        self.node_sets = _inherited_node_sets(
+            mesh.node_sets, N, self.node_level, self.mid_parent, self.centre_parent, levels_i
+        )
         return self
 
     # ------------------------------------------------------------------ sizes, labels

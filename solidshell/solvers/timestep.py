@@ -116,27 +116,57 @@ def estimate_omega_max(
               safety factor; what an adaptive run's re-estimate after each remesh uses)
     iteration : the difference step, iteration cap and seed (:class:`Iteration`)
     """
-    from scipy.sparse.linalg import ArpackNoConvergence, LinearOperator, eigsh
-
-    fd_step, maxiter, seed = iteration.fd_step, iteration.maxiter, iteration.seed
-
+    maxiter = iteration.maxiter
     M = np.asarray(mass, dtype=float)
     shape = M.shape
     Mf = M.ravel()
     if U is None:
         U = np.zeros(shape)
     U = np.asarray(U, dtype=float).reshape(shape)
+    idx, mf, s = _free_dofs(Mf, free)
+    start = _start_vector(idx, mf, iteration.seed, v0)
+    if method == "tangent":
+        lam, vec, conv = _tangent_top(tangent, U, idx, s, start, tol, maxiter)
+        n_force_evals = 0
+    else:
+        product = _ForceProduct(force, U, idx, s, difference, iteration.fd_step)
+        if method == "lanczos":
+            lam, vec, conv = _lanczos_top(product, idx.size, start, tol, maxiter)
+        elif method == "power":
+            lam, vec, conv = _power_top(product, start, tol, maxiter)
+        else:
+            raise ValueError(f"unknown method {method!r}; use lanczos, power or tangent")
+        n_force_evals = product.n_evals
+
+    if not (lam > 0.0 and math.isfinite(lam)):
+        raise ValueError(
+            f"largest eigenvalue of M^-1 K is {lam!r}: the stiffness is not positive "
+            "at this state or the force is not finite"
+        )
+    mode = np.zeros(Mf.size)
+    mode[idx] = s * vec
+    return OmegaEstimate(
+        omega_max=math.sqrt(lam), method=method, n_force_evals=n_force_evals, converged=conv, mode=mode
+    )
+
+
+def _free_dofs(Mf, free):
+    """(flat indices of the free dofs, their masses, 1 / sqrt of them); refuses none free or a massless one."""
     free = np.asarray(free)
     idx = np.flatnonzero(free.ravel()) if free.dtype == bool else np.asarray(free, dtype=np.int64)
-    n = idx.size
-    if n == 0:
+    if idx.size == 0:
         raise ValueError("no free dof: nothing vibrates")
     mf = Mf[idx]
     if np.any(mf <= 0.0):
         raise ValueError(f"{int(np.sum(mf <= 0))} free dof(s) have no mass; the explicit scheme needs M > 0")
-    s = 1.0 / np.sqrt(mf)
+    return idx, mf, 1.0 / np.sqrt(mf)
+
+
+def _start_vector(idx, mf, seed, v0):
+    """The iteration's start vector on the free dofs (M^1/2-scaled): the seeded random vector, or the
+    given mode ``v0`` with ``_WARM_NOISE`` of the random one added."""
     rng = np.random.default_rng(seed)
-    start = rng.standard_normal(n)
+    start = rng.standard_normal(idx.size)
     if v0 is not None:
         # the given mode plus a little of the random vector: a mode carried from another mesh can
         # lack a new mode localised on refined elements entirely, which no Krylov space from it
@@ -146,86 +176,93 @@ def estimate_omega_max(
         nw = float(np.linalg.norm(w))
         if nw > 0.0:
             start = w / nw + _WARM_NOISE * start / float(np.linalg.norm(start))
-    count = [0]
+    return start
 
-    if method == "tangent":
-        if tangent is None:
-            raise ValueError("method='tangent' needs the tangent callable")
-        K = tangent(U).tocsr()[idx][:, idx]
-        from scipy.sparse import diags
 
-        A = diags(s) @ K @ diags(s)
-        lam, vec = eigsh(A, k=1, which="LA", tol=tol, v0=start, maxiter=maxiter or 10 * n)
-        lam, vec = float(lam[0]), vec[:, 0]
-        conv = True
-    else:
+def _tangent_top(tangent, U, idx, s, start, tol, maxiter):
+    """(omega^2, eigenvector, converged) by ARPACK on the assembled M^-1/2 K M^-1/2 (method "tangent")."""
+    from scipy.sparse import diags
+    from scipy.sparse.linalg import eigsh
+
+    if tangent is None:
+        raise ValueError("method='tangent' needs the tangent callable")
+    K = tangent(U).tocsr()[idx][:, idx]
+    A = diags(s) @ K @ diags(s)
+    lam, vec = eigsh(A, k=1, which="LA", tol=tol, v0=start, maxiter=maxiter or 10 * idx.size)
+    return float(lam[0]), vec[:, 0], True
+
+
+class _ForceProduct:
+    """x -> M^-1/2 K M^-1/2 x on the free dofs, K x the directional derivative of the internal force
+    at U by a central or forward difference (module docstring); ``n_evals`` counts the force
+    evaluations spent (F(U) of the forward difference included)."""
+
+    def __init__(self, force, U, idx, s, difference, fd_step):
         if difference not in ("central", "forward"):
             raise ValueError(f"unknown difference {difference!r}; use central or forward")
-        base = U.ravel().copy()
-        idx = np.ascontiguousarray(idx, dtype=np.int64)
-
-        f0 = None
+        self.force, self.shape, self.s, self.fd_step = force, U.shape, s, fd_step
+        self.base = U.ravel().copy()
+        self.idx = np.ascontiguousarray(idx, dtype=np.int64)
+        self.n_evals = 0
+        self.f0 = None
         if difference == "forward":
-            f0 = np.array(force(base.reshape(shape)), dtype=float).ravel()[idx]
-            count[0] += 1
-        w = base.copy()  # the perturbed state, one buffer: only its ``idx`` entries change
-        v = np.empty(n)
-        fp = np.empty(n)
+            self.f0 = np.array(force(self.base.reshape(self.shape)), dtype=float).ravel()[self.idx]
+            self.n_evals += 1
+        self.w = self.base.copy()  # the perturbed state, one buffer: only its ``idx`` entries change
+        self.v = np.empty(idx.size)
+        self.fp = np.empty(idx.size)
 
-        def Av(x):
-            x = np.ascontiguousarray(x, dtype=float).ravel()
-            vmax = _scale_max(s, x, v)
-            if vmax == 0.0:
-                return np.zeros_like(x)
-            e = fd_step / vmax
-            _place(w, idx, base, e, v, 1.0)
-            Fp = np.asarray(force(w.reshape(shape)), dtype=float).ravel()
-            if f0 is not None:
-                count[0] += 1
-                return _forward_product(s, Fp, idx, f0, e)
-            np.take(Fp, idx, out=fp)  # kept: force may reuse its buffer for the second evaluation
-            _place(w, idx, base, e, v, -1.0)
-            Fm = np.asarray(force(w.reshape(shape)), dtype=float).ravel()
-            count[0] += 2
-            return _central_product(s, fp, Fm, idx, e)
+    def __call__(self, x):
+        s, idx, base, w, v = self.s, self.idx, self.base, self.w, self.v
+        x = np.ascontiguousarray(x, dtype=float).ravel()
+        vmax = _scale_max(s, x, v)
+        if vmax == 0.0:
+            return np.zeros_like(x)
+        e = self.fd_step / vmax
+        _place(w, idx, base, e, v, 1.0)
+        Fp = np.asarray(self.force(w.reshape(self.shape)), dtype=float).ravel()
+        if self.f0 is not None:
+            self.n_evals += 1
+            return _forward_product(s, Fp, idx, self.f0, e)
+        np.take(Fp, idx, out=self.fp)  # kept: force may reuse its buffer for the second evaluation
+        _place(w, idx, base, e, v, -1.0)
+        Fm = np.asarray(self.force(w.reshape(self.shape)), dtype=float).ravel()
+        self.n_evals += 2
+        return _central_product(s, self.fp, Fm, idx, e)
 
-        if method == "lanczos":
-            op = LinearOperator((n, n), matvec=Av, dtype=float)
-            ncv = min(n, 40)
-            try:
-                lam, vec = eigsh(op, k=1, which="LA", tol=tol, v0=start, ncv=ncv, maxiter=maxiter or 2000)
-                lam, vec, conv = float(lam[0]), vec[:, 0], True
-            except ArpackNoConvergence as exc:  # keep the best Ritz value, say so
-                ev, evec = exc.eigenvalues, exc.eigenvectors
-                if ev is None or len(ev) == 0:
-                    raise
-                lam, vec, conv = float(np.max(ev)), evec[:, int(np.argmax(ev))], False
-        elif method == "power":
-            x = start / np.linalg.norm(start)
-            lam, conv = 0.0, False
-            for _ in range(maxiter or 5000):
-                y = Av(x)
-                lam_new = float(x @ y)
-                ny = np.linalg.norm(y)
-                if ny == 0.0:
-                    break
-                x = y / ny
-                if abs(lam_new - lam) <= tol * abs(lam_new):
-                    lam, conv = lam_new, True
-                    break
-                lam = lam_new
-            vec = x
-        else:
-            raise ValueError(f"unknown method {method!r}; use lanczos, power or tangent")
 
-    if not (lam > 0.0 and math.isfinite(lam)):
-        raise ValueError(
-            f"largest eigenvalue of M^-1 K is {lam!r}: the stiffness is not positive "
-            "at this state or the force is not finite"
-        )
-    mode = np.zeros(Mf.size)
-    mode[idx] = s * vec
-    return OmegaEstimate(omega_max=math.sqrt(lam), method=method, n_force_evals=count[0], converged=conv, mode=mode)
+def _lanczos_top(product, n, start, tol, maxiter):
+    """(omega^2, eigenvector, converged) by matrix-free ARPACK; without convergence the best Ritz pair."""
+    from scipy.sparse.linalg import ArpackNoConvergence, LinearOperator, eigsh
+
+    op = LinearOperator((n, n), matvec=product, dtype=float)
+    ncv = min(n, 40)
+    try:
+        lam, vec = eigsh(op, k=1, which="LA", tol=tol, v0=start, ncv=ncv, maxiter=maxiter or 2000)
+        return float(lam[0]), vec[:, 0], True
+    except ArpackNoConvergence as exc:  # keep the best Ritz value, say so
+        ev, evec = exc.eigenvalues, exc.eigenvectors
+        if ev is None or len(ev) == 0:
+            raise
+        return float(np.max(ev)), evec[:, int(np.argmax(ev))], False
+
+
+def _power_top(product, start, tol, maxiter):
+    """(omega^2, eigenvector, converged) by the plain power iteration (method "power")."""
+    x = start / np.linalg.norm(start)
+    lam, conv = 0.0, False
+    for _ in range(maxiter or 5000):
+        y = product(x)
+        lam_new = float(x @ y)
+        ny = np.linalg.norm(y)
+        if ny == 0.0:
+            break
+        x = y / ny
+        if abs(lam_new - lam) <= tol * abs(lam_new):
+            lam, conv = lam_new, True
+            break
+        lam = lam_new
+    return lam, x, conv
 
 
 # The matrix-free product's vector work, one pass each (the numpy expressions they replace took

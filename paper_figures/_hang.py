@@ -44,12 +44,27 @@ def make_hang(name, scene, caption, out_dir: Path, quick: bool, title: str) -> d
     for k, (tk, mk, Xk) in enumerate(frames):
         for i, v in enumerate(("iso", "side")):
             ax = fig.add_subplot(gs[i, k])
-            sm = common.panel(ax, mk, Xk, cams[v], scene=out.scene, norm=norm, extent=ext[v], labels=(k == 0),
-                              title=f"({'abcd'[k]}) t = {tk:.2f} s" if i == 0 else None)
+            sm = common.panel(
+                ax,
+                mk,
+                Xk,
+                cams[v],
+                scene=out.scene,
+                norm=norm,
+                extent=ext[v],
+                labels=(k == 0),
+                title=f"({'abcd'[k]}) t = {tk:.2f} s" if i == 0 else None,
+            )
             axes.append(ax)
     common.shared_colorbar(fig, axes, sm)
-    info = {"figure": name, "caption": caption, "quick": quick, "runs": [rec], "times": times,
-            "frame_times": [f[0] for f in frames],
-            "differs_from_paper": "quick: 12x12 mesh, director masses x1e4" if quick else ""}
+    info = {
+        "figure": name,
+        "caption": caption,
+        "quick": quick,
+        "runs": [rec],
+        "times": times,
+        "frame_times": [f[0] for f in frames],
+        "differs_from_paper": "quick: 12x12 mesh, director masses x1e4" if quick else "",
+    }
     common.save(fig, out_dir, name, info, suptitle=title)
     return info

@@ -20,8 +20,11 @@ from . import common
 
 
 def run_sphere(mesh: str, quick: bool):
-    kw = dict(damping="kinetic", mass_scaling=1e4, mass_scaling_mode="director", max_wall_time=150.0) if quick \
+    kw = (
+        dict(damping="kinetic", mass_scaling=1e4, mass_scaling_mode="director", max_wall_time=150.0)
+        if quick
         else dict(damping="rayleigh", alpha=50.0, mass_scaling=100.0, mass_scaling_mode="director")
+    )
     out, rec = common.run("sphere", mesh=mesh, solver="relax", **kw)
     return out, rec
 

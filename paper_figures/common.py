@@ -14,7 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
-from solidshell.render import ViewStyle, bodies_of, colorbar, draw_view, height_norm, scene_warp_deg
+from solidshell.render import ViewStyle, bodies_of, draw_view, height_norm, scene_warp_deg
+from solidshell.render import colorbar as colorbar  # re-exported: the figure scripts call common.colorbar
 
 
 def mpl():
@@ -31,15 +32,42 @@ def run(scene, mesh=None, solver=None, overrides=None, adaptive=None, **settings
     from solidshell.run import run_scene
 
     t = time.perf_counter()
-    out = run_scene(scene, mesh=mesh, solver=solver, out_dir=None, progress=False, overrides=overrides,
-                    adaptive=adaptive, **settings)
+    out = run_scene(
+        scene,
+        mesh=mesh,
+        solver=solver,
+        out_dir=None,
+        progress=False,
+        overrides=overrides,
+        adaptive=adaptive,
+        **settings,
+    )
     s = out.summary
-    rec = {"scene": s["scene"], "mesh": s["mesh"], "solver": s["solver"], "overrides": dict(overrides or {}),
-           "settings": {k: v for k, v in settings.items()}, "converged": s.get("converged"),
-           "message": s.get("message"), "wall_s": round(time.perf_counter() - t, 2)}
-    for k in ("drape_coefficient", "fold_count", "interpenetrated_nodes", "max_interpenetrated_nodes",
-              "max_active_nodes", "remesh_count", "t_final", "steps", "tip_position",
-              "iterations", "positive_definite", "min_tangent_eigenvalue", "fold_angles_deg"):
+    rec = {
+        "scene": s["scene"],
+        "mesh": s["mesh"],
+        "solver": s["solver"],
+        "overrides": dict(overrides or {}),
+        "settings": {k: v for k, v in settings.items()},
+        "converged": s.get("converged"),
+        "message": s.get("message"),
+        "wall_s": round(time.perf_counter() - t, 2),
+    }
+    for k in (
+        "drape_coefficient",
+        "fold_count",
+        "interpenetrated_nodes",
+        "max_interpenetrated_nodes",
+        "max_active_nodes",
+        "remesh_count",
+        "t_final",
+        "steps",
+        "tip_position",
+        "iterations",
+        "positive_definite",
+        "min_tangent_eigenvalue",
+        "fold_angles_deg",
+    ):
         if s.get(k) is not None:
             rec[k] = s[k]
     if s.get("warnings"):
@@ -69,8 +97,18 @@ def panel(ax, out_or_mesh, X, view, scene=None, norm=None, title=None, zoom=None
     the fields of solidshell.render.ViewStyle (labels, mesh_lines, ...)."""
     mesh = out_or_mesh.mesh if hasattr(out_or_mesh, "mesh") else out_or_mesh
     sc = scene if scene is not None else getattr(out_or_mesh, "scene", None)
-    sm = draw_view(ax, mesh, X, view, bodies=bodies_of(sc), norm=norm or height_norm(X),
-                   warp_deg=scene_warp_deg(sc), zoom=zoom, extent=extent, style=ViewStyle(**style))
+    sm = draw_view(
+        ax,
+        mesh,
+        X,
+        view,
+        bodies=bodies_of(sc),
+        norm=norm or height_norm(X),
+        warp_deg=scene_warp_deg(sc),
+        zoom=zoom,
+        extent=extent,
+        style=ViewStyle(**style),
+    )
     if title:
         ax.set_title(title, fontsize=9)
     return sm
@@ -148,8 +186,9 @@ def projected_boundary(out):
     return np.asarray(analysis.drape_summary(out.mesh, out.U, **kw)["projected_boundary"], float)
 
 
-def views_figure(rows, views=("top", "iso"), boundaries=None, pedestal=None, boundary_title=None,
-                 panel_size=3.6, mesh_lines=True):
+def views_figure(
+    rows, views=("top", "iso"), boundaries=None, pedestal=None, boundary_title=None, panel_size=3.6, mesh_lines=True
+):
     """A figure of ``rows`` = [(label, RunOutput or (mesh, scene), X)], one row per state with one
     panel per view, all on ONE colour scale (one colour bar, in its own column), plus an optional
     panel of projected boundaries (label -> (M,2) points) on the right.  Returns (fig, axes)."""
@@ -157,7 +196,7 @@ def views_figure(rows, views=("top", "iso"), boundaries=None, pedestal=None, bou
     nr, nv = len(rows), len(views)
     widths = [1.4 if v == "iso" else 1.0 for v in views] + [0.05]
     if boundaries:
-        widths += [0.35, 1.25]    # room for the boundary panel's y label beside the colour bar's label
+        widths += [0.35, 1.25]  # room for the boundary panel's y label beside the colour bar's label
     fig = plt.figure(figsize=(panel_size * sum(widths) + 0.6, panel_size * nr * 0.95 + 0.5))
     gs = fig.add_gridspec(nr, len(widths), width_ratios=widths, wspace=0.2, hspace=0.32)
     norm = height_norm(*[X for _, _, X in rows])
@@ -167,7 +206,7 @@ def views_figure(rows, views=("top", "iso"), boundaries=None, pedestal=None, bou
         for j, v in enumerate(views):
             ax = fig.add_subplot(gs[i, j])
             sm = panel(ax, mesh, X, v, scene=sc, norm=norm, mesh_lines=mesh_lines)
-            if j == 0:                   # the row's label once, over its first panel
+            if j == 0:  # the row's label once, over its first panel
                 ax.set_title(label, fontsize=9, loc="left")
             axes.append(ax)
     cax = fig.add_subplot(gs[:, nv])
@@ -177,7 +216,7 @@ def views_figure(rows, views=("top", "iso"), boundaries=None, pedestal=None, bou
     if boundaries:
         ax = fig.add_subplot(gs[:, -1])
         boundary_panel(ax, boundaries, pedestal)
-        ax.set_anchor("W")        # equal axes leave the cell wider than the panel: keep it by the colour bar
+        ax.set_anchor("W")  # equal axes leave the cell wider than the panel: keep it by the colour bar
         ax.set_xlabel("x [cm]", fontsize=8)
         ax.set_ylabel("y [cm]", fontsize=8)
         ax.set_title(boundary_title or "projected boundaries on the X-Y plane", fontsize=9)
@@ -199,8 +238,13 @@ def save_state(out_dir: Path, name: str, out, **extra) -> Path:
     p = Path(out_dir) / f"{name}.npz"
     p.parent.mkdir(parents=True, exist_ok=True)
     m = out.mesh
-    np.savez_compressed(p, nodes=m.nodes, quads=getattr(m, "quads", None) if getattr(m, "quads", None) is not None
-                        else np.zeros((0, 4), int), U=np.asarray(out.U, float), **extra)
+    np.savez_compressed(
+        p,
+        nodes=m.nodes,
+        quads=getattr(m, "quads", None) if getattr(m, "quads", None) is not None else np.zeros((0, 4), int),
+        U=np.asarray(out.U, float),
+        **extra,
+    )
     return p
 
 
@@ -208,7 +252,11 @@ def interpenetration_note(rec) -> str:
     """'' or one clause naming the nodes interpenetrated at the end of a run (n_p . d_p < 0, §4.3),
     which the paper reports only for Fig. 12."""
     n = rec.get("interpenetrated_nodes")
-    return f"{n} node(s) of {rec['mesh']} interpenetrated at the end (n_p . d_p < 0, §4.3; the paper reports none here)" if n else ""
+    return (
+        f"{n} node(s) of {rec['mesh']} interpenetrated at the end (n_p . d_p < 0, §4.3; the paper reports none here)"
+        if n
+        else ""
+    )
 
 
 def describe(rec) -> str:
@@ -220,8 +268,10 @@ def describe(rec) -> str:
         parts.append(f"{rec['fold_count']} folds")
     if rec.get("converged") is False:
         parts.append("NOT converged")
-    if rec.get("positive_definite") is not None:      # static runs: the final tangent's verdict
+    if rec.get("positive_definite") is not None:  # static runs: the final tangent's verdict
         lmin = rec.get("min_tangent_eigenvalue")
-        parts.append(("stable" if rec["positive_definite"] else "NOT stable")
-                     + (f" (min eig {lmin:.2g})" if isinstance(lmin, float) else ""))
+        parts.append(
+            ("stable" if rec["positive_definite"] else "NOT stable")
+            + (f" (min eig {lmin:.2g})" if isinstance(lmin, float) else "")
+        )
     return ", ".join(parts)

@@ -17,8 +17,10 @@ import numpy as np
 from . import common
 
 NAME = "fig04"
-CAPTION = ("A 5x1 cm wool strip clamped at one end. (a) The isometric view of the deformed warp-cut strip "
-           "predicted by 10x1 elements; (b) the side view of the deformed predictions.")
+CAPTION = (
+    "A 5x1 cm wool strip clamped at one end. (a) The isometric view of the deformed warp-cut strip "
+    "predicted by 10x1 elements; (b) the side view of the deformed predictions."
+)
 REFERENCE = Path(__file__).resolve().parents[1] / "reference" / "elastica_strip.json"
 
 
@@ -51,24 +53,45 @@ def make(out_dir: Path, quick: bool = False) -> dict:
     colours = {"warp": "C0", "weft": "C3"}
     for cut in ("warp", "weft"):
         r = ref[cut]["curve"]
-        ax_b.plot(r["x"], r["z"], "-", color="0.2", lw=2.4, alpha=0.35,
-                  label=f"{cut}: elastica (reference)" if cut == "warp" else "weft: elastica (reference)")
+        ax_b.plot(
+            r["x"],
+            r["z"],
+            "-",
+            color="0.2",
+            lw=2.4,
+            alpha=0.35,
+            label=f"{cut}: elastica (reference)" if cut == "warp" else "weft: elastica (reference)",
+        )
         for m, mk in (("10x1", "o"), ("20x1", "s")):
             c = centreline(runs[cut, m])
-            ax_b.plot(c[:, 0], c[:, 1], mk + "-", color=colours[cut], ms=3.2, lw=0.9, mfc="none" if m == "20x1" else None,
-                      label=f"{cut}-cut, {m}")
+            ax_b.plot(
+                c[:, 0],
+                c[:, 1],
+                mk + "-",
+                color=colours[cut],
+                ms=3.2,
+                lw=0.9,
+                mfc="none" if m == "20x1" else None,
+                label=f"{cut}-cut, {m}",
+            )
     ax_b.set_aspect("equal")
     ax_b.set_xlabel("x [cm]  (along the strip)")
     ax_b.set_ylabel("z [cm]")
     ax_b.grid(True, lw=0.3, alpha=0.5)
     ax_b.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.03, 0.5), frameon=False)
     ax_b.set_title("(b) side view: centre lines over the elastica", fontsize=9)
-    info = {"figure": NAME, "caption": CAPTION, "quick": quick, "runs": recs,
-            "differs_from_paper": "reference curve: the heavy elastica instead of the paper's 50x5 S4R model"}
+    info = {
+        "figure": NAME,
+        "caption": CAPTION,
+        "quick": quick,
+        "runs": recs,
+        "differs_from_paper": "reference curve: the heavy elastica instead of the paper's 50x5 S4R model",
+    }
     common.save(fig, out_dir, NAME, info, suptitle="Fig. 4  A 5x1 cm wool strip clamped at one end (§3.1)")
     return info
 
 
 if __name__ == "__main__":
     from .registry import script_main
+
     script_main(NAME)

@@ -14,9 +14,11 @@ from pathlib import Path
 from . import common
 
 NAME = "fig05"
-CAPTION = ("A 20x20 cm square fabric sheet draped over a 10x10 cm square pedestal. (a) The top and isometric "
-           "views predicted by 24x8x4 elements; (b) the top and isometric views predicted by 48x16x4 elements; "
-           "(c) the deformed boundary projected onto X-Y plane.")
+CAPTION = (
+    "A 20x20 cm square fabric sheet draped over a 10x10 cm square pedestal. (a) The top and isometric "
+    "views predicted by 24x8x4 elements; (b) the top and isometric views predicted by 48x16x4 elements; "
+    "(c) the deformed boundary projected onto X-Y plane."
+)
 
 
 def make(out_dir: Path, quick: bool = False) -> dict:
@@ -27,15 +29,24 @@ def make(out_dir: Path, quick: bool = False) -> dict:
         recs.append(rec)
         rows.append((f"({tag}) {m}", out, common.positions(out.mesh, out.U)))
         bnd[common.describe(rec)] = common.projected_boundary(out)
-    fig, _ = common.views_figure(rows, boundaries=bnd, pedestal=rows[0][1].scene.pedestal(),
-                                 boundary_title="(c) projected boundaries")
-    info = {"figure": NAME, "caption": CAPTION, "quick": quick, "runs": recs,
-            "differs_from_paper": "(c) has no experiment (Kang & Yu) and no 90x30x4 S4R curve; "
-                                  + ("quick: meshes 12x4x4 and 24x8x4 instead of 24x8x4 and 48x16x4" if quick else "")}
-    common.save(fig, out_dir, NAME, info, suptitle="Fig. 5  20x20 cm sheet on a 10x10 cm square pedestal (§3.2, static)")
+    fig, _ = common.views_figure(
+        rows, boundaries=bnd, pedestal=rows[0][1].scene.pedestal(), boundary_title="(c) projected boundaries"
+    )
+    info = {
+        "figure": NAME,
+        "caption": CAPTION,
+        "quick": quick,
+        "runs": recs,
+        "differs_from_paper": "(c) has no experiment (Kang & Yu) and no 90x30x4 S4R curve; "
+        + ("quick: meshes 12x4x4 and 24x8x4 instead of 24x8x4 and 48x16x4" if quick else ""),
+    }
+    common.save(
+        fig, out_dir, NAME, info, suptitle="Fig. 5  20x20 cm sheet on a 10x10 cm square pedestal (§3.2, static)"
+    )
     return info
 
 
 if __name__ == "__main__":
     from .registry import script_main
+
     script_main(NAME)

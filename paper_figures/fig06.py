@@ -21,9 +21,11 @@ from pathlib import Path
 from . import common
 
 NAME = "fig06"
-CAPTION = ("A circular fabric sheet draped over a circular pedestal. (a) The top and isometric views predicted "
-           "by using a 20x80 mesh; (b) the deformed boundary projected to X-Y plane. (c) the top and isometric "
-           "views of another convergent predictions by using the 20x80 mesh.")
+CAPTION = (
+    "A circular fabric sheet draped over a circular pedestal. (a) The top and isometric views predicted "
+    "by using a 20x80 mesh; (b) the deformed boundary projected to X-Y plane. (c) the top and isometric "
+    "views of another convergent predictions by using the 20x80 mesh."
+)
 C_A, C_C, C_HI = 1e-3, 2e-3, 1e-2
 
 
@@ -36,16 +38,23 @@ def _stab(rec) -> str:
 def _row_label(tag, mesh, c, rec) -> str:
     conv = "" if rec.get("converged") else ", NOT converged"
     dc = rec.get("drape_coefficient")
-    return (f"({tag}) {mesh}, c = {c:g}: {rec.get('fold_count')} folds, DC {dc:.3f}{conv}\n{_stab(rec)}"
-            if dc is not None else f"({tag}) {mesh}, c = {c:g}{conv}")
+    return (
+        f"({tag}) {mesh}, c = {c:g}: {rec.get('fold_count')} folds, DC {dc:.3f}{conv}\n{_stab(rec)}"
+        if dc is not None
+        else f"({tag}) {mesh}, c = {c:g}{conv}"
+    )
 
 
 def make(out_dir: Path, quick: bool = False) -> dict:
     fine, coarse = ("10x40", "5x20") if quick else ("20x80", "10x40")
     recs, bnd, runs = [], {}, {}
     for key, m, c in (("a", fine, C_A), ("coarse", coarse, C_A), ("c", fine, C_C), ("c'", fine, C_HI)):
-        out, rec = common.run("circle-pedestal", mesh=m, solver="static",
-                              overrides={"solver.static.method": "paper", "solver.static.c": c})
+        out, rec = common.run(
+            "circle-pedestal",
+            mesh=m,
+            solver="static",
+            overrides={"solver.static.method": "paper", "solver.static.c": c},
+        )
         rec["c"] = c
         rec["panel"] = key
         recs.append(rec)
@@ -55,22 +64,34 @@ def make(out_dir: Path, quick: bool = False) -> dict:
         bnd[common.describe(rec) + f", c = {C_A:g}"] = common.projected_boundary(out)
     shown = [("a", C_A), ("c", C_C)]
     if runs["c"][1].get("fold_count") == runs["a"][1].get("fold_count"):
-        shown.append(("c'", C_HI))       # doubling did not switch the state: show the high end too
-    rows = [(_row_label(k, fine, c, runs[k][1]), runs[k][0], common.positions(runs[k][0].mesh, runs[k][0].U))
-            for k, c in shown]
-    fig, _ = common.views_figure(rows, boundaries=bnd, pedestal=runs["a"][0].scene.pedestal(),
-                                 boundary_title="(b) projected boundaries")
+        shown.append(("c'", C_HI))  # doubling did not switch the state: show the high end too
+    rows = [
+        (_row_label(k, fine, c, runs[k][1]), runs[k][0], common.positions(runs[k][0].mesh, runs[k][0].U))
+        for k, c in shown
+    ]
+    fig, _ = common.views_figure(
+        rows, boundaries=bnd, pedestal=runs["a"][0].scene.pedestal(), boundary_title="(b) projected boundaries"
+    )
     fa, fc, fh = (runs[k][1].get("fold_count") for k in ("a", "c", "c'"))
-    diff = [f"fold counts on {fine}: (a) c = {C_A:g}: {fa}, (c) c = {C_C:g} (lambda doubled, the paper's recipe): {fc}, "
-            f"(c') c = {C_HI:g}: {fh} (paper: 4, and 8 with lambda doubled)",
-            "(b) has no experiment and no 30x120 S4R curve"]
+    diff = [
+        f"fold counts on {fine}: (a) c = {C_A:g}: {fa}, (c) c = {C_C:g} (lambda doubled, the paper's recipe): {fc}, "
+        f"(c') c = {C_HI:g}: {fh} (paper: 4, and 8 with lambda doubled)",
+        "(b) has no experiment and no 30x120 S4R curve",
+    ]
     if quick:
         diff.append(f"quick: {fine} / {coarse} instead of 20x80 / 10x40")
     info = {"figure": NAME, "caption": CAPTION, "quick": quick, "runs": recs, "differs_from_paper": "; ".join(diff)}
-    common.save(fig, out_dir, NAME, info, suptitle="Fig. 6  25.4 cm disc on a 12.7 cm pedestal (§3.3, static, the paper's scheme, Eq. 18 constant c)")
+    common.save(
+        fig,
+        out_dir,
+        NAME,
+        info,
+        suptitle="Fig. 6  25.4 cm disc on a 12.7 cm pedestal (§3.3, static, the paper's scheme, Eq. 18 constant c)",
+    )
     return info
 
 
 if __name__ == "__main__":
     from .registry import script_main
+
     script_main(NAME)

@@ -30,19 +30,32 @@ def make(out_dir: Path, quick: bool = False) -> dict:
         recs.append(rec)
         rows.append((f"({tag}) {start}: {common.describe(rec)}", out, common.positions(out.mesh, out.U)))
     fig, _ = common.views_figure(rows, panel_size=4.6)
-    interp = [f"{r['start']}: {r['interpenetrated_nodes']} node(s) interpenetrated at the end (n_p . d_p < 0, §4.3; "
-              "the paper reports none here)" for r in recs if r.get("interpenetrated_nodes")]
-    diff = [f"from the flat sheet {recs[0].get('fold_count')} folds (paper: 12); from a 12-fold start "
-            f"{recs[1].get('fold_count')} folds: see positive_definite of each run for stability",
-            "the scene has no pedestal body (the paper's clamped edge only), so the hanging cloth may swing under "
-            "the rim into the pedestal's footprint"] + interp
+    interp = [
+        f"{r['start']}: {r['interpenetrated_nodes']} node(s) interpenetrated at the end (n_p . d_p < 0, §4.3; "
+        "the paper reports none here)"
+        for r in recs
+        if r.get("interpenetrated_nodes")
+    ]
+    diff = [
+        f"from the flat sheet {recs[0].get('fold_count')} folds (paper: 12); from a 12-fold start "
+        f"{recs[1].get('fold_count')} folds: see positive_definite of each run for stability",
+        "the scene has no pedestal body (the paper's clamped edge only), so the hanging cloth may swing under "
+        "the rim into the pedestal's footprint",
+    ] + interp
     if quick:
         diff.append("quick: 10x80 instead of 30x240")
     info = {"figure": NAME, "caption": CAPTION, "quick": quick, "runs": recs, "differs_from_paper": "; ".join(diff)}
-    common.save(fig, out_dir, NAME, info, suptitle="Fig. 7  50x50 cm sheet on a 20 cm diameter pedestal (§3.4, static, energy Newton)")
+    common.save(
+        fig,
+        out_dir,
+        NAME,
+        info,
+        suptitle="Fig. 7  50x50 cm sheet on a 20 cm diameter pedestal (§3.4, static, energy Newton)",
+    )
     return info
 
 
 if __name__ == "__main__":
     from .registry import script_main
+
     script_main(NAME)

@@ -9,15 +9,24 @@ from pathlib import Path
 from ._hang import make_hang
 
 NAME = "fig09"
-CAPTION = ("Dynamic draping process of a 20x20 cm square fabric sheet hung by two corners. (a) to (d) are the "
-           "isometric and side views at different time instants.")
+CAPTION = (
+    "Dynamic draping process of a 20x20 cm square fabric sheet hung by two corners. (a) to (d) are the "
+    "isometric and side views at different time instants."
+)
 
 
 def make(out_dir: Path, quick: bool = False) -> dict:
-    return make_hang(NAME, "hang-20", CAPTION, out_dir, quick,
-                     "Fig. 9  20x20 cm sheet hung by two adjacent corners (§4.1, explicit dynamics)")
+    return make_hang(
+        NAME,
+        "hang-20",
+        CAPTION,
+        out_dir,
+        quick,
+        "Fig. 9  20x20 cm sheet hung by two adjacent corners (§4.1, explicit dynamics)",
+    )
 
 
 if __name__ == "__main__":
     from .registry import script_main
+
     script_main(NAME)

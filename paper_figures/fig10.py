@@ -13,10 +13,17 @@ CAPTION = "Dynamic draping process of a 100x100 cm square fabric sheet hung by t
 
 
 def make(out_dir: Path, quick: bool = False) -> dict:
-    return make_hang(NAME, "hang-100", CAPTION, out_dir, quick,
-                     "Fig. 10  100x100 cm sheet hung by two adjacent corners (§4.1, explicit dynamics)")
+    return make_hang(
+        NAME,
+        "hang-100",
+        CAPTION,
+        out_dir,
+        quick,
+        "Fig. 10  100x100 cm sheet hung by two adjacent corners (§4.1, explicit dynamics)",
+    )
 
 
 if __name__ == "__main__":
     from .registry import script_main
+
     script_main(NAME)

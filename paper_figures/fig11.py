@@ -18,33 +18,51 @@ from pathlib import Path
 from . import common
 
 NAME = "fig11"
-CAPTION = ("Steady-state shape of a 50x50 cm square fabric sheet draped over a 20 cm diameter pedestal. (a) and "
-           "(b) are the top and isometric views of two different steady-state patterns.")
+CAPTION = (
+    "Steady-state shape of a 50x50 cm square fabric sheet draped over a 20 cm diameter pedestal. (a) and "
+    "(b) are the top and isometric views of two different steady-state patterns."
+)
 
 
 def make(out_dir: Path, quick: bool = False) -> dict:
     m = "8x64" if quick else "30x240"
-    extra = dict(mass_scaling=1e4, mass_scaling_mode="director", max_wall_time=90.0) if quick else \
-        dict(mass_scaling=100.0, mass_scaling_mode="director")
-    extra["damping"] = "rayleigh"     # the scene's [solver.relax] preset is FIRE, which ignores alpha
+    extra = (
+        dict(mass_scaling=1e4, mass_scaling_mode="director", max_wall_time=90.0)
+        if quick
+        else dict(mass_scaling=100.0, mass_scaling_mode="director")
+    )
+    extra["damping"] = "rayleigh"  # the scene's [solver.relax] preset is FIRE, which ignores alpha
     rows, recs = [], []
     for tag, a_paper in (("a", 5.0), ("b", 1.0)):
         out, rec = common.run("square-on-disc", mesh=m, solver="relax", alpha=10.0 * a_paper, **extra)
         rec["paper_alpha"] = a_paper
         recs.append(rec)
         steady = "" if rec.get("converged") else ", NOT steady"
-        rows.append((f"({tag}) alpha {a_paper:g}/s: {rec.get('fold_count')} folds, DC {rec.get('drape_coefficient', float('nan')):.3f}{steady}",
-                     out, common.positions(out.mesh, out.U)))
+        rows.append(
+            (
+                f"({tag}) alpha {a_paper:g}/s: {rec.get('fold_count')} folds, DC {rec.get('drape_coefficient', float('nan')):.3f}{steady}",
+                out,
+                common.positions(out.mesh, out.U),
+            )
+        )
     fig, _ = common.views_figure(rows, panel_size=4.0)
-    info = {"figure": NAME, "caption": CAPTION, "quick": quick, "runs": recs,
-            "differs_from_paper": f"fold counts {recs[0].get('fold_count')} and {recs[1].get('fold_count')} (paper: 10 and 8); "
-                                  "a stable static 10-fold state exists on 30x240 (verification/fold_pursuit.py, "
-                                  "sod30-newton-pert10: DC 0.069, min eig 4.1e-5), so a different count is the path's choice"
-                                  + ("; quick: 8x64, director masses x1e4, wall time capped" if quick else "")}
-    common.save(fig, out_dir, NAME, info, suptitle="Fig. 11  50x50 cm sheet on a 20 cm pedestal by dynamic relaxation (§4.2)")
+    info = {
+        "figure": NAME,
+        "caption": CAPTION,
+        "quick": quick,
+        "runs": recs,
+        "differs_from_paper": f"fold counts {recs[0].get('fold_count')} and {recs[1].get('fold_count')} (paper: 10 and 8); "
+        "a stable static 10-fold state exists on 30x240 (verification/fold_pursuit.py, "
+        "sod30-newton-pert10: DC 0.069, min eig 4.1e-5), so a different count is the path's choice"
+        + ("; quick: 8x64, director masses x1e4, wall time capped" if quick else ""),
+    }
+    common.save(
+        fig, out_dir, NAME, info, suptitle="Fig. 11  50x50 cm sheet on a 20 cm pedestal by dynamic relaxation (§4.2)"
+    )
     return info
 
 
 if __name__ == "__main__":
     from .registry import script_main
+
     script_main(NAME)

@@ -13,9 +13,17 @@ CAPTION = "A 20x20 cm square fabric sheet draped over a 10x10 cm square pedestal
 
 
 def make(out_dir: Path, quick: bool = False) -> dict:
-    return make_adaptive(NAME, "square-pedestal", CAPTION, out_dir, quick, "Fig. 19  20x20 cm sheet on a 10x10 cm pedestal, adaptive (§6.1)")
+    return make_adaptive(
+        NAME,
+        "square-pedestal",
+        CAPTION,
+        out_dir,
+        quick,
+        "Fig. 19  20x20 cm sheet on a 10x10 cm pedestal, adaptive (§6.1)",
+    )
 
 
 if __name__ == "__main__":
     from .registry import script_main
+
     script_main(NAME)

@@ -13,9 +13,17 @@ CAPTION = "A 40x40 cm square fabric sheet draped over a 20x20 cm square pedestal
 
 
 def make(out_dir: Path, quick: bool = False) -> dict:
-    return make_adaptive(NAME, "large-square-pedestal", CAPTION, out_dir, quick, "Fig. 20  40x40 cm sheet on a 20x20 cm pedestal, adaptive (§6.2)")
+    return make_adaptive(
+        NAME,
+        "large-square-pedestal",
+        CAPTION,
+        out_dir,
+        quick,
+        "Fig. 20  40x40 cm sheet on a 20x20 cm pedestal, adaptive (§6.2)",
+    )
 
 
 if __name__ == "__main__":
     from .registry import script_main
+
     script_main(NAME)

@@ -13,9 +13,17 @@ CAPTION = "A 50x50 cm square fabric sheet draped over a 20 cm diameter pedestal:
 
 
 def make(out_dir: Path, quick: bool = False) -> dict:
-    return make_adaptive(NAME, "square-on-disc", CAPTION, out_dir, quick, "Fig. 21  50x50 cm sheet on a 20 cm diameter pedestal, adaptive (§6.3)")
+    return make_adaptive(
+        NAME,
+        "square-on-disc",
+        CAPTION,
+        out_dir,
+        quick,
+        "Fig. 21  50x50 cm sheet on a 20 cm diameter pedestal, adaptive (§6.3)",
+    )
 
 
 if __name__ == "__main__":
     from .registry import script_main
+
     script_main(NAME)

@@ -13,9 +13,12 @@ CAPTION = "A 30x30 cm square cloth draped on a 10 cm diameter sphere: adaptive m
 
 
 def make(out_dir: Path, quick: bool = False) -> dict:
-    return make_adaptive(NAME, "sphere", CAPTION, out_dir, quick, "Fig. 22  30x30 cm cloth on a 10 cm sphere, adaptive (§6.4)")
+    return make_adaptive(
+        NAME, "sphere", CAPTION, out_dir, quick, "Fig. 22  30x30 cm cloth on a 10 cm sphere, adaptive (§6.4)"
+    )
 
 
 if __name__ == "__main__":
     from .registry import script_main
+
     script_main(NAME)

@@ -55,7 +55,10 @@ def _imports(mod: str, is_pkg: bool, tree: ast.AST, known: set[str]) -> set[str]
                 head = ".".join(pref + ([node.module] if node.module else []))
             else:
                 head = node.module or ""
-            names = [head] + [f"{head}.{a.name}" for a in node.names]
+            # `from pkg import mod` depends on pkg.mod (which Python runs after pkg's __init__, as any
+            # submodule import does), `from pkg import name` on pkg
+            subs = [f"{head}.{a.name}" for a in node.names]
+            names = [n for n in subs if n in known] or [head]
         else:
             continue
         if isinstance(node, ast.ImportFrom) and node.module and node.module.split(".")[0] == "__future__":

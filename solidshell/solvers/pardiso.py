@@ -12,7 +12,7 @@ docs/solvers.md, section 5).
 Matrix type 2 (real symmetric positive definite): a Cholesky LL^T without pivot perturbation, so a
 matrix that is not positive definite fails (MKL error -4, "zero pivot"), which is the answer the
 energy Newton asks for (linear.Cholesky).  The input is the lower triangle in CSC
-(linear.LowerCSC) read as the upper triangle in CSR, the form PARDISO takes, zero-based
+(sparse.LowerCSC) read as the upper triangle in CSR, the form PARDISO takes, zero-based
 (iparm[34] = 1): no copy of the pattern.  The analysis (minimum-degree ordering, symbolic
 factorisation) is done once per pattern; ``factor`` runs the numeric phase only.
 
@@ -35,7 +35,7 @@ from ctypes.util import find_library
 
 import numpy as np
 
-from .linear import SINGULAR_PIVOT, PatternFactor
+from .sparse import SINGULAR_PIVOT, PatternFactor
 
 __all__ = ["Pardiso", "PardisoLDL", "available", "unavailable_reason"]
 
@@ -147,7 +147,7 @@ def unavailable_reason() -> str | None:
 
 class Pardiso(PatternFactor):
     """PARDISO Cholesky of symmetric matrices sharing a sparsity pattern: ``factor(A, shift)`` factors
-    A + diag(shift) (A a linear.LowerCSC) and returns True, or False when that matrix is not
+    A + diag(shift) (A a sparse.LowerCSC) and returns True, or False when that matrix is not
     positive definite; ``solve(b)`` solves with the last successful factor."""
 
     _mtype = _MTYPE_SPD
@@ -239,7 +239,7 @@ class Pardiso(PatternFactor):
     def factor(self, A, shift=None) -> bool:
         """Factor A + diag(shift); False (and no factor kept) when it is not positive definite
         (PARDISO's Cholesky meets a non-positive pivot), not finite, or numerically singular (a
-        pivot below linear.SINGULAR_PIVOT of the largest: CHOLMOD's test, on L_ii^2)."""
+        pivot below sparse.SINGULAR_PIVOT of the largest: CHOLMOD's test, on L_ii^2)."""
         v = self._values(A, shift)
         if v is None:
             return False

@@ -33,6 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..checks.record import skipped
 from .jobs import DolfinxMissing, check_dolfinx, make_job
 from .jobs import run_model as _run_model
 from .state import from_fenicsx_state, max_translation_change, to_fenicsx_state
@@ -722,23 +723,10 @@ def dc_series_rows(fx, variant):
 
 
 def skipped_record(name, reference, source, quantity, why, wall_time_s=0.0, note=""):
-    """A comparison that could not be made (its reason in ``why``, in short in ``note``): no value,
-    neither passed nor failed."""
-    return dict(
-        name=name,
-        reference=reference,
-        source=source,
-        quantity=quantity,
-        value=None,
-        reference_value=None,
-        error=None,
-        tolerance=None,
-        passed=None,
-        status="skipped",
-        wall_time_s=float(wall_time_s),
-        why=why,
-        note=note,
-    )
+    """A comparison that could not be made (its reason in ``why``, in short in ``note``): the
+    verification record's ``skipped`` (no value, neither passed nor failed) with this row's time."""
+    rec = skipped(name, quantity, reference=reference, source=source, why=why, note=note).to_dict()
+    return {**rec, "wall_time_s": float(wall_time_s)}
 
 
 def richardson(n, q):

@@ -1,6 +1,17 @@
 """The suite runs in a random order (pytest-randomly, pyproject's [test] extra).  pytest-randomly names
 its seed in the session header, which ``-q`` (the README's command) leaves out: the summary names it
-too, so that a failure that depends on the order can be repeated with ``--randomly-seed=N``."""
+too, so that a failure that depends on the order can be repeated with ``--randomly-seed=N``.
+
+The property tests (hypothesis) are derandomized: each draws the same examples on every run, so
+the suite's verdict does not depend on the order's seed (pytest-randomly would otherwise reseed
+hypothesis with it).  ``--hypothesis-profile=explore`` draws new examples each run, for a search
+beyond the fixed ones."""
+
+from hypothesis import settings
+
+settings.register_profile("default", derandomize=True)
+settings.register_profile("explore", derandomize=False)
+settings.load_profile("default")
 
 
 def pytest_terminal_summary(terminalreporter, exitstatus, config):

@@ -2,14 +2,15 @@
 its seed in the session header, which ``-q`` (the README's command) leaves out: the summary names it
 too, so that a failure that depends on the order can be repeated with ``--randomly-seed=N``.
 
-The property tests (hypothesis) are derandomized: each draws the same examples on every run, so
-the suite's verdict does not depend on the order's seed (pytest-randomly would otherwise reseed
-hypothesis with it).  ``--hypothesis-profile=explore`` draws new examples each run, for a search
-beyond the fixed ones."""
+The property tests (hypothesis) are derandomized and keep no example database: each draws the
+same examples on every run and nothing one run found is replayed by the next, so the suite's
+verdict depends neither on the seed nor on what ran before (the database had replayed a case one
+run found into the next run of the same checkout).  ``--hypothesis-profile=explore`` draws new
+examples each run, with the database, for a search beyond the fixed ones."""
 
 from hypothesis import settings
 
-settings.register_profile("default", derandomize=True)
+settings.register_profile("default", derandomize=True, database=None)
 settings.register_profile("explore", derandomize=False)
 settings.load_profile("default")
 

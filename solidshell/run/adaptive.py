@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import solvers
 from ..errors import InputError
 from ..scenes import Scene
 from ..scenes.build import build_problem
@@ -19,7 +20,7 @@ def adapt_settings(scene: Scene, kind: str):
     from ..adapt.settings import parse_adapt
 
     adapt = parse_adapt(scene.adapt, f"{scene.source}: adapt")
-    if kind not in ("explicit", "relax"):
+    if not solvers.dynamic(kind):
         raise InputError(
             f"adaptive subdivision runs inside a dynamic run (--solver explicit or relax, "
             f"paper §5.5); the {kind} solver is not adaptive"

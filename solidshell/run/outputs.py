@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import io as sio
+from .. import solvers
 from ..rundir import RunFolder
 from ..scenes import Scene
 
@@ -143,7 +144,7 @@ def _state_files(folder, kind: str, solved, summary: dict, finite: bool) -> list
         summary["series_parameter"] = "time [s]"
     elif len(frames) > 1:
         files.append(folder.write("series.xdmf", sio.write_time_series, mesh, frames, run_id=rid))
-        summary["series_parameter"] = "time [s]" if kind in ("explicit", "relax") else "load factor"
+        summary["series_parameter"] = "time [s]" if solvers.dynamic(kind) else "load factor"
     return files
 
 

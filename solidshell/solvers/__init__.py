@@ -15,16 +15,18 @@ from dataclasses import dataclass
 
 from ..errors import InputError
 
-__all__ = ["Kind", "KINDS", "kind", "get", "settings_model", "validate"]
+__all__ = ["Kind", "KINDS", "kind", "dynamic", "get", "settings_model", "validate"]
 
 
 @dataclass(frozen=True)
 class Kind:
-    """A solver kind: where its run function and its settings model live ("module:attribute")."""
+    """A solver kind: where its run function and its settings model live ("module:attribute"), and
+    whether it integrates in time (``dynamic``: frames are times, adaptivity can run inside it)."""
 
     name: str
     run: str
     settings: str
+    dynamic: bool
 
     @staticmethod
     def _attr(ref: str):
@@ -41,9 +43,15 @@ class Kind:
 KINDS: dict[str, Kind] = {
     k.name: k
     for k in (
-        Kind("static", "solidshell.solvers.static.driver:run", "solidshell.solvers.static.settings:StaticSettings"),
-        Kind("explicit", "solidshell.solvers.explicit:run", "solidshell.solvers.explicit.settings:ExplicitSettings"),
-        Kind("relax", "solidshell.solvers.explicit:run_relax", "solidshell.solvers.explicit.settings:RelaxSettings"),
+        Kind(
+            "static", "solidshell.solvers.static.driver:run", "solidshell.solvers.static.settings:StaticSettings", False
+        ),
+        Kind(
+            "explicit", "solidshell.solvers.explicit:run", "solidshell.solvers.explicit.settings:ExplicitSettings", True
+        ),
+        Kind(
+            "relax", "solidshell.solvers.explicit:run_relax", "solidshell.solvers.explicit.settings:RelaxSettings", True
+        ),
     )
 }
 
@@ -54,6 +62,11 @@ def kind(name: str) -> Kind:
         return KINDS[name]
     except KeyError:
         raise InputError(f"unknown solver {name!r}; choose one of: {', '.join(KINDS)}") from None
+
+
+def dynamic(name: str) -> bool:
+    """True when ``name`` is a registered kind that integrates in time ("none", a mesh-only run: False)."""
+    return name in KINDS and KINDS[name].dynamic
 
 
 def get(name: str):

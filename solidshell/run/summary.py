@@ -1,5 +1,6 @@
 """A run's summary (summary.json): what was run (:func:`describe_run`), the solved state and its drape
-measures (:func:`record_state`, :func:`analyse`), the runner's own warnings, and the closing
+measures (:func:`record_state`, :func:`analyse`), the contact contract's measure (:func:`contact_check`:
+``summary["penetration"]``), the runner's own warnings, and the closing
 timings and warnings (:func:`close_summary`)."""
 
 from __future__ import annotations
@@ -114,7 +115,33 @@ def record_state(summary: dict, sc: Scene, solved) -> list[str]:
         else:
             for k, v in a.items():
                 summary.setdefault(k, v)
+        warnings += contact_check(summary, sc, solved)
     return warnings + _state_warnings(summary, info)
+
+
+def contact_tables(scene: Scene) -> list[dict]:
+    """The scene's resolved contact tables, one per contact body of its problem (``Scene.bodies()``
+    where the scene has it: the implied pedestal included; else its [[contact]] tables)."""
+    bodies = getattr(scene, "bodies", None)  # Scene.bodies() is being added (issue 36); then call it
+    return [dict(c) for c in (bodies() if callable(bodies) else scene.contact)]
+
+
+def contact_check(summary: dict, sc: Scene, solved) -> list[str]:
+    """Enter the contact contract's measure (solidshell.penetration.report: per body the deepest
+    node and face point and the counts beyond ``contact.PENETRATION_TOL * h``) as
+    ``summary["penetration"]`` (no key: the problem has no contact body); returns its warnings."""
+    bodies = list(solved.problem.contact)
+    if not bodies:
+        return []
+    from .. import penetration
+
+    try:
+        entry = penetration.report(solved.mesh, solved.U, bodies, contact_tables(sc), summary["material"]["thickness"])
+    except Exception as e:  # the check must never lose a solved state
+        summary["penetration_error"] = f"{type(e).__name__}: {e}"
+        return [f"the contact penetration check failed ({type(e).__name__}: {e})"]
+    summary["penetration"] = entry
+    return penetration.warnings(entry)
 
 
 def analyse(scene: Scene, mesh, U, model=None) -> dict:

@@ -2,8 +2,9 @@
 
 Bodies
 ------
-:class:`Sphere`, :class:`Plane` (a floor: the half-space below the plane is solid) and
-:class:`Pedestal` (a flat-topped vertical cylinder or box with an optional rounded top edge).
+:class:`Sphere`, :class:`Plane` (a floor: the half-space below the plane is solid),
+:class:`Pedestal` (a flat-topped vertical cylinder or box with an optional rounded top edge) and
+:class:`CusickSupport` (a Cusick-type drape tester's support: a disc on a narrower stem).
 Their distances and the laws below are compiled, one node at a time (``contact_kernels``); a
 user's own :class:`RigidBody` subclass gives ``signed_distance`` and goes through the same laws.
 Each body is a *solid*; its signed distance ``g(x)`` is positive outside, negative inside, and its
@@ -128,7 +129,7 @@ class RigidBody:
     friction: float = 0.0  # Coulomb coefficient mu (0: frictionless, the default)
     lipschitz: float | None = None
 
-    code: int = -1  # contact_kernels.SPHERE, PLANE, CYLINDER or BOX; -1: a user's body
+    code: int = -1  # contact_kernels.SPHERE, PLANE, CYLINDER, BOX or CUSICK; -1: a user's body
 
     @property
     def params(self) -> np.ndarray:
@@ -241,7 +242,8 @@ class Pedestal(RigidBody):
         around it).
 
     The paper clamps the sheet along the pedestal edge and models only the hanging part, so the
-    pedestal body here only keeps the hanging skirt out of the pedestal's side and top.
+    pedestal body keeps the hanging skirt out of the pedestal's side and top (a pedestal scene
+    builds one by default: solidshell.scenes.Scene.bodies).
     """
 
     # the exact signed distance of a box (Euclidean outside, minus the nearest face's distance
@@ -282,6 +284,56 @@ class Pedestal(RigidBody):
         dims = f"radius={self.radius}" if self.kind == "cylinder" else f"half_widths={self.half_widths.tolist()}"
         return (
             f"Pedestal({self.kind}, top_center={self.top_center.tolist()}, {dims}, height={self.height}, "
+            f"edge_radius={self.edge_radius}, offset={self.offset}, friction={self.friction})"
+        )
+
+
+class CusickSupport(RigidBody):
+    """The support of a Cusick-type drape tester: a flat disc of ``radius`` and ``disc_thickness``
+    on a narrower coaxial stem of ``stem_radius`` that reaches from the disc's underside down to the
+    base, ``height`` below the top face (axis global Z).  One body: its signed distance is the
+    smaller of the two cylinders' (contact_kernels.CUSICK), the exact distance to the union outside
+    it (a skirt hanging under the disc's overhang meets the disc's underside or the stem, whichever
+    is nearer) and 1-Lipschitz everywhere.  ``edge_radius`` rounds the disc's top edge (default 0:
+    sharp); an upper clamping disc is a second body (a :class:`Pedestal` cylinder on the sheet).
+    """
+
+    lipschitz = 1.0  # the minimum of two 1-Lipschitz distances
+
+    def __init__(
+        self, top_center, radius, disc_thickness, stem_radius, height=10.0, edge_radius=0.0, offset=0.0, friction=0.0
+    ):
+        self.top_center = _vec3(top_center, "support top_center")
+        self.radius = _pos(radius, "support disc radius")
+        self.disc_thickness = _pos(disc_thickness, "support disc_thickness")
+        self.stem_radius = _pos(stem_radius, "support stem radius")
+        self.height = _pos(height, "support height")
+        if self.stem_radius > self.radius:
+            raise InputError(
+                f"support stem radius ({self.stem_radius:g}) exceeds the disc radius ({self.radius:g}): "
+                "a Cusick-type stem must not be wider than its disc"
+            )
+        if self.disc_thickness >= self.height:
+            raise InputError(
+                f"support disc_thickness ({self.disc_thickness:g}) must be smaller than its height ({self.height:g})"
+            )
+        self.edge_radius = _pos(edge_radius, "edge_radius", allow_zero=True)
+        if self.edge_radius >= min(self.radius, 0.5 * self.disc_thickness):
+            raise InputError("support edge_radius must be smaller than the disc radius and half its thickness")
+        self.offset = _pos(offset, "contact offset", allow_zero=True)
+        self.friction = friction_coefficient(friction)
+        self.code = ck.CUSICK
+
+    @property
+    def params(self) -> np.ndarray:
+        return _params(
+            *self.top_center, self.height, self.edge_radius, self.radius, self.disc_thickness, self.stem_radius
+        )
+
+    def __repr__(self):
+        return (
+            f"CusickSupport(top_center={self.top_center.tolist()}, radius={self.radius}, "
+            f"disc_thickness={self.disc_thickness}, stem_radius={self.stem_radius}, height={self.height}, "
             f"edge_radius={self.edge_radius}, offset={self.offset}, friction={self.friction})"
         )
 

@@ -2,12 +2,14 @@
 node at a time (``contact.py`` describes the laws; its bodies and functions call these, and so does
 the explicit solver's contact pass over its candidate nodes, ``contact_pass``).
 
-A body is a code (SPHERE, PLANE, CYLINDER, BOX) and a parameter row of PARAMS floats:
+A body is a code (SPHERE, PLANE, CYLINDER, BOX, CUSICK) and a parameter row of PARAMS floats:
 
 * SPHERE   : centre (3), radius
 * PLANE    : point (3), unit normal (3)
 * CYLINDER : top centre (3), height, edge radius, radius        (a vertical pedestal)
 * BOX      : top centre (3), height, edge radius, half widths a, b
+* CUSICK   : top centre (3), height, edge radius, disc radius, disc thickness, stem radius  (a
+  Cusick-type support: a disc on a narrower coaxial stem that reaches down to the base)
 
 Every function returns the same numbers the former numpy code did, to round-off: the sums of
 three squares are taken left to right, the box distance follows ``_box`` below term by term.
@@ -21,7 +23,7 @@ import math
 import numpy as np
 from numba import njit
 
-SPHERE, PLANE, CYLINDER, BOX = 0, 1, 2, 3
+SPHERE, PLANE, CYLINDER, BOX, CUSICK = 0, 1, 2, 3, 4
 PARAMS = 8
 _G0, _N0 = np.zeros(0), np.zeros((0, 3))  # "no given distances" (body_forces' g_in, n_in)
 
@@ -74,6 +76,22 @@ def signed_distance(code, p, x0, x1, x2):
         else:
             e0, e1 = 1.0, 0.0
         return g - er, ga0 * e0, ga0 * e1, ga1
+    if code == CUSICK:
+        # the union of the disc (its top edge rounded by er) and the stem below it: the smaller of
+        # the two cylinders' distances (exact outside the union, 1-Lipschitz inside; the disc's on a tie)
+        rho = math.hypot(d0, d1)
+        if rho > 0.0:
+            e0, e1 = d0 / rho, d1 / rho
+        else:
+            e0, e1 = 1.0, 0.0
+        t = p[6]
+        g, ga0, ga1, _ = _box(rho, (x2 - p[2]) + 0.5 * t, 0.0, p[5] - er, 0.5 * t - er, 0.0, 2)
+        g -= er
+        hs = p[3] - t  # the stem: from the disc's underside down to the base
+        gs, gs0, gs1, _ = _box(rho, (x2 - p[2]) + t + 0.5 * hs, 0.0, p[7], 0.5 * hs, 0.0, 2)
+        if gs < g:
+            return gs, gs0 * e0, gs0 * e1, gs1
+        return g, ga0 * e0, ga0 * e1, ga1
     g, n0, n1, n2 = _box(d0, d1, zc, p[5] - er, p[6] - er, 0.5 * p[3] - er, 3)
     return g - er, n0, n1, n2
 

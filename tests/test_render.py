@@ -18,8 +18,10 @@ def _sheet(n=8, size=10.0, z=0.0):
     return ShellMesh(nodes, quads=quads)
 
 
-# a box (pedestal) under the sheet's centre, its top 1 cm below the sheet; a sphere touching it
-BOX = {"type": "pedestal", "shape": "square", "size": 4.0, "centre": (0.0, 0.0, -1.0)}
+# a box (pedestal) under the sheet's centre, its top 1 cm below the sheet; a sphere touching it.
+# A pedestal is drawn down to its base: 2.4 cm high keeps the sheet in the middle of the iso
+# picture (a 10 cm column would pull the picture's centre pixel off the sheet, onto the column)
+BOX = {"type": "pedestal", "shape": "square", "size": 4.0, "centre": (0.0, 0.0, -1.0), "height": 2.4}
 BALL = {"type": "sphere", "centre": (0.0, 0.0, -3.05), "radius": 3.0}
 
 

@@ -129,10 +129,24 @@ def test_tables_become_the_scene_fields(tmp_path):
         "[perturbation]\nshape='folds'\namplitude=0.5\nfolds=6\n",
     )
     s = go()
-    # a pedestal gets its defaults (square shape but for the given one, centre at the origin, 10 cm)
-    assert s.contact == (
-        {"type": "pedestal", "shape": "disc", "centre": (0.0, 0.0, 0.0), "diameter": 10.0, "height": 10.0},
-    )
+    # the table as written (and its 10 cm height); Scene.bodies() fills the rest: outside a
+    # pedestal recipe, centre at the origin, offset 0, solid, sharp edge, frictionless
+    assert s.contact == ({"type": "pedestal", "shape": "disc", "diameter": 10.0, "height": 10.0},)
+    assert s.bodies() == [
+        {
+            "type": "pedestal",
+            "shape": "disc",
+            "diameter": 10.0,
+            "centre": (0.0, 0.0, 0.0),
+            "height": 10.0,
+            "edge_radius": 0.0,
+            "offset": 0.0,
+            "friction": 0.0,
+            "support": "solid",
+            "role": "support",
+            "origin": "contact[0]",
+        }
+    ]
     assert s.loads["point"] == [{"force": (0.0, 0.0, 1.0), "at": (1.0, 2.0, 3.0)}]
     assert s.supports == {"clamped": ("a", "b")}
     assert s.solver == {"kind": "static", "static": {}, "explicit": {}, "relax": {"preset": "fast"}}

@@ -132,74 +132,96 @@ def _outline(shape: str, size: float, n: int):
     )
 
 
-def pedestal_surfaces(body: dict, bottom: float, cap_gap: float = 0.0):
-    """(side wall, top) of a pedestal from its top at centre[2] down to ``bottom`` [cm]; the wall
-    and the top are tessellated in cells no larger than ~1/24 of the pedestal (the painter sorts
-    polygons by their centroids, which needs polygons about the size of the sheet's)."""
-    c = np.asarray(body.get("centre", (0.0, 0.0, 0.0)), float)
-    shape = body.get("shape", "square")
-    size = body["diameter"] if shape == "disc" else body["size"]
-    ring = _outline(shape, size, 96)
+def _cap(ring, c_xy, z: float, up: bool = True) -> Surface:
+    """A flat face of outline ``ring`` (n,2) about ``c_xy`` at height z: concentric rings and a fan
+    (works for a disc and a square), normals up (or down)."""
     n = len(ring)
-    top = c[2] - cap_gap
-    nz = max(4, int(np.ceil((top - bottom) / (size / 12.0))))
-    zs = np.linspace(top, bottom, nz + 1)
-    wall = np.concatenate([np.column_stack([ring + c[:2], np.full(n, z)]) for z in zs])
-    wq = _grid_quads(n, nz, closed_u=True)[:, ::-1]  # outward
-    side = Surface(wall, wq, np.zeros((0, 3), int), solid=True)
-    # top: concentric rings (disc) / a grid clipped to the square; a fan of rings works for both
-    rings = [c[:2] + f * ring for f in np.linspace(1.0, 0.0, 9)[:-1]]
-    pts = np.concatenate([np.column_stack([r_, np.full(n, top)]) for r_ in rings] + [[[c[0], c[1], top]]])
+    rings = [c_xy + f * ring for f in np.linspace(1.0, 0.0, 9)[:-1]]
+    pts = np.concatenate([np.column_stack([r_, np.full(n, z)]) for r_ in rings] + [[[c_xy[0], c_xy[1], z]]])
     tq = _grid_quads(n, len(rings) - 1, closed_u=True)  # rings inwards: normals up
     centre_idx = len(pts) - 1
     inner = (len(rings) - 1) * n + np.arange(n)
     tt = np.stack([inner, (inner - inner[0] + 1) % n + inner[0], np.full(n, centre_idx)], -1)
-    cap = Surface(pts, tq, tt, solid=True)
-    return side, cap
+    if not up:
+        tq, tt = tq[:, ::-1], tt[:, ::-1]
+    return Surface(pts, tq, tt, solid=True)
+
+
+def _column(c_xy, shape: str, size: float, top: float, bottom: float, cap: bool = True, base: bool = False) -> list:
+    """A vertical prism of outline ``shape`` (disc: diameter ``size``; square: side) from ``top``
+    down to ``bottom`` [cm]: its side wall, then its top face (``cap``) and underside (``base``).
+    Cells no larger than ~1/12 of the outline (the painter sorts polygons by their centroids, which
+    needs polygons about the size of the sheet's)."""
+    c_xy = np.asarray(c_xy, float)[:2]
+    ring = _outline(shape, size, 96)
+    n = len(ring)
+    nz = max(4, int(np.ceil((top - bottom) / (size / 12.0))))
+    zs = np.linspace(top, bottom, nz + 1)
+    wall = np.concatenate([np.column_stack([ring + c_xy, np.full(n, z)]) for z in zs])
+    out = [Surface(wall, _grid_quads(n, nz, closed_u=True)[:, ::-1], np.zeros((0, 3), int), solid=True)]  # outward
+    if cap:
+        out.append(_cap(ring, c_xy, top))
+    if base:
+        out.append(_cap(ring, c_xy, bottom, up=False))
+    return out
+
+
+def _extent(body: dict) -> float:
+    return float(body["diameter"] if body.get("shape") == "disc" else body["size"])
+
+
+def pedestal_surfaces(body: dict, bottom: float | None = None, cap_gap: float = 0.0, cap: bool = True) -> list:
+    """The surfaces of a pedestal body dict (Scene.bodies) as it is: a solid column from its top
+    face down to ``bottom`` (default: its base, ``height`` below the top), or a Cusick-type
+    support's disc (side, top, underside) on its stem; a clamp is a short solid disc.  ``cap_gap``
+    lowers the top of the side walls, ``cap`` False leaves the top face out (a sheet covers it)."""
+    c = np.asarray(body.get("centre", (0.0, 0.0, 0.0)), float)
+    size = _extent(body)
+    top = float(c[2])
+    if bottom is None:
+        bottom = top - float(body.get("height", 10.0))
+    if body.get("support") == "cusick":
+        t = float(body["disc_thickness"])
+        disc = _column(c, "disc", size, top - min(cap_gap, 0.25 * t), top - t, cap=cap, base=True)
+        return disc + _column(c, "disc", float(body["stem_diameter"]), top - t, bottom, cap=False)
+    return _column(c, body.get("shape", "square"), size, top - cap_gap, bottom, cap=cap)
 
 
 def covered_top(body: dict, z: float) -> Surface:
     """The part of a sheet lying flat on a pedestal's top (the pedestal scenes mesh only the
     hanging part and clamp its edge there): a flat, cloth-coloured patch at height z."""
-    side, cap = pedestal_surfaces(body, z - 1.0)
-    pts = cap.points.copy()
-    pts[:, 2] = z
-    return Surface(pts, cap.quads, cap.tris, scalars=np.full(len(pts), z), edges=False)
+    c = np.asarray(body.get("centre", (0.0, 0.0, 0.0)), float)
+    cap = _cap(_outline(body.get("shape", "square"), _extent(body), 96), c[:2], z)
+    return Surface(cap.points, cap.quads, cap.tris, scalars=np.full(len(cap.points), z), edges=False)
 
 
 def bodies_of(scene) -> list:
-    """The rigid bodies a scene's pictures show: its sphere/pedestal contact bodies, else the
-    pedestal its recipe implies."""
+    """The rigid bodies a scene's pictures show: its spheres and pedestals (a Cusick support and
+    its clamp included) out of ``scene.bodies()``, the same dicts the solvers build their contact
+    bodies from (planes are not drawn)."""
     if scene is None:
         return []
-    out = [dict(c) for c in scene.contact if c["type"] in ("sphere", "pedestal")]
-    if not any(c["type"] == "pedestal" for c in out):
-        p = scene.pedestal()
-        if p is not None:
-            out.append(p)
-    return out
+    return [b for b in scene.bodies() if b["type"] in ("sphere", "pedestal")]
 
 
 def scene_surfaces(mesh, X, bodies, mesh_lines: bool = True, cover_pedestal: bool = True) -> list:
-    """The sheet and the bodies of a picture: [cloth, (flat cloth on the pedestal top), bodies...]."""
+    """The sheet and the bodies of a picture: [cloth, (flat cloth on the pedestal top), bodies...].
+    A pedestal is drawn as it is: from its top face down to its base (``height``)."""
     cloth = cloth_surface(mesh, X, edges=mesh_lines)
     out = [cloth]
-    zmin = float(np.min(X[:, 2])) if len(X) else 0.0
     for b in bodies:
         if b["type"] == "sphere":
             out.append(sphere_surface(b["centre"], b["radius"] - chord_sag(mesh, X, b["radius"])))
         elif b["type"] == "pedestal":
-            top = float(b.get("centre", (0, 0, 0))[2])
-            size = b["diameter"] if b.get("shape") == "disc" else b["size"]
-            bottom = min(zmin - 0.1 * size, top - 0.6 * size)  # a column standing below the sheet
-            # a pedestal scene meshes only the hanging part; the sheet lies flat on the top, which
-            # hides the pedestal's own top
-            if cover_pedestal and _sheet_around(mesh, X, b):
-                out.append(covered_top(b, top))
-                side, _ = pedestal_surfaces(b, bottom, cap_gap=0.01 * size)
-                out.append(side)
+            # a pedestal scene meshes only the hanging part; the sheet lies flat on the top (its
+            # mid-surface ``offset`` above it), which hides the pedestal's own top.  A clamp sits on
+            # the sheet and is drawn whole.
+            if cover_pedestal and b.get("role", "support") == "support" and _sheet_around(mesh, X, b):
+                top = float(b.get("centre", (0, 0, 0))[2])
+                out.append(covered_top(b, top + float(b.get("offset", 0.0))))
+                out += pedestal_surfaces(b, cap_gap=0.01 * _extent(b), cap=False)
             else:
-                out += list(pedestal_surfaces(b, bottom))
+                out += pedestal_surfaces(b)
     return out
 
 

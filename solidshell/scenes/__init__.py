@@ -20,6 +20,7 @@ Scene file format
     recipe = "square_on_square"           #   strip(length, width), square_on_square(sheet, pedestal),
     sheet = 20.0                          #   disc_on_disc(diameter, pedestal_diameter),
     pedestal = 10.0                       #   square_on_disc(sheet, pedestal_diameter), square(size)
+    # pedestal_contact = false            # pedestal recipes only: no pedestal body (see [[contact]])
     # file = "my_sheet.msh"               # OR a gmsh .msh/.geo file (or any mesh meshio reads:
                                           #   .vtu, .xdmf, ...), relative to this scene file
 
@@ -55,18 +56,34 @@ Scene file format
 
     [[contact]]                           # zero or more rigid bodies (solidshell.contact, penalty)
     type = "pedestal"                     # sphere:   centre = [x,y,z], radius
-    shape = "square"                      # plane:    point = [x,y,z], normal = [nx,ny,nz] (the
-    size = 10.0                           #           side opposite the normal is solid)
-    centre = [0.0, 0.0, 0.0]              # pedestal: shape = "square" (size = side) or "disc"
+    support = "cusick"                    # plane:    point = [x,y,z], normal = [nx,ny,nz] (the
+    disc_thickness = 0.3                  #           side opposite the normal is solid)
+    stem_diameter = 5.0                   # pedestal: shape = "square" (size = side) or "disc"
                                           #           (diameter); centre = centre of its top face;
-                                          #           height (default 10), edge_radius (default 0)
+                                          #           height (default 10), edge_radius (default 0);
+                                          #           support = "solid" (default: a column down to
+                                          #           its base) or "cusick" (a disc of
+                                          #           disc_thickness on a coaxial stem of
+                                          #           stem_diameter <= diameter; optional upper
+                                          #           clamping disc clamp_diameter <= diameter,
+                                          #           clamp_thickness, lying on the sheet)
                                           # all:      offset = distance kept between the body and
                                           #           the mid-surface (h/2 for the lower face);
                                           #           friction = Coulomb coefficient mu >= 0
                                           #           (default 0: frictionless; explicit/relax
                                           #           solvers only, stick spring + return map)
-    # The paper's pedestal scenes clamp the sheet on the pedestal edge and need no pedestal body
-    # (a picture still shows the pedestal); add one to keep folds out of the pedestal.
+    # A pedestal recipe (square_on_square, disc_on_disc, square_on_disc) meshes only the hanging
+    # part and clamps its inner edge on the rim; the sheet lies on a pedestal, and the scene has
+    # that pedestal as a contact body without a [[contact]] table: solid, the recipe's shape and
+    # size, its top face at z = -h/2 with offset = h/2 (h: the material's thickness; the sheet's
+    # lower face on the top, the clamped rim at gap 0, like the sphere scene's sheet), sharp edge,
+    # frictionless, 10 cm high.  It keeps the hanging skirt out of the pedestal (without it, the
+    # static skirt of square-on-disc 30x240 passes up to 2 cm into it, issue 36).  A pedestal table in such a
+    # scene replaces it and takes every key it leaves out from it (so the table above, in
+    # square-on-disc, is a Cusick-type support of the recipe's 20 cm disc).  The paper's own
+    # node-free model (no pedestal body, only the clamped rim) stays one key away:
+    # [geometry] pedestal_contact = false.  Scene.bodies() lists the bodies with every key filled:
+    # the solvers feel exactly these and the pictures draw exactly these (planes are not drawn).
 
     [solver]
     kind = "static"                       # static | explicit | relax
@@ -146,6 +163,7 @@ class Scene:
     output: dict  # {"snapshots": [...], "pictures": [...]}
     adapt: dict = field(default_factory=dict)  # the [adapt] table (solidshell.adapt.settings.AdaptSettings)
     perturbation: dict = field(default_factory=dict)  # [perturbation] (solidshell.perturbation), {} = none
+    pedestal_contact: bool = True  # [geometry] pedestal_contact of a pedestal recipe (False: no pedestal body)
     source: str = "<dict>"
     raw: dict = field(default_factory=dict, repr=False, compare=False)
 
@@ -199,29 +217,24 @@ class Scene:
             s["snapshots"] = list(self.output["snapshots"])
         return s
 
+    def bodies(self) -> list[dict]:
+        """The rigid bodies of this scene, one dict per body with every key filled: the
+        ``[[contact]]`` tables resolved (a Cusick support's clamp as a second body right after it),
+        then the pedestal the recipe implies unless a table gives one or ``geometry.pedestal_contact``
+        is false (schema.resolve_bodies).  The one source of truth: the solvers feel exactly these
+        (build.contact_bodies) and the pictures draw exactly these (render.bodies_of; planes not
+        drawn).  Fresh dicts on every call."""
+        return schema.resolve_bodies(self.geometry, self.material, self.contact, self.pedestal_contact)
+
     def pedestal(self) -> dict | None:
-        """The pedestal (for pictures): from a pedestal contact body, else from the recipe."""
-        for c in self.contact:
-            if c["type"] == "pedestal":
-                return dict(c)
-        r, g = self.recipe, self.geometry
-        if r == "square_on_square":
-            return {
-                "type": "pedestal",
-                "shape": "square",
-                "size": g["pedestal"],
-                "centre": (0.0, 0.0, 0.0),
-                "height": 10.0,
-            }
-        if r in ("disc_on_disc", "square_on_disc"):
-            return {
-                "type": "pedestal",
-                "shape": "disc",
-                "diameter": g["pedestal_diameter"],
-                "centre": (0.0, 0.0, 0.0),
-                "height": 10.0,
-            }
-        return None
+        """The pedestal the sheet lies on (its outline, centre and area: pictures, the perturbation's
+        centre, the DC): the supporting pedestal among :meth:`bodies`, else, when the scene opts out
+        of the pedestal body (``geometry.pedestal_contact = false``), the recipe's pedestal all the
+        same (the sheet still lies on it, nothing keeps the skirt out); None without a pedestal."""
+        for b in self.bodies():
+            if b["type"] == "pedestal" and b["role"] == "support":
+                return b
+        return schema.recipe_pedestal(self.geometry, float(self.material_object().thickness))
 
     def summary(self) -> dict:
         """JSON-able description (for summary.json)."""
@@ -249,6 +262,8 @@ class Scene:
             "supports": plain(self.supports),
             "loads": plain(self.loads),
             "contact": plain(list(self.contact)),
+            "pedestal_contact": self.pedestal_contact,
+            "bodies": plain(self.bodies()),
             "solver": plain(self.solver),
             "output": plain(self.output),
             "adapt": plain(self.adapt),

@@ -163,32 +163,35 @@ def scene_loads(scene: Scene, model) -> np.ndarray:
 
 
 def contact_bodies(scene: Scene) -> list:
-    """solidshell.contact bodies of the scene's [[contact]] tables (empty: no contact search)."""
-    if not scene.contact:
-        return []
+    """solidshell.contact bodies of the scene, one per dict of ``scene.bodies()`` and in its order
+    (the pictures draw the same dicts; empty: no contact search)."""
+    return [contact_body(b) for b in scene.bodies()]
+
+
+def contact_body(b: dict):
+    """The solidshell.contact body of one resolved body dict (Scene.bodies)."""
     from .. import contact as C
 
-    out = []
-    for c in scene.contact:
-        off = c.get("offset", 0.0)
-        mu = c.get("friction", 0.0)
-        if c["type"] == "sphere":
-            out.append(C.Sphere(c["centre"], c["radius"], offset=off, friction=mu))
-        elif c["type"] == "plane":
-            out.append(C.Plane(c["point"], c["normal"], offset=off, friction=mu))
-        else:
-            kw = dict(height=c.get("height"), edge_radius=c.get("edge_radius", 0.0), offset=off, friction=mu)
-            if c["shape"] == "disc":
-                out.append(C.Pedestal(c["centre"], radius=c["diameter"] / 2, **kw))
-            else:
-                out.append(C.Pedestal(c["centre"], half_widths=(c["size"] / 2, c["size"] / 2), **kw))
-    return out
+    off, mu = b["offset"], b["friction"]
+    if b["type"] == "sphere":
+        return C.Sphere(b["centre"], b["radius"], offset=off, friction=mu)
+    if b["type"] == "plane":
+        return C.Plane(b["point"], b["normal"], offset=off, friction=mu)
+    kw = dict(height=b["height"], edge_radius=b["edge_radius"], offset=off, friction=mu)
+    if b["support"] == "cusick":
+        return C.CusickSupport(b["centre"], b["diameter"] / 2, b["disc_thickness"], b["stem_diameter"] / 2, **kw)
+    if b["shape"] == "disc":
+        return C.Pedestal(b["centre"], radius=b["diameter"] / 2, **kw)
+    return C.Pedestal(b["centre"], half_widths=(b["size"] / 2, b["size"] / 2), **kw)
 
 
 def _body_label(scene: Scene, i: int) -> str:
-    c = scene.contact[i]
-    where = {"sphere": "centre", "plane": "point", "pedestal": "centre"}[c["type"]]
-    return f"contact[{i}] ({c['type']} at {list(c[where])})"
+    b = scene.bodies()[i]
+    at = list(b["point" if b["type"] == "plane" else "centre"])
+    what = f"{b['type']} at {at}"
+    if b["origin"] == "geometry.recipe":
+        return f"the pedestal of recipe {scene.recipe!r} ({what}; geometry.pedestal_contact = false leaves it out)"
+    return f"{b['origin']} ({what})"
 
 
 def check_initial_contact(scene: Scene, mesh, fixed, bodies=None, U0=None) -> None:

@@ -40,11 +40,31 @@ from ..settings import SettingsModel
 from ..settings import parse as parse_model
 from ..solvers import KINDS
 
-__all__ = ["SceneDoc", "parse", "check_density", "FABRICS", "make_material"]
+__all__ = [
+    "SceneDoc",
+    "parse",
+    "check_density",
+    "FABRICS",
+    "make_material",
+    "PEDESTAL_RECIPES",
+    "recipe_pedestal",
+    "resolve_bodies",
+]
 
 FABRICS = {"wool": Fabric.wool}
 """Named fabrics a scene's ``material.fabric`` may start from (Table 1)."""
 RECIPES = {k: r for k, r in meshing.RECIPES.items() if r.form is not None}  # from_file: geometry.file
+PEDESTAL_RECIPES = {
+    "square_on_square": ("square", "size", "pedestal"),
+    "disc_on_disc": ("disc", "diameter", "pedestal_diameter"),
+    "square_on_disc": ("disc", "diameter", "pedestal_diameter"),
+}
+"""The recipes whose sheet lies on a pedestal: (its shape, the pedestal table's extent key, the
+geometry key giving that extent).  Only the hanging part is meshed, its inner edge on the rim."""
+PEDESTAL_HEIGHT = 10.0
+"""A pedestal's default height below its top face [cm] (the pictures drew 10 cm before it was a body)."""
+SUPPORTS = ("solid", "cusick")
+CUSICK_KEYS = ("disc_thickness", "stem_diameter", "clamp_diameter", "clamp_thickness")
 
 
 # --------------------------------------------------------------------------- one-line errors
@@ -316,17 +336,18 @@ def _one_geometry(v):
     return v
 
 
+def _recipe_geometry(name: str, r):
+    """[geometry] of recipe ``name``: its lengths [cm]; a pedestal recipe also takes
+    ``pedestal_contact`` (false: no pedestal body, the paper's node-free model; Scene.bodies)."""
+    fields = {p: (Optional[Pos], None) for p in r.geometry}
+    if name in PEDESTAL_RECIPES:
+        fields["pedestal_contact"] = (Optional[Bool], None)
+    return create_model(f"Geometry_{name}", __base__=RecipeGeometry, **fields)
+
+
 Geometry = Annotated[
     _tagged(
-        {
-            "file": FileGeometry,
-            **{
-                name: create_model(
-                    f"Geometry_{name}", __base__=RecipeGeometry, **{p: (Optional[Pos], None) for p in r.geometry}
-                )
-                for name, r in RECIPES.items()
-            },
-        },
+        {"file": FileGeometry, **{name: _recipe_geometry(name, r) for name, r in RECIPES.items()}},
         lambda d: "file" if "file" in d else d.get("recipe"),
         key="recipe",
         what="recipe",
@@ -459,21 +480,34 @@ class Plane(Body):
 
 
 class Pedestal(Body):
-    shape: choice(("square", "disc")) = "square"
-    centre: Vec3 = [0.0, 0.0, 0.0]  # of its top face
+    """A pedestal table as written; the keys it leaves out are filled by :func:`resolve_bodies`
+    (from the recipe's pedestal in a pedestal scene, else square, centre at the origin, offset 0)."""
+
+    shape: Optional[choice(("square", "disc"))] = None
+    centre: Optional[Vec3] = None  # of its top face
     size: Optional[Pos] = None
     diameter: Optional[Pos] = None
-    height: Pos = 10.0
+    height: Pos = PEDESTAL_HEIGHT
     edge_radius: Optional[NonNeg] = None
+    support: Optional[choice(SUPPORTS)] = None  # "solid" (default) | "cusick"
+    disc_thickness: Optional[Pos] = None  # cusick: the support disc [cm]
+    stem_diameter: Optional[Pos] = None  # cusick: the stem under it [cm]
+    clamp_diameter: Optional[Pos] = None  # cusick, optional: the upper clamping disc [cm]
+    clamp_thickness: Optional[Pos] = None
 
     @model_validator(mode="after")
-    def _extent(self):
-        given = {"size": self.size, "diameter": self.diameter}
-        need, other = ("size", "diameter") if self.shape == "square" else ("diameter", "size")
-        if given[need] is None:
-            raise Bad(need, f"required for a {self.shape} pedestal [cm]; missing")
-        if given[other] is not None:
-            raise Bad(other, f"does not apply to a {self.shape} pedestal")
+    def _support(self):
+        if self.support != "cusick":
+            for k in CUSICK_KEYS:
+                if getattr(self, k) is not None:
+                    raise Bad(k, 'applies to a Cusick-type support only (support = "cusick"), not to a solid pedestal')
+            return self
+        for k in ("disc_thickness", "stem_diameter"):
+            if getattr(self, k) is None:
+                raise Bad(k, "required for a cusick support [cm]; missing")
+        if (self.clamp_diameter is None) != (self.clamp_thickness is None):
+            k = "clamp_thickness" if self.clamp_thickness is None else "clamp_diameter"
+            raise Bad(k, "a clamp needs both clamp_diameter and clamp_thickness [cm]; missing")
         return self
 
 
@@ -518,6 +552,140 @@ def _own_model(name: str, model, filled: bool):
         return parsed.as_dict() if filled else dict(v)
 
     return Annotated[dict, PlainValidator(check)]
+
+
+# --------------------------------------------------------------------------- the bodies a scene feels
+def recipe_pedestal(geometry: dict, h: float) -> dict | None:
+    """The pedestal body a pedestal recipe implies (None for other geometries), every key filled:
+    solid, its top face at z = -h/2 under the flat sheet (mid-surface z = 0) with ``offset`` = h/2,
+    so the sheet's lower face lies on the top and the clamped mid-surface rim is at gap 0, exactly
+    (as the sphere scene's sheet on the sphere top); sharp edge, frictionless, 10 cm high."""
+    r = PEDESTAL_RECIPES.get(geometry.get("recipe"))
+    if r is None:
+        return None
+    shape, key, gkey = r
+    return {
+        "type": "pedestal",
+        "shape": shape,
+        key: float(geometry[gkey]),
+        "centre": (0.0, 0.0, -0.5 * h),
+        "height": PEDESTAL_HEIGHT,
+        "edge_radius": 0.0,
+        "offset": 0.5 * h,
+        "friction": 0.0,
+        "support": "solid",
+        "role": "support",
+        "origin": "geometry.recipe",
+    }
+
+
+def _pedestal_bodies(c: dict, implied: dict | None, where: str) -> list[dict]:
+    """The resolved body (and, for a Cusick-type support with a clamp, the clamp) of pedestal table
+    ``c``: keys it leaves out come from the recipe's pedestal ``implied`` (else square, centre at the
+    origin, offset 0).  Bad naming ``where``.key for a table that does not describe a body."""
+    d = implied or {"shape": "square", "centre": (0.0, 0.0, 0.0), "offset": 0.0}
+    shape = c.get("shape", d["shape"])
+    need, other = ("size", "diameter") if shape == "square" else ("diameter", "size")
+    if c.get(other) is not None:
+        raise Bad(f"{where}.{other}", f"does not apply to a {shape} pedestal")
+    extent = c.get(need, d.get(need) if shape == d["shape"] else None)
+    if extent is None:
+        raise Bad(f"{where}.{need}", f"required for a {shape} pedestal [cm]; missing")
+    height = float(c.get("height", PEDESTAL_HEIGHT))
+    er = float(c.get("edge_radius", 0.0))
+    support = c.get("support", "solid")
+    body = {
+        "type": "pedestal",
+        "shape": shape,
+        need: float(extent),
+        "centre": tuple(float(v) for v in c.get("centre", d["centre"])),
+        "height": height,
+        "edge_radius": er,
+        "offset": float(c.get("offset", d["offset"])),
+        "friction": float(c.get("friction", 0.0)),
+        "support": support,
+        "role": "support",
+        "origin": where,
+    }
+    if support == "solid":
+        if er >= min(0.5 * extent, 0.5 * height):
+            raise Bad(
+                f"{where}.edge_radius",
+                f"must be smaller than half the pedestal's {need} and half its height, got {er:g}",
+            )
+        return [body]
+    if shape != "disc":
+        raise Bad(f"{where}.support", f'a cusick support is a disc (shape = "disc"); this pedestal is {shape}')
+    t, sd = float(c["disc_thickness"]), float(c["stem_diameter"])
+    if sd > extent:
+        raise Bad(
+            f"{where}.stem_diameter",
+            f"the stem ({sd:g} cm) is wider than the disc (diameter {extent:g} cm); a Cusick-type support's stem must not exceed its disc",
+        )
+    if t >= height:
+        raise Bad(f"{where}.disc_thickness", f"must be smaller than the support's height ({height:g} cm), got {t:g}")
+    if er >= min(0.5 * extent, 0.5 * t):
+        raise Bad(
+            f"{where}.edge_radius", f"must be smaller than half the disc's diameter and half its thickness, got {er:g}"
+        )
+    cd, ct = c.get("clamp_diameter"), c.get("clamp_thickness")
+    body.update(disc_thickness=t, stem_diameter=sd, clamp_diameter=cd, clamp_thickness=ct)
+    if cd is None:
+        return [body]
+    if cd > extent:
+        raise Bad(
+            f"{where}.clamp_diameter",
+            f"the clamp ({cd:g} cm) is wider than the support disc (diameter {extent:g} cm); it would press on the hanging sheet",
+        )
+    # the clamp lies on the sheet: its lower face as far above the mid-surface as the support's top
+    # is below it (offset h/2 each: lower face at z = +h/2 over the recipe's sheet)
+    x, y, z = body["centre"]
+    off = body["offset"]
+    clamp = {
+        "type": "pedestal",
+        "shape": "disc",
+        "diameter": float(cd),
+        "centre": (x, y, z + 2.0 * off + float(ct)),
+        "height": float(ct),
+        "edge_radius": 0.0,
+        "offset": off,
+        "friction": body["friction"],
+        "support": "solid",
+        "role": "clamp",
+        "origin": f"{where}.clamp",
+    }
+    return [body, clamp]
+
+
+def resolve_bodies(geometry: dict, material: dict, contact, pedestal_contact: bool = True) -> list[dict]:
+    """The contact bodies a scene feels and its pictures show, one dict per body with every key
+    filled (Scene.bodies): its [[contact]] tables in order (a Cusick support's clamp right after it),
+    then the pedestal its recipe implies (:func:`recipe_pedestal`) unless a table gives a pedestal
+    or ``pedestal_contact`` (the file's ``geometry.pedestal_contact``) is false.  ``origin`` names where a body comes from
+    ("contact[0]", "contact[0].clamp", "geometry.recipe"); a pedestal's ``role`` is "support" or
+    "clamp".  Bad (key, message) for a table that does not describe a body."""
+    h = float(make_material(material).thickness)
+    implied = recipe_pedestal(geometry, h)
+    out: list[dict] = []
+    for i, c in enumerate(contact):
+        where = f"contact[{i}]"
+        base = {"offset": float(c.get("offset", 0.0)), "friction": float(c.get("friction", 0.0)), "origin": where}
+        if c["type"] == "sphere":
+            out.append({"type": "sphere", "centre": tuple(c["centre"]), "radius": float(c["radius"]), **base})
+        elif c["type"] == "plane":
+            out.append({"type": "plane", "point": tuple(c["point"]), "normal": tuple(c["normal"]), **base})
+        else:
+            out += _pedestal_bodies(c, implied, where)
+    tables = [i for i, c in enumerate(contact) if c["type"] == "pedestal"]
+    if not pedestal_contact:
+        if tables:
+            raise Bad(
+                "geometry.pedestal_contact",
+                f"is false (no pedestal body), but contact[{tables[0]}] is a pedestal; remove one of them",
+            )
+    elif implied is not None and not tables:
+        out.append(implied)
+    return out
 
 
 def _adapt_settings():
@@ -601,6 +769,15 @@ class SceneDoc(Table):
             raise Bad("mesh.density", "applies to recipe geometries only, not to a mesh file")
         return self
 
+    @model_validator(mode="after")
+    def _bodies(self):
+        """Every [[contact]] table describes a body once the recipe's pedestal fills its gaps."""
+        resolve_bodies(self.geometry.given(), self.material.given(), [c.given() for c in self.contact], self._on())
+        return self
+
+    def _on(self) -> bool:
+        return getattr(self.geometry, "pedestal_contact", None) is not False
+
     def tables(self) -> dict:
         """The Scene's fields (every table a plain dict; densities normalised, "48x16x4")."""
         m = self.mesh
@@ -610,7 +787,9 @@ class SceneDoc(Table):
             "title": self.title,
             "paper_section": self.paper_section,
             "description": self.description,
-            "geometry": self.geometry.given(),
+            # the recipe and its mesh parameters; pedestal_contact is a field of its own
+            "geometry": {k: v for k, v in self.geometry.given().items() if k != "pedestal_contact"},
+            "pedestal_contact": self._on(),
             "mesh": {
                 "density": norm(m.density),
                 "paper_meshes": [norm(d) for d in m.paper_meshes],

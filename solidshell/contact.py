@@ -132,6 +132,13 @@ class RigidBody:
     code: int = -1  # contact_kernels.SPHERE, PLANE, CYLINDER, BOX or CUSICK; -1: a user's body
 
     @property
+    def curvature_radius(self) -> float | None:
+        """The radius of the body's most curved smooth face [length] (sharp edges not counted), None
+        when it has none (flat faces) or it is unknown: how closely face points must sit
+        (contact_faces.spacing)."""
+        return None
+
+    @property
     def params(self) -> np.ndarray:
         """(contact_kernels.PARAMS,) the body's numbers for the kernels, from its attributes now."""
         return np.zeros(ck.PARAMS)
@@ -191,6 +198,10 @@ class Sphere(RigidBody):
     @property
     def params(self) -> np.ndarray:
         return _params(*self.center, self.radius)
+
+    @property
+    def curvature_radius(self) -> float | None:
+        return self.radius
 
     def __repr__(self):
         return (
@@ -276,6 +287,14 @@ class Pedestal(RigidBody):
         self.code = ck.CYLINDER if self.kind == "cylinder" else ck.BOX
 
     @property
+    def curvature_radius(self) -> float | None:
+        """The rounded edge and, for a cylinder, its side (a box's faces are flat)."""
+        r = [self.edge_radius] if self.edge_radius > 0.0 else []
+        if self.kind == "cylinder":
+            r.append(self.radius)
+        return min(r) if r else None
+
+    @property
     def params(self) -> np.ndarray:
         top = (*self.top_center, self.height, self.edge_radius)
         return _params(*top, self.radius) if self.kind == "cylinder" else _params(*top, *self.half_widths)
@@ -323,6 +342,12 @@ class CusickSupport(RigidBody):
         self.offset = _pos(offset, "contact offset", allow_zero=True)
         self.friction = friction_coefficient(friction)
         self.code = ck.CUSICK
+
+    @property
+    def curvature_radius(self) -> float | None:
+        """The disc's and the stem's sides and the rounded edge."""
+        r = [self.radius, self.stem_radius] + ([self.edge_radius] if self.edge_radius > 0.0 else [])
+        return min(r)
 
     @property
     def params(self) -> np.ndarray:

@@ -132,11 +132,20 @@ def body_forces(code, p, offset, mu, x, k, kt, anchor, f, ft, new, g_in, n_in):
     where a node was not in contact).  A body of code < 0 (a user's own RigidBody) gives its signed
     distances and normals in g_in (N,), n_in (N,3).  Returns (penalty energy 1/2 sum k p^2, stick
     energy 1/2 sum |f_t|^2 / k_t, nodes in contact, slipping nodes, deepest |f_n| / k)."""
+    return node_forces(code, p, offset, mu, x, k, kt, anchor, f, ft, new, g_in, n_in, _G0)
+
+
+@njit(cache=True)
+def node_forces(code, p, offset, mu, x, k, kt, anchor, f, ft, new, g_in, n_in, fx):
+    """:func:`body_forces` with ``fx`` (N,) the normal load the face points of the node's elements
+    carry on it (contact_faces.face_pass; empty: none): it adds to the node's Coulomb limit, and a
+    node with fx > 0 sticks or slips even when the node itself is just off the body (its face is on it)."""
     en = 0.0
     et = 0.0
     nact = 0
     nslip = 0
     pen = 0.0
+    extra = fx.size > 0
     for i in range(x.shape[0]):
         if code < 0:
             g, n0, n1, n2 = g_in[i], n_in[i, 0], n_in[i, 1], n_in[i, 2]
@@ -145,6 +154,7 @@ def body_forces(code, p, offset, mu, x, k, kt, anchor, f, ft, new, g_in, n_in):
         pi = max(-(g - offset), 0.0)
         kp = k[i] * pi
         fn0, fn1, fn2 = kp * n0, kp * n1, kp * n2
+        fxi = fx[i] if extra else 0.0
         if mu > 0.0:
             ft[i, 0] = ft[i, 1] = ft[i, 2] = 0.0
             new[i, 0] = new[i, 1] = new[i, 2] = np.nan
@@ -152,15 +162,15 @@ def body_forces(code, p, offset, mu, x, k, kt, anchor, f, ft, new, g_in, n_in):
             en += kp * pi
             nact += 1
             pen = max(pen, math.sqrt(fn0 * fn0 + fn1 * fn1 + fn2 * fn2) / k[i])
-            if mu > 0.0:
-                t0, t1, t2, slip = _stick(
-                    mu, kp, kt[i], x[i, 0], x[i, 1], x[i, 2], n0, n1, n2, anchor[i, 0], anchor[i, 1], anchor[i, 2]
-                )
-                ft[i, 0], ft[i, 1], ft[i, 2] = t0, t1, t2
-                new[i, 0], new[i, 1], new[i, 2] = x[i, 0] + t0 / kt[i], x[i, 1] + t1 / kt[i], x[i, 2] + t2 / kt[i]
-                et += (t0 * t0 + t1 * t1 + t2 * t2) / kt[i]
-                nslip += slip
-                fn0, fn1, fn2 = fn0 + t0, fn1 + t1, fn2 + t2
+        if mu > 0.0 and (pi > 0.0 or fxi > 0.0):
+            t0, t1, t2, slip = _stick(
+                mu, kp + fxi, kt[i], x[i, 0], x[i, 1], x[i, 2], n0, n1, n2, anchor[i, 0], anchor[i, 1], anchor[i, 2]
+            )
+            ft[i, 0], ft[i, 1], ft[i, 2] = t0, t1, t2
+            new[i, 0], new[i, 1], new[i, 2] = x[i, 0] + t0 / kt[i], x[i, 1] + t1 / kt[i], x[i, 2] + t2 / kt[i]
+            et += (t0 * t0 + t1 * t1 + t2 * t2) / kt[i]
+            nslip += slip
+            fn0, fn1, fn2 = fn0 + t0, fn1 + t1, fn2 + t2
         f[i, 0] += fn0
         f[i, 1] += fn1
         f[i, 2] += fn2
@@ -168,17 +178,20 @@ def body_forces(code, p, offset, mu, x, k, kt, anchor, f, ft, new, g_in, n_in):
 
 
 @njit(cache=True)
-def contact_pass(codes, params, offsets, mus, X0, D, nodes, k, kt, anchors, new, C, FT):
+def contact_pass(codes, params, offsets, mus, X0, D, nodes, k, kt, anchors, new, C, FT, fx, Ff):
     """Every body (each of code >= 0) on the mid-surface nodes ``nodes`` (ascending) of the sheet at D (6N,): their
-    contact forces into C (6N,) (the nodes' translation dofs overwritten), the frictional bodies'
-    forces into FT (n_fric, len(nodes), 3) and their new anchors into new (n_fric, N, 3) at the
-    nodes (anchors: (n_fric, N, 3), NaN off contact).  Returns (contact energy, stick energy, nodes
-    in contact counted per body, slipping nodes, deepest |f_n| / k) -- body_forces summed in body
-    order."""
+    contact forces plus the face points' Ff (N,3) (contact_faces.face_pass; empty: none) into C (6N,)
+    (the nodes' translation dofs overwritten), the frictional bodies' forces into FT (n_fric,
+    len(nodes), 3) and their new anchors into new (n_fric, N, 3) at the nodes (anchors: (n_fric, N,
+    3), NaN off contact; fx (n_fric, N): the face points' normal load on the nodes, node_forces).
+    Returns (contact energy, stick energy, nodes in contact counted per body, slipping nodes,
+    deepest |f_n| / k) -- body_forces summed in body order."""
     m = nodes.size
     x = np.empty((m, 3))
     kk = np.empty(m)
     kkt = np.empty(m)
+    faces = Ff.shape[0] > 0
+    fxj = np.zeros(m if faces else 0)
     for j in range(m):
         i = nodes[j]
         x[j, 0], x[j, 1], x[j, 2] = X0[i, 0] + D[6 * i], X0[i, 1] + D[6 * i + 1], X0[i, 2] + D[6 * i + 2]
@@ -195,8 +208,11 @@ def contact_pass(codes, params, offsets, mus, X0, D, nodes, k, kt, anchors, new,
         if mu > 0.0:
             for j in range(m):
                 a[j, 0], a[j, 1], a[j, 2] = anchors[jf, nodes[j], 0], anchors[jf, nodes[j], 1], anchors[jf, nodes[j], 2]
-            e1, e2, n1, n2, pb = body_forces(
-                codes[b], params[b], offsets[b], mu, x, kk, kkt, a, f, FT[jf], na, _G0, _N0
+            if faces:
+                for j in range(m):
+                    fxj[j] = fx[jf, nodes[j]]
+            e1, e2, n1, n2, pb = node_forces(
+                codes[b], params[b], offsets[b], mu, x, kk, kkt, a, f, FT[jf], na, _G0, _N0, fxj
             )
             for j in range(m):
                 new[jf, nodes[j], 0], new[jf, nodes[j], 1], new[jf, nodes[j], 2] = na[j, 0], na[j, 1], na[j, 2]
@@ -210,7 +226,11 @@ def contact_pass(codes, params, offsets, mus, X0, D, nodes, k, kt, anchors, new,
         pen = max(pen, pb)
     for j in range(m):
         o = 6 * nodes[j]
-        C[o], C[o + 1], C[o + 2] = f[j, 0], f[j, 1], f[j, 2]
+        if faces:
+            i = nodes[j]
+            C[o], C[o + 1], C[o + 2] = f[j, 0] + Ff[i, 0], f[j, 1] + Ff[i, 1], f[j, 2] + Ff[i, 2]
+        else:
+            C[o], C[o + 1], C[o + 2] = f[j, 0], f[j, 1], f[j, 2]
     return ec, et, nact, nslip, pen
 
 

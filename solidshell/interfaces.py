@@ -84,6 +84,10 @@ class ContactBody(Protocol):
     def params(self) -> np.ndarray:
         """(contact_kernels.PARAMS,) the body's numbers for the compiled kernels."""
 
+    @property
+    def curvature_radius(self) -> float | None:
+        """Radius of the most curved smooth face [length], None for flat faces or unknown."""
+
     def signed_distance(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(g (m,), n (m,3)) at points x (m,3)."""
 

@@ -42,7 +42,7 @@ def test_candidate_contact_is_every_node_contact_bitwise(body):
     V0[:, 2] = -20.0
     s = {"t_end": 1.0, "mass_scaling": 100.0, "sample_every": 1, "V0": V0}
     a, b = Integrator(prob, s), Integrator(prob, s)
-    a.cand = Candidates(prob.contact, prob.model.mesh.nodes, 0.01)
+    a.cand = Candidates(prob.contact, prob.model.mesh.nodes, 0.01, a.faces)
     b.cand = None
     for it in (a, b):
         assert it.advance(200) == "running"
@@ -90,11 +90,12 @@ def test_compiled_contact_pass_is_the_per_body_path(body):
     """The explicit solver's one compiled pass over the candidates (contact_kernels.contact_pass)
     against the per-body path a user's own body takes (contact.frictional_contact / forces, the same
     per-node laws): 200 steps of the thrown sheet give the same state, anchors and books bit for
-    bit; the deepest penetration, which the per-body path takes from f - f_t, to round-off."""
+    bit; the deepest penetration, which the per-body path takes from f - f_t, to round-off.  Nodes
+    only (a user's body has no face points, contact_faces.py)."""
     prob = drop(body)
     V0 = np.zeros((prob.model.n_nodes, 6))
     V0[:, 2] = -20.0
-    s = {"t_end": 1.0, "mass_scaling": 100.0, "sample_every": 1, "V0": V0}
+    s = {"t_end": 1.0, "mass_scaling": 100.0, "sample_every": 1, "V0": V0, "contact_face_points": 0}
     a, b = Integrator(prob, s), Integrator(prob, s)
     assert a.forces.compiled
     b.forces.compiled = False

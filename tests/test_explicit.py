@@ -378,15 +378,24 @@ def test_dropped_sheet_does_not_pass_through(body):
     x = np.stack([mesh.nodes + U[:, :3] for _, U in res.frames])
     gap, _ = b.penetration(x.reshape(-1, 3))
     # A node arriving at v = sqrt(2 g z0) on a penalty spring of frequency sqrt(0.1) w_max sinks
-    # about v / (sqrt(0.1) w_max) (~0.01 here, a fifth of the thickness); allow twice that.
+    # about v / (sqrt(0.1) w_max) (~0.01 here, a fifth of the thickness; the face points only
+    # stiffen the landing); allow twice that.
     w_sheet = 2 / i["critical_time_step_sheet"]
     bound = math.sqrt(2 * G0 * z0) / (math.sqrt(0.1) * w_sheet)
-    assert -gap.min() < 2 * bound and i["max_contact_penetration"] < 2 * bound, (gap.min(), bound)
+    assert -gap.min() < 2 * bound, (gap.min(), bound)
+    # the face points (contact_faces.py) meet the body where the sheet's flaps swing onto it, faster
+    # than the drop: the same spring law with the sheet's fastest speed in the run (from the frames)
+    t = np.array([tf for tf, _ in res.frames])
+    v_max = float(np.max(np.linalg.norm(np.diff(x, axis=0), axis=2) / np.diff(t)[:, None]))
+    bound_f = v_max / (math.sqrt(0.1) * w_sheet)
+    assert i["max_contact_penetration"] < 2 * bound_f, (i["max_contact_penetration"], bound_f)
     assert i["max_contact_penetration"] >= -gap.min() - 1e-12  # tracked every step, frames included
     # at the end it lies on the body, not through it
     assert np.all(gap.reshape(len(res.frames), -1)[-1] > -2 * bound)
-    # Energy balance, to what the step allows.  Each landed node rings on its penalty spring,
-    # k = 0.1 m w_max^2 (contact.penalty_stiffness), at w_c = sqrt(0.1) w_max.  For x'' = -w_c^2 x
+    # Energy balance, to what the step allows.  Each landed node rings on its penalty springs (its
+    # own, k = 0.1 m w_max^2, contact.penalty_stiffness, and its share of the face points',
+    # contact_faces.py) at w_c <= sqrt(w^2 - w_max^2), w = 2 / the critical step with contact (the
+    # bound the step control uses).  For x'' = -w_c^2 x
     # the central difference conserves the shadow energy E (1 - (w_c dt)^2/4) (E the amplitude's
     # energy, sin(w~ dt/2) = w_c dt/2), while the ledger's E_kin, read with the central velocity
     # (D_n+1 - D_n-1)/(2 dt), swings between that and E: the reading is off by up to
@@ -398,7 +407,7 @@ def test_dropped_sheet_does_not_pass_through(body):
     # for O(dt^2); dt/2 and dt/8 fit the same order, 0.32/0.24 and 0.020/0.012).  A penalty spring
     # stiffer than the rule's (k from twice the node mass: floor 0.083) fails here, passed 10 %.
     dt = i["dt"]
-    w_c_dt = math.sqrt(0.1) * w_sheet * dt
+    w_c_dt = math.sqrt((2 / i["critical_time_step"]) ** 2 - w_sheet**2) * dt
     assert i["energy_balance_error"] < w_c_dt**2 / (4 - w_c_dt**2), (i["energy_balance_error"], w_c_dt)
     fine = explicit.run(prob, {"t_end": 0.05, "alpha": 5.0, "dt": dt / 4})
     assert fine.converged, fine.message

@@ -10,6 +10,7 @@ import numpy as np
 
 from ... import contact_kernels as ck
 from ...contact import contact_forces, frictional_contact
+from ...contact_faces import face_pass
 from ...interfaces import QuasiStrainModel, SolverProblem
 from ...model import Model
 
@@ -20,9 +21,11 @@ class Forces:
     coefficient of each contact body (0: frictionless); ``fused`` the model's FusedForces (None:
     the model's own methods).  A library Model (``shell``) has a mesh, energy_and_force and the
     interpenetration counts; any other model (interfaces.ExplicitModel) its force and energy, its
-    nodes at the origin, and Eq. (24)'s books when it is an interfaces.QuasiStrainModel."""
+    nodes at the origin, and Eq. (24)'s books when it is an interfaces.QuasiStrainModel.
+    ``faces``: the mesh's contact_faces.FacePoints (None or empty: contact on the nodes only); they
+    take part when every body is one of the compiled kinds (a user's own RigidBody: nodes only)."""
 
-    def __init__(self, problem: SolverProblem, k_pen, k_t, fric_of, fused=None):
+    def __init__(self, problem: SolverProblem, k_pen, k_t, fric_of, fused=None, faces=None):
         self.model = model = problem.model
         self.N = model.n_nodes
         self.shape = (self.N, 6)
@@ -47,6 +50,14 @@ class Forces:
             self._kt = np.ascontiguousarray(k_t, dtype=float) if k_t is not None else np.zeros(0)
             self._ft = np.zeros((self.n_fric, self.N, 3))  # the friction forces of one pass
             self._no_anchor = np.zeros((0, self.N, 3))
+        self.faces = faces if self.compiled and faces is not None and len(faces) else None
+        if self.faces is not None:
+            self.kq = self.faces.stiffness(self.k_pen)
+            self._all_els = np.arange(len(self.faces.conn4))
+            self._fx = np.zeros((self.n_fric, self.N))  # the face points' normal load on the nodes
+            self._Ff = np.zeros((self.N, 3))  # the face points' forces on the nodes
+        else:
+            self._fx, self._Ff = np.zeros((0, 0)), np.zeros((0, 3))
 
     def internal(self, D, want_energy):
         """(F(D) flat, strain energy or None)."""
@@ -82,26 +93,30 @@ class Forces:
             C6[nodes, :3] = fc
         return C
 
-    def contact(self, D, nodes=None, C=None):
-        """Frictionless penalty contact: (C flat, energy, active nodes, deepest penetration).
-        ``nodes``: evaluate only these (sorted; every node in contact must be among them,
-        candidates.py), ``C``: the output buffer (see _into)."""
+    def contact(self, D, nodes=None, C=None, elements=None):
+        """Frictionless penalty contact: (C flat, energy, active nodes and face points, deepest
+        penetration).  ``nodes``: evaluate only these and the face points of ``elements`` (sorted;
+        every node and element in contact must be among them, and the nodes of the elements,
+        candidates.py; elements None: those whose nodes are all among ``nodes``),
+        ``C``: the output buffer (see _into)."""
         if self.compiled:
-            C, ec, _, nact, _, pen = self._pass(D, None, nodes, C, None)
+            C, ec, _, nact, _, pen = self._pass(D, None, nodes, C, None, elements=elements)
             return C, ec, nact, pen
         x, k, _ = self._points(D, nodes)
         fc, ec, nact = contact_forces(self.bodies, x, k)
         pen = float(np.max(np.linalg.norm(fc, axis=1) / k)) if nact else 0.0
         return self._into(fc, nodes, C), ec, nact, pen
 
-    def contact_friction(self, D, anchors, nodes=None, C=None, new=None):
+    def contact_friction(self, D, anchors, nodes=None, C=None, new=None, elements=None):
         """As :meth:`contact`, with Coulomb friction on the bodies with mu > 0
         (contact.frictional_contact): also (FT (n_fric, m, 3), node indices (m,)), the friction
         forces of the m nodes evaluated per frictional body, the stick energy, the new anchors and
         the slip count.  ``anchors`` is not modified (a restart must see the saved ones).  With
         ``nodes`` the new anchors go into ``new`` (n_fric, N, 3), NaN elsewhere."""
         if self.compiled:
-            C, ec, et, nact, nslip, pen, FT, idx, a_new = self._pass(D, anchors, nodes, C, new, friction=True)
+            C, ec, et, nact, nslip, pen, FT, idx, a_new = self._pass(
+                D, anchors, nodes, C, new, friction=True, elements=elements
+            )
             return C, ec, nact, pen, (FT, idx), et, a_new, nslip
         x, k, kt = self._points(D, nodes)
         m = len(x)
@@ -138,10 +153,35 @@ class Forces:
         fr = (FT, self._all if nodes is None else nodes)
         return self._into(fc, nodes, C), ec, nact, pen, fr, et, a_new, nslip
 
-    def _pass(self, D, anchors, nodes, C, new, friction=False):
-        """contact_kernels.contact_pass on ``nodes`` (None: all): (C, contact energy, stick energy,
-        nodes in contact, slipping, deepest |f_n| / k[, FT, nodes, new anchors])."""
+    def _pass(self, D, anchors, nodes, C, new, friction=False, elements=None):
+        """contact_faces.face_pass on the face points of ``elements`` and contact_kernels.contact_pass on
+        ``nodes`` (None: all of both): (C, contact energy, stick energy, nodes and points in contact,
+        slipping, deepest penetration[, FT, nodes, new anchors])."""
         idx = self._all if nodes is None else nodes
+        ef, nf, pf = 0.0, 0, 0.0
+        if self.faces is not None:
+            els = self._all_els if nodes is None else elements
+            if els is None:  # the elements whose nodes are all among ``nodes``
+                inn = np.zeros(self.N, dtype=bool)
+                inn[nodes] = True
+                els = np.flatnonzero(inn[self.faces.conn4].all(axis=1))
+            f = self.faces
+            ef, nf, pf = face_pass(
+                self.codes,
+                self.params,
+                self.offsets,
+                self.mus,
+                self.X0,
+                D,
+                els,
+                f.estart,
+                f.nodes,
+                f.w,
+                self.kq,
+                idx,
+                self._fx,
+                self._Ff,
+            )
         if C is None:
             C = np.zeros(6 * self.N)
         if friction:
@@ -157,8 +197,23 @@ class Forces:
         else:
             FT, anc, new = self._ft[:, :0], self._no_anchor, self._no_anchor
         ec, et, nact, nslip, pen = ck.contact_pass(
-            self.codes, self.params, self.offsets, self.mus, self.X0, D, idx, self.k_pen, self._kt, anc, new, C, FT
+            self.codes,
+            self.params,
+            self.offsets,
+            self.mus,
+            self.X0,
+            D,
+            idx,
+            self.k_pen,
+            self._kt,
+            anc,
+            new,
+            C,
+            FT,
+            self._fx,
+            self._Ff,
         )
+        ec, nact, pen = ec + ef, nact + nf, max(pen, pf)
         if friction:
             return C, ec, et, nact, nslip, pen, FT, idx, new
         return C, ec, et, nact, nslip, pen

@@ -19,6 +19,7 @@ import time
 
 import numpy as np
 
+from ...contact_faces import FacePoints, spacing
 from ...contact_kernels import friction_work
 from ...errors import InputError, SolverError
 from ...interfaces import ExplicitModel, SolverProblem
@@ -106,8 +107,20 @@ class Integrator:
         self.fric_of = [float(b.friction) for b in self.bodies]
         self.n_fric = sum(1 for mu in self.fric_of if mu > 0.0)  # 0: the frictionless path
         # the step's contact only at the nodes near a body (candidates.py), into buffers of its own
+        self.faces = (
+            FacePoints(
+                mesh,
+                self.model.nodal_areas(),
+                s.contact_face_points,
+                spacing(self.bodies, self.model.material.thickness),
+            )
+            if self.bodies and mesh is not None and all(b.code >= 0 for b in self.bodies)
+            else None
+        )
         self.cand = (
-            Candidates(self.bodies, mesh.nodes, default_margin(mesh)) if self.bodies and mesh is not None else None
+            Candidates(self.bodies, mesh.nodes, default_margin(mesh), self.faces)
+            if self.bodies and mesh is not None
+            else None
         )
         self._C = np.zeros(6 * self.N)
         self._anchor_bufs = [np.full((self.n_fric, self.N, 3), np.nan) for _ in range(2)]
@@ -133,7 +146,9 @@ class Integrator:
         # internal_force) go through their methods
         self.fused = FusedForces(self.model) if mesh is not None else None
         self.force_fn = self._fused_force if self.fused is not None else self.model.internal_force
-        self.dynamics = stepcontrol.Dynamics(self.model, M, self.free_mask, self.bodies, self.n_fric, self.force_fn)
+        self.dynamics = stepcontrol.Dynamics(
+            self.model, M, self.free_mask, self.bodies, self.n_fric, self.force_fn, self.faces
+        )
         shaping = {k: v for k, v in s.as_dict().items() if k not in RESTART_NEUTRAL}
         self.fingerprint = checkpoint.fingerprint(problem, shaping, M)
 
@@ -144,7 +159,7 @@ class Integrator:
     def _bind(self, lim) -> None:
         """Attach a critical-step estimate: penalty stiffness, forces, the energy floor."""
         self.lim = lim
-        self.forces = Forces(self.problem, lim.k_pen, lim.k_t, self.fric_of, self.fused)
+        self.forces = Forces(self.problem, lim.k_pen, lim.k_t, self.fric_of, self.fused, self.faces)
         self.quasi = self.forces.quasi
         self.E_floor = ledger.energy_floor(self.P, self.Mf, self.free_idx, self.forces.X0, lim.omega_el)
 
@@ -420,18 +435,18 @@ class Integrator:
         st, cand = self.state, self.cand
         if not self.bodies:
             return None
-        nodes, C, new = None, None, None
+        nodes, C, new, elements = None, None, None, None
         if cand is not None and cand.enabled:
             if cand.update(D):
                 self._C.fill(0.0)  # the previous candidates' entries
-            nodes, C = cand.nodes, self._C
+            nodes, C, elements = cand.nodes, self._C, cand.elements
             new = self._anchor_bufs[1] if st.anchors is self._anchor_bufs[0] else self._anchor_bufs[0]
         if self.n_fric:
             C, f["Ec"], f["nact"], pen, f["fr"], f["Et"], f["anchors"], f["nslip"] = self.forces.contact_friction(
-                D, st.anchors, nodes, C, new
+                D, st.anchors, nodes, C, new, elements
             )
         else:
-            C, f["Ec"], f["nact"], pen = self.forces.contact(D, nodes, C)
+            C, f["Ec"], f["nact"], pen = self.forces.contact(D, nodes, C, elements)
         f["C"] = C
         f["cnodes"] = self._all_nodes if nodes is None else nodes
         if pen > st.max_pen:

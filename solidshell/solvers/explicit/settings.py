@@ -14,6 +14,7 @@ from typing import Annotated, Any, Literal, Optional
 import numpy as np
 from pydantic import AfterValidator, BeforeValidator, Field, ValidationInfo, field_validator, model_validator
 
+from ...contact_faces import DEFAULT_FACE_POINTS, MAX_FACE_POINTS
 from ...errors import InputError
 from ...settings import Finite, SettingsModel, StateArray, parse
 
@@ -74,6 +75,7 @@ class _Common(SettingsModel):
     critical_step_method: Literal["lanczos", "power", "tangent"] = "lanczos"
     critical_step_tol: Pos = 1e-6
     contact_penalty_factor: Pos = 0.1
+    contact_face_points: Annotated[int, Field(ge=0, le=MAX_FACE_POINTS)] = DEFAULT_FACE_POINTS  # per element edge
     checkpoint: PathStr = None
     checkpoint_every: Optional[PosInt] = None  # steps; default every checkpoint_wall seconds
     checkpoint_wall: Pos = 60.0  # [s] of wall time

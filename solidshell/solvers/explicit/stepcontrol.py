@@ -12,6 +12,7 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -32,6 +33,7 @@ class Dynamics:
     bodies: list[ContactBody]  # the contact bodies (their penalty springs)
     n_fric: int  # how many of them have friction (their stick springs)
     force: Callable | None = None  # U (N,6) -> internal force to differentiate (None: model.internal_force)
+    faces: Any = None  # contact_faces.FacePoints of the mesh (None: contact on the nodes only)
 
 
 @dataclass
@@ -89,11 +91,19 @@ def limit(omega_el, method, dyn: Dynamics, s, alpha, n_evals=0, seconds=0.0, mod
     omega = omega_el
     if bodies:
         k_pen = penalty_stiffness(M[:, 0], omega_el, s.contact_penalty_factor)
-        # the contact Hessian of a node has eigenvalues k (normal) and k_t (tangential, friction)
-        k_max = k_pen * max(1.0, s.friction_stiffness) if n_fric else k_pen
+        # the contact Hessian of a node has eigenvalues k (normal) and k_t (tangential, friction);
+        # the face points add their row sums to the normal one (contact_faces.py).  The stick
+        # springs sit on the nodes and take the normal stiffness a node has when its faces lie flat
+        # on the body (its own and the grid points' share): then normal and tangential springs ring
+        # in step and a load inside the Coulomb cone stays inside it while they ring
+        k_n, k_flat = k_pen, k_pen
+        if dyn.faces is not None:
+            kq = dyn.faces.stiffness(k_pen)
+            k_n = k_flat = k_pen + dyn.faces.node_stiffness(kq)
+        k_max = np.maximum(k_n, s.friction_stiffness * k_flat) if n_fric else k_n
         omega = 2.0 / combined_critical_time_step(omega_el, k_max, M[:, 0])
         if n_fric:
-            k_t = s.friction_stiffness * k_pen
+            k_t = s.friction_stiffness * k_flat
     return StepLimit(
         omega_el, omega, critical_time_step(omega, alpha), method, k_pen, k_max, k_t, n_evals, seconds, mode
     )

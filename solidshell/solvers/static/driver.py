@@ -164,7 +164,7 @@ def _setup(model, fixed, loads, prescribed, contact, s):
     if loads.size != 6 * n:
         raise InputError(f"loads must have shape ({n}, 6), got {loads.shape}")
     factorization = resolve_factorization(s.factorization, int(np.count_nonzero(~fixed)))
-    sys = System(model, fixed, loads, prescribed, contact, s.contact_stiffness, factorization)
+    sys = System(model, fixed, loads, prescribed, contact, s.contact_stiffness, factorization, s.contact_face_points)
     if sys.free.size == 0:
         raise InputError("every dof is fixed: nothing to solve")
     if s.U0 is None:

@@ -17,6 +17,7 @@ from typing import Literal, Optional, Union, get_args
 
 from pydantic import Field, field_validator, model_validator
 
+from ...contact_faces import DEFAULT_FACE_POINTS, MAX_FACE_POINTS
 from ...settings import Finite, SettingsModel, StateArray
 from ..linear import FACTORIZATIONS
 
@@ -102,6 +103,12 @@ class StaticSettings(SettingsModel):
     saddle_step: Finite = Field(0.05, gt=0.0, description="largest escape step, fraction of L_f")
     contact_stiffness: Optional[Finite] = Field(
         None, gt=0.0, description="penalty [force/length] (None: 1e3 x heaviest nodal dead load / h)"
+    )
+    contact_face_points: int = Field(
+        DEFAULT_FACE_POINTS,
+        ge=0,
+        le=MAX_FACE_POINTS,
+        description="contact points per element edge inside each element (contact_faces.py; 0: nodes only)",
     )
     factorization: Literal[FACTORIZATIONS] = Field(
         "auto",

@@ -43,7 +43,9 @@ import math
 
 import numpy as np
 
+from ...contact_faces import DEFAULT_FACE_POINTS, FacePoints, contact_terms, spacing
 from ...errors import InputError
+from ...model import Model
 from ..linear import CHOLESKY_KINDS, Cholesky, LowerCSC, arpack_start, as_csc, ldl_inertia, positive_definite_factor
 
 __all__ = [
@@ -63,8 +65,19 @@ __all__ = [
 class System:
     """Model + constraints + loads + contact, with counters.  Works on full flat vectors D (6N)."""
 
-    def __init__(self, model, fixed, loads, prescribed, contact, contact_stiffness, factorization):
-        # factorization: a resolved kind (linear.resolve_factorization)
+    def __init__(
+        self,
+        model,
+        fixed,
+        loads,
+        prescribed,
+        contact,
+        contact_stiffness,
+        factorization,
+        face_points=DEFAULT_FACE_POINTS,
+    ):
+        # factorization: a resolved kind (linear.resolve_factorization); face_points: per element edge
+        # (contact_faces.py, 0: contact on the nodes only)
         n = model.n_nodes
         self.model = model
         self.n = n
@@ -91,6 +104,12 @@ class System:
                 w = np.abs(self.P.reshape(n, 6)[:, :3]).max()
                 contact_stiffness = 1e3 * max(w, 1e-12) / h
             self.k_contact = float(contact_stiffness)
+        self.faces = None
+        self._lw_keys = None  # the lower pattern's entry keys (_lower_positions)
+        if self.contact and isinstance(model, Model) and face_points:
+            sp = spacing(self.contact, model.material.thickness)
+            self.faces = FacePoints(model.mesh, model.nodal_areas(), face_points, sp)
+            self.k_faces = self.faces.stiffness(np.full(n, self.k_contact))
         self.n_energy = 0
         self.n_tangent = 0
         self.n_solves = 0
@@ -134,10 +153,12 @@ class System:
     def U(self, D):
         return D.reshape(self.n, 6)
 
-    # -- contact (mid-surface nodes; forces on U_o only)
+    # -- contact (mid-surface nodes and face points; forces on U_o only)
     def _contact(self, D, want_tangent=False):
-        """(penalty energy, its gradient (6N,), tangent blocks): the blocks are a list of (active
-        nodes (A,), k n n^T (A,3,3)) per body, None without ``want_tangent``."""
+        """(penalty energy, its gradient (6N,), tangent blocks, face entries): the blocks are a list
+        of (active nodes (A,), k n n^T (A,3,3)) per body, the face entries (rows, cols, vals) of the
+        face points' tangent in the full 6N x 6N numbering (contact_faces.contact_terms); both None
+        without ``want_tangent``."""
         x = self.model.mesh.nodes + D.reshape(self.n, 6)[:, :3]
         f = np.zeros((self.n, 6))
         e = 0.0
@@ -152,11 +173,17 @@ class System:
                 act = np.flatnonzero(gap < 0.0)
                 if act.size:
                     blocks.append((act, k * nrm[act][:, :, None] * nrm[act][:, None, :]))
-        return e, f.ravel(), blocks
+        entries = None
+        if self.faces is not None:
+            ef, Ff, entries = contact_terms(self.faces, self.contact, x, self.k_faces, want_tangent)
+            e += ef
+            f[:, :3] += Ff
+        return e, f.ravel(), blocks, entries
 
-    def _contact_matrix(self, blocks):
-        """The contact tangent blocks as a (6N, 6N) CSR matrix, or None."""
-        if not blocks:
+    def _contact_matrix(self, blocks, entries=None):
+        """The contact tangent blocks (and face entries) as a (6N, 6N) CSR matrix, or None."""
+        blocks = list(blocks or [])
+        if not blocks and not (entries and entries[0]):
             return None
         import scipy.sparse as sp  # scipy.sparse only where a 6N x 6N matrix is formed: a small
 
@@ -169,6 +196,10 @@ class System:
             rows.append(r.ravel())
             cols.append(c.ravel())
             vals.append(nn.ravel())
+        if entries:
+            rows += entries[0]
+            cols += entries[1]
+            vals += entries[2]
         m = 6 * self.n
         return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(m, m))
 
@@ -180,7 +211,7 @@ class System:
         W, F = self.model.energy_and_force(U)
         F = np.asarray(F, dtype=float).ravel()
         if self.contact:
-            ec, fc, _ = self._contact(D)
+            ec, fc, _, _ = self._contact(D)
             W += ec
             F = F + fc
         return float(W) - lam * float(np.dot(self.P, D)), F - lam * self.P
@@ -194,9 +225,9 @@ class System:
         F = np.asarray(F, dtype=float).ravel()
         K = sp.csr_matrix(K)
         if self.contact:
-            _, fc, blocks = self._contact(D, want_tangent=True)
+            _, fc, blocks, entries = self._contact(D, want_tangent=True)
             F = F + fc
-            Kc = self._contact_matrix(blocks)
+            Kc = self._contact_matrix(blocks, entries)
             if Kc is not None:
                 K = K + Kc
         return F, K
@@ -214,13 +245,31 @@ class System:
         F, data = self.model.force_and_free_tangent(self.U(D), lw)
         F = np.asarray(F, dtype=float).ravel()
         if self.contact:
-            _, fc, blocks = self._contact(D, want_tangent=True)
+            _, fc, blocks, entries = self._contact(D, want_tangent=True)
             F = F + fc
             for act, nn in blocks:
                 pos = lw.node_pos[act]
                 m = pos >= 0
                 np.add.at(data, pos[m], nn[m])
+            if entries and entries[0]:
+                pos, vals = self._lower_positions(lw, entries)
+                np.add.at(data, pos, vals)
         return F, LowerCSC(lw.indptr, lw.indices, data, lw.diag_pos, lw)
+
+    def _lower_positions(self, lw, entries):
+        """(positions in the lower free-dof data, values) of full-matrix entries (rows, cols, vals):
+        the entries on free dofs with row >= column (in the free numbering), each once -- the lower
+        triangle of the symmetric sum.  The pattern holds every pair of dofs of one element."""
+        if self._lw_keys is None or self._lw_keys[0] is not lw:
+            new = np.full(6 * self.n, -1, dtype=np.int64)
+            new[lw.free] = np.arange(lw.n)
+            cols = np.repeat(np.arange(lw.n, dtype=np.int64), np.diff(lw.indptr))
+            self._lw_keys = (lw, new, cols * lw.n + lw.indices)
+        _, new, keys = self._lw_keys
+        r, c, v = (np.concatenate(a) for a in entries)
+        r, c = new[r], new[c]
+        ok = (r >= 0) & (c >= 0) & (r >= c)
+        return np.searchsorted(keys, c[ok] * lw.n + r[ok]), v[ok]
 
     def ldl(self, A):
         """(solver, number of negative eigenvalues or None) of the symmetric free tangent ``A``:

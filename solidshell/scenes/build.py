@@ -195,10 +195,11 @@ def _body_label(scene: Scene, i: int) -> str:
 
 
 def check_initial_contact(scene: Scene, mesh, fixed, bodies=None, U0=None) -> None:
-    """InputError when a node of the sheet starts inside a contact body (solidshell.contact.
-    initial_penetration): names the body, the node count and the deepest penetration [cm].
-    Nodes with all translations fixed are not checked (they cannot be pushed out, and a clamped
-    rim on a pedestal's edge sits exactly on it)."""
+    """InputError when a node or a face point (contact_faces.py) of the sheet starts inside a contact
+    body (solidshell.contact.initial_penetration): names the body, the count and the deepest
+    penetration [cm].  Nodes with all translations fixed are not checked (they cannot be pushed
+    out, and a clamped rim on a pedestal's edge sits exactly on it), nor the face points of
+    elements whose nodes are all fixed."""
     bodies = contact_bodies(scene) if bodies is None else bodies
     if not bodies:
         return
@@ -210,13 +211,22 @@ def check_initial_contact(scene: Scene, mesh, fixed, bodies=None, U0=None) -> No
         if u.size == 6 * mesh.n_nodes:  # (a wrong shape is the solver's settings' to refuse)
             x = x + u.reshape(-1, 6)[:, :3]
     free = ~np.asarray(fixed, bool)[:, :3].all(axis=1)
-    hits = initial_penetration(bodies, x, free=free)
+    what, hits = "node(s)", initial_penetration(bodies, x, free=free)
+    if not hits:  # an element whose nodes lie outside can still start through a body (contact_faces)
+        from ..contact_faces import FacePoints, spacing
+
+        faces = FacePoints(mesh, np.ones(mesh.n_nodes), spacing=spacing(bodies, scene.material_object().thickness))
+        tol = 1e-9 * float(np.linalg.norm(np.ptp(x, axis=0))) if len(x) > 1 else 0.0
+        what, hits = (
+            "face point(s)",
+            initial_penetration(bodies, faces.positions(x), free=free[faces.nodes].any(1), tol=tol),
+        )
     if hits:
         i, body, n, depth = hits[0]
         more = f"; {len(hits) - 1} more bod{'y' if len(hits) == 2 else 'ies'} too" if len(hits) > 1 else ""
         off = f" (its offset {body.offset:g} cm included)" if body.offset else ""
         raise InputError(
-            f"{scene.source}: {_body_label(scene, i)}: {n} node(s) of the sheet start inside "
+            f"{scene.source}: {_body_label(scene, i)}: {n} {what} of the sheet start inside "
             f"the body, deepest {depth:.4g} cm{off}; move the body or the sheet so that "
             f"they start apart or just touching{more}"
         )

@@ -62,7 +62,18 @@ PEDESTAL_RECIPES = {
 """The recipes whose sheet lies on a pedestal: (its shape, the pedestal table's extent key, the
 geometry key giving that extent).  Only the hanging part is meshed, its inner edge on the rim."""
 PEDESTAL_HEIGHT = 10.0
-"""A pedestal's default height below its top face [cm] (the pictures drew 10 cm before it was a body)."""
+"""A pedestal's least default height below its top face [cm] (the pictures drew 10 cm before it was
+a body); a recipe's pedestal is at least as tall as the sheet's skirt is long (:func:`recipe_pedestal`)."""
+
+
+def _skirt_length(geometry: dict) -> float:
+    """The longest distance of the recipe's sheet from its centre [cm] (the half diagonal of a
+    square sheet, the radius of a disc): no skirt reaches further down the pedestal than that."""
+    if "sheet" in geometry:
+        return float(geometry["sheet"]) / 2.0**0.5
+    return 0.5 * float(geometry.get("diameter", 0.0))
+
+
 SUPPORTS = ("solid", "cusick")
 CUSICK_KEYS = ("disc_thickness", "stem_diameter", "clamp_diameter", "clamp_thickness")
 
@@ -559,7 +570,9 @@ def recipe_pedestal(geometry: dict, h: float) -> dict | None:
     """The pedestal body a pedestal recipe implies (None for other geometries), every key filled:
     solid, its top face at z = -h/2 under the flat sheet (mid-surface z = 0) with ``offset`` = h/2,
     so the sheet's lower face lies on the top and the clamped mid-surface rim is at gap 0, exactly
-    (as the sphere scene's sheet on the sphere top); sharp edge, frictionless, 10 cm high."""
+    (as the sphere scene's sheet on the sphere top); sharp edge, frictionless, PEDESTAL_HEIGHT high
+    or taller, as long as the sheet's skirt can hang (square-on-disc: 35.4 cm; a shorter body
+    would let the skirt's corners fold in under its base)."""
     r = PEDESTAL_RECIPES.get(geometry.get("recipe"))
     if r is None:
         return None
@@ -569,7 +582,7 @@ def recipe_pedestal(geometry: dict, h: float) -> dict | None:
         "shape": shape,
         key: float(geometry[gkey]),
         "centre": (0.0, 0.0, -0.5 * h),
-        "height": PEDESTAL_HEIGHT,
+        "height": max(PEDESTAL_HEIGHT, round(_skirt_length(geometry), 3)),
         "edge_radius": 0.0,
         "offset": 0.5 * h,
         "friction": 0.0,
@@ -591,7 +604,7 @@ def _pedestal_bodies(c: dict, implied: dict | None, where: str) -> list[dict]:
     extent = c.get(need, d.get(need) if shape == d["shape"] else None)
     if extent is None:
         raise Bad(f"{where}.{need}", f"required for a {shape} pedestal [cm]; missing")
-    height = float(c.get("height", PEDESTAL_HEIGHT))
+    height = float(c.get("height", (implied or {}).get("height", PEDESTAL_HEIGHT)))
     er = float(c.get("edge_radius", 0.0))
     support = c.get("support", "solid")
     body = {

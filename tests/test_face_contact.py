@@ -1,0 +1,190 @@
+"""Contact on element faces (solidshell/contact_faces.py, issue 36): the face points' forces are the
+gradient of their energy, the explicit and static paths agree, and drapes keep every point of their
+elements out of the bodies -- where contact on the nodes alone lets the bodies through.
+
+"Out" is measured by solidshell.penetration (a 5 x 5 lattice per quad including the element's
+edges, not the contact's own sub-cell centres) against contact.PENETRATION_TOL = 2 % of h."""
+
+import math
+
+import numpy as np
+import pytest
+
+from solidshell import Fabric
+from solidshell.contact import PENETRATION_TOL, Pedestal, Sphere
+from solidshell.contact_faces import FacePoints, contact_terms, face_pass, spacing
+from solidshell.meshing import build_mesh
+from solidshell.model import Model
+from solidshell.penetration import check
+from solidshell.problem import Problem
+from solidshell.solvers import get
+
+G0 = 980.665
+H = Fabric.wool().thickness
+TOL = PENETRATION_TOL * H
+
+
+def _sheet(n, size, z=0.0):
+    mesh = build_mesh("square", f"{n}x{n}", size=size)
+    mesh.nodes[:, 2] += z
+    return mesh
+
+
+def test_face_points_partition_each_element():
+    """Weights are a partition of unity, the points' areas sum to the element's, the stiffness per
+    area is the nodes' (k_a / A_a), and the row sums (the critical step's share) are the nodes'
+    own k on a uniform mesh with one point per sub-cell (sum_q N_a(xi_q) = n^2 / 4 per quad)."""
+    mesh = _sheet(4, 4.0)
+    A = np.ones(mesh.n_nodes)  # unit nodal areas: kappa = k
+    fp = FacePoints(mesh, A, 3)
+    assert len(fp) == 9 * 16 and np.all(fp.per_edge == 3)
+    np.testing.assert_allclose(fp.w.sum(axis=1), 1.0, rtol=0, atol=1e-15)
+    per_elem = np.bincount(fp.elem, weights=fp.area)
+    np.testing.assert_allclose(per_elem, 1.0, rtol=1e-14)  # 16 unit squares
+    kq = fp.stiffness(np.full(mesh.n_nodes, 2.0))
+    np.testing.assert_allclose(kq, 2.0 / 9.0, rtol=1e-14)  # kappa 2 x area 1/9
+    rows = fp.node_stiffness(kq)
+    inner = np.flatnonzero((np.abs(mesh.nodes[:, :2]) < 1.9).all(axis=1))
+    np.testing.assert_allclose(rows[inner], 2.0, rtol=1e-14)  # 4 quads x 9 points x N_a / 9 ... = k
+
+
+def test_spacing_from_the_bodies_curvature():
+    """n_e grows where the body is curved: a flat patch between points dips s^2 / (8 rho) = tol / 2."""
+    sph = Sphere((0, 0, -5.0), 5.0, offset=H / 2)
+    s = spacing([sph], H)
+    assert s**2 / (8 * (5.0 + H / 2)) == pytest.approx(0.5 * TOL, rel=1e-12)
+    box = Pedestal((0, 0, 0), half_widths=(1.0, 1.0))
+    assert spacing([box], H) == math.inf  # flat faces, sharp edges: the least n everywhere
+    fp = FacePoints(_sheet(4, 4.0), np.ones(25), 3, s)
+    assert np.all(fp.per_edge == min(8, math.ceil(1.0 / s)))
+
+
+def test_forces_are_the_gradient_and_both_paths_agree():
+    """contact_terms' F is dE/dx (central differences, 1e-6 relative: the FD error of a quadratic
+    penalty is round-off), its tangent is symmetric, and the explicit solver's compiled face_pass
+    gives the same energy and forces (1e-12 relative: the same sums in another order)."""
+    mesh = _sheet(4, 4.0)
+    rng = np.random.default_rng(7)
+    x = mesh.nodes + 0.02 * rng.standard_normal(mesh.nodes.shape)
+    body = Sphere((0.3, -0.2, -5.0), 5.05)
+    fp = FacePoints(mesh, np.ones(mesh.n_nodes), 3)
+    kq = fp.stiffness(np.full(mesh.n_nodes, 10.0))
+    e, F, (r, c, v) = contact_terms(fp, [body], x, kq, tangent=True)
+    assert e > 0.0
+    G = np.zeros_like(F)
+    eps = 1e-6
+    for i in range(len(x)):
+        for j in range(3):
+            xp, xm = x.copy(), x.copy()
+            xp[i, j] += eps
+            xm[i, j] -= eps
+            G[i, j] = (contact_terms(fp, [body], xp, kq)[0] - contact_terms(fp, [body], xm, kq)[0]) / (2 * eps)
+    assert np.abs(G - F).max() < 1e-6 * np.abs(F).max()
+    import scipy.sparse as sp
+
+    K = sp.coo_matrix((np.concatenate(v), (np.concatenate(r), np.concatenate(c))), shape=(6 * len(x),) * 2).toarray()
+    assert np.abs(K - K.T).max() < 1e-14 * np.abs(K).max()
+    D = np.zeros(6 * len(x))
+    D.reshape(-1, 6)[:, :3] = x - mesh.nodes
+    Ff, fx = np.zeros((len(x), 3)), np.zeros((0, len(x)))
+    ec, nact, pen = face_pass(
+        np.array([body.code]),
+        np.array([body.params]),
+        np.array([body.offset]),
+        np.zeros(1),
+        np.ascontiguousarray(mesh.nodes),
+        D,
+        np.arange(len(fp.conn4)),
+        fp.estart,
+        fp.nodes,
+        fp.w,
+        kq,
+        np.arange(len(x)),
+        fx,
+        Ff,
+    )
+    assert ec == pytest.approx(e, rel=1e-12) and nact > 0
+    np.testing.assert_allclose(Ff, -F, rtol=0, atol=1e-12 * np.abs(F).max())
+    assert pen == pytest.approx(-np.min(body.penetration(fp.positions(x))[0]), rel=1e-12)
+
+
+def _drop_on_sphere(n_face, n=8, size=8.0):
+    """An n x n wool sheet lying on the top of a R = 2 cm sphere (its lower face touching), relaxed
+    under its weight with friction 0.3: it drapes round the sphere."""
+    mesh = _sheet(n, size)
+    model = Model(mesh, Fabric.wool())
+    loads = np.zeros((mesh.n_nodes, 6))
+    loads[:, 2] = -model.lumped_mass()[:, 0] * G0
+    sph = Sphere((0.0, 0.0, -2.0 - H / 2), 2.0, offset=H / 2, friction=0.3)
+    prob = Problem(model, np.zeros((mesh.n_nodes, 6), bool), loads, contact=[sph])
+    res = get("relax")(prob, {"contact_face_points": n_face, "mass_scaling": 100.0, "mass_scaling_mode": "director"})
+    assert res.converged, res.message
+    return check(mesh, res.U, [sph], H)[0], res
+
+
+def test_coarse_sheet_on_a_sphere_keeps_its_faces_out_further():
+    """1 cm elements relaxed onto a 2 cm sphere: contact on the nodes leaves the element faces ~L^2 /
+    (8 R) = 0.06 cm (100 % of h) inside; the face points cut that by far more than 3 and keep every
+    node out.  Measured 0.007 cm with faces: above the contract's 2 % of h -- the explicit penalty
+    (0.1 m omega^2, omega with the director masses x100) sinks a flat 1 cm face resting on a 2 cm
+    sphere by ~sqrt(F / (pi kappa R)) (docs/contact.md, "What is not met yet")."""
+    nodes_only, _ = _drop_on_sphere(0)
+    assert nodes_only["deepest_face_point_cm"] > 10 * TOL  # what contact on the nodes lets through
+    faces, res = _drop_on_sphere(3)
+    assert faces["nodes_beyond"] == 0, faces
+    assert faces["deepest_face_point_cm"] < nodes_only["deepest_face_point_cm"] / 5, (faces, nodes_only)
+    assert res.info["max_contact_nodes"] > 0
+
+
+@pytest.mark.parametrize("shape", ["box", "cylinder"])
+@pytest.mark.parametrize("edge_radius", [0.0, 0.2])
+def test_sheet_over_a_pedestal_edge_face_points_cut_the_edge_through(shape, edge_radius):
+    """A 6 x 6 cm sheet (0.5 cm elements) held at its centre on a 2 cm wide pedestal top (its lower
+    face on it), solved statically: the overhang folds down over the edge (sharp or rounded).  With
+    contact on the nodes only the edge cuts through the elements lying over it; the face points
+    keep them out to a fraction of that.  Measured deepest face point (nodes only -> faces), cm:
+    box sharp 0.102 -> 0.011, cylinder sharp 0.069 -> 0.019, box rounded 0.116 -> 0.010, cylinder
+    rounded 0.072 -> 0.020; the contract's 2 % of h (0.0012 cm) is NOT met over an edge (a line
+    load on a bilinear face between points; docs/contact.md, "What is not met yet"): asserted is a
+    third of the nodes-only depth and 0.4 h, above what was measured."""
+    from solidshell.solvers.static import solve_static
+
+    mesh = _sheet(12, 6.0, z=H / 2)
+    model = Model(mesh, Fabric.wool())
+    fixed = np.zeros((mesh.n_nodes, 6), bool)
+    fixed[np.linalg.norm(mesh.nodes[:, :2], axis=1) < 1e-9] = True
+    loads = np.zeros((mesh.n_nodes, 6))
+    loads[:, 2] = -model.lumped_mass()[:, 0] * G0
+    size = {"half_widths": (1.0, 1.0)} if shape == "box" else {"radius": 1.0}
+    ped = Pedestal((0, 0, 0), **size, edge_radius=edge_radius, offset=H / 2, height=3.0)
+    deep = {}
+    for n in (0, 3):
+        res = solve_static(model, fixed, loads, contact=[ped], contact_face_points=n)
+        assert res.converged, res.message
+        assert (mesh.nodes + res.U[:, :3])[:, 2].min() < -0.5  # it draped over the edge
+        deep[n] = check(mesh, res.U, [ped], H)[0]["deepest_face_point_cm"]
+    assert deep[3] < deep[0] / 3 and deep[3] < 0.4 * H, deep
+
+
+def test_static_drape_on_a_sphere_stable_and_faces_out_further():
+    """Static solve of a sheet on a sphere, its centre node held in-plane (frictionless: a centred
+    drape slides off otherwise): a converged stable minimum (positive-definite tangent), and the
+    face points keep the 1 cm elements' faces a fraction as deep as contact on the nodes only
+    (chord sag L^2 / (8 R) ~ 0.06 cm); printed numbers in the closing note of issue 36."""
+    from solidshell.solvers.static import solve_static
+
+    mesh = _sheet(8, 8.0)
+    model = Model(mesh, Fabric.wool())
+    fixed = np.zeros((mesh.n_nodes, 6), bool)
+    fixed[np.linalg.norm(mesh.nodes[:, :2], axis=1) < 1e-9, :2] = True
+    loads = np.zeros((mesh.n_nodes, 6))
+    loads[:, 2] = -model.lumped_mass()[:, 0] * G0
+    sph = Sphere((0.0, 0.0, -2.0 - H / 2), 2.0, offset=H / 2)
+    deep = {}
+    for n in (0, 3):
+        r = solve_static(model, fixed, loads, contact=[sph], contact_face_points=n)
+        assert r.converged, r.message
+        assert r.info["positive_definite"]
+        deep[n] = check(mesh, r.U, [sph], H)[0]["deepest_face_point_cm"]
+    # measured 0.104 cm (nodes only) -> 0.012 cm (faces)
+    assert deep[3] < deep[0] / 3, deep

@@ -804,8 +804,10 @@ def test_the_sphere_first_remesh_of_the_papers_path_books_no_penalty_energy():
     s = out.summary
     assert s["finite"] and s["t_final"] >= 1.13 - 1e-6, s["message"]
     first = s["remeshes"][0]
-    assert first["t"] == pytest.approx(1.096, abs=0.002) and first["splits"] == 16
-    assert s["remesh_nodes_pushed_out"] > 0
+    # (1.096 s with contact on the nodes only; 1.120 s with the face points, contact_faces.py)
+    assert first["t"] == pytest.approx(1.120, abs=0.002) and first["splits"] == 16
+    # (with contact on the nodes only 8 inserted nodes had to be pushed out; the face points keep
+    # the level-0 faces out, so an inserted node lands outside: none or few need it now)
     assert abs(first["energy_jump"]) < 20.0
     assert s["max_contact_penetration"] < 0.02
 
@@ -836,7 +838,8 @@ def test_inserted_nodes_keep_their_interpolated_velocity_when_the_sheet_is_near_
         },
     )
     r = out.summary["remeshes"]
-    assert len(r) >= 2 and r[1]["t"] == pytest.approx(1.245, abs=0.002), [x["t"] for x in r]
+    # (1.245 s with no pedestal body; 1.263 s on the solid pedestal with face contact)
+    assert len(r) >= 2 and r[1]["t"] == pytest.approx(1.263, abs=0.002), [x["t"] for x in r]
     # 5 gf cm: well below the 80 of the old rate, above the 0.7 measured (the first pass, of 8
     # coarse corner quads, books 5.2 with either rate)
     assert abs(r[1]["energy_jump"]) < 5.0

@@ -27,6 +27,8 @@ PAPER = {
     "square-on-disc": ("disc", "diameter", 20.0),
     "large-square-pedestal": ("square", "size", 20.0),
 }
+# their height: as long as the skirt can hang (the sheet's half diagonal or radius, at least 10 cm)
+HEIGHT = {"square-pedestal": 14.142, "circle-pedestal": 12.7, "square-on-disc": 35.355, "large-square-pedestal": 28.284}
 
 # a support disc Ø20 (the recipe's) 0.4 cm thick on a Ø6 stem, with a Ø16 x 0.5 cm clamp
 CUSICK = """
@@ -57,7 +59,7 @@ def test_paper_pedestal_scenes_lie_on_a_solid_pedestal(name):
         "shape": shape,
         key: extent,
         "centre": (0.0, 0.0, -H / 2),  # top face h/2 under the mid-surface (z = 0) ...
-        "height": 10.0,
+        "height": HEIGHT[name],
         "edge_radius": 0.0,
         "offset": H / 2,  # ... kept h/2 off it: the lower face on the top, the rim at gap 0
         "friction": 0.0,
@@ -69,7 +71,7 @@ def test_paper_pedestal_scenes_lie_on_a_solid_pedestal(name):
     assert sc.pedestal() == want  # pictures, the DC's pedestal area, the perturbation's centre
     (body,) = contact_bodies(sc)
     assert isinstance(body, Pedestal) and body.offset == H / 2 and body.friction == 0.0
-    assert body.height == 10.0 and body.edge_radius == 0.0
+    assert body.height == HEIGHT[name] and body.edge_radius == 0.0
     # the sheet's flat mid-surface: on the rim exactly at gap 0 (round-off of the +-h/2 sums:
     # 1e-15 cm), a point above the top's centre 1 cm off, one 1 cm outside a side 1 cm below the
     # sheet 1 cm off the side (less the offset)
@@ -115,7 +117,7 @@ def test_cusick_scene_resolves_from_the_recipe(tmp_path):
         "shape": "disc",
         "diameter": 20.0,
         "centre": (0.0, 0.0, -H / 2),
-        "height": 10.0,
+        "height": HEIGHT["square-on-disc"],
         "edge_radius": 0.0,
         "offset": H / 2,
         "friction": 0.0,
@@ -221,7 +223,9 @@ def test_pictures_draw_the_bodies_as_they_are(tmp_path):
     top = -H / 2
     P = np.concatenate([s.points for s in pedestal_surfaces(support)])
     rho = np.hypot(P[:, 0], P[:, 1])
-    assert P[:, 2].max() == pytest.approx(top, abs=1e-12) and P[:, 2].min() == pytest.approx(top - 10.0, abs=1e-12)
+    assert P[:, 2].max() == pytest.approx(top, abs=1e-12) and P[:, 2].min() == pytest.approx(
+        top - HEIGHT["square-on-disc"], abs=1e-12
+    )
     assert rho.max() == pytest.approx(10.0, rel=1e-12)
     # below the disc only the stem: nothing drawn wider than r = 3 (polygon corners on the circle)
     assert rho[P[:, 2] < top - 0.4 - 1e-9].max() == pytest.approx(3.0, rel=1e-12)
@@ -230,7 +234,7 @@ def test_pictures_draw_the_bodies_as_they_are(tmp_path):
     assert np.hypot(C[:, 0], C[:, 1]).max() == pytest.approx(8.0, rel=1e-12)
     solid = scenes.load("square-pedestal").bodies()[0]
     S = np.concatenate([s.points for s in pedestal_surfaces(solid)])
-    assert (S[:, 2].min(), S[:, 2].max()) == pytest.approx((top - 10.0, top), abs=1e-12)
+    assert (S[:, 2].min(), S[:, 2].max()) == pytest.approx((top - HEIGHT["square-pedestal"], top), abs=1e-12)
     assert np.abs(S[:, :2]).max() == pytest.approx(5.0, rel=1e-12)
 
 
@@ -250,7 +254,7 @@ def test_pictures_draw_the_bodies_as_they_are(tmp_path):
         ),
         (CUSICK.replace("clamp_thickness = 0.5\n", ""), "contact[0].clamp_thickness", "needs both"),
         (CUSICK.replace("clamp_diameter = 16.0", "clamp_diameter = 24.0"), "contact[0].clamp_diameter", "wider than"),
-        (CUSICK.replace("disc_thickness = 0.4", "disc_thickness = 10.0"), "contact[0].disc_thickness", "smaller than"),
+        (CUSICK.replace("disc_thickness = 0.4", "disc_thickness = 40.0"), "contact[0].disc_thickness", "smaller than"),
         (
             CUSICK.replace('type = "pedestal"', 'type = "pedestal"\nshape = "square"\nsize = 20.0'),
             "contact[0].support",

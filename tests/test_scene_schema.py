@@ -129,9 +129,9 @@ def test_tables_become_the_scene_fields(tmp_path):
         "[perturbation]\nshape='folds'\namplitude=0.5\nfolds=6\n",
     )
     s = go()
-    # the table as written (and its 10 cm height); Scene.bodies() fills the rest: outside a
-    # pedestal recipe, centre at the origin, offset 0, solid, sharp edge, frictionless
-    assert s.contact == ({"type": "pedestal", "shape": "disc", "diameter": 10.0, "height": 10.0},)
+    # the table as written; Scene.bodies() fills the rest: outside a pedestal recipe, 10 cm high,
+    # centre at the origin, offset 0, solid, sharp edge, frictionless
+    assert s.contact == ({"type": "pedestal", "shape": "disc", "diameter": 10.0},)
     assert s.bodies() == [
         {
             "type": "pedestal",

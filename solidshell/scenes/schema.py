@@ -498,7 +498,7 @@ class Pedestal(Body):
     centre: Optional[Vec3] = None  # of its top face
     size: Optional[Pos] = None
     diameter: Optional[Pos] = None
-    height: Pos = PEDESTAL_HEIGHT
+    height: Optional[Pos] = None  # default: the recipe pedestal's (as long as the skirt), else PEDESTAL_HEIGHT
     edge_radius: Optional[NonNeg] = None
     support: Optional[choice(SUPPORTS)] = None  # "solid" (default) | "cusick"
     disc_thickness: Optional[Pos] = None  # cusick: the support disc [cm]
@@ -604,7 +604,8 @@ def _pedestal_bodies(c: dict, implied: dict | None, where: str) -> list[dict]:
     extent = c.get(need, d.get(need) if shape == d["shape"] else None)
     if extent is None:
         raise Bad(f"{where}.{need}", f"required for a {shape} pedestal [cm]; missing")
-    height = float(c.get("height", (implied or {}).get("height", PEDESTAL_HEIGHT)))
+    height = c.get("height")
+    height = float(height if height is not None else (implied or {}).get("height", PEDESTAL_HEIGHT))
     er = float(c.get("edge_radius", 0.0))
     support = c.get("support", "solid")
     body = {

@@ -1,7 +1,7 @@
 """Every pedestal a scene draws is a contact body (issue 36): ``Scene.bodies()`` is the one list the
 solvers build their bodies from and the pictures draw; the paper's pedestal scenes lie on a solid
 pedestal by default (``geometry.pedestal_contact = false`` leaves it out); a Cusick-type support is a
-disc on a stem (one compiled body, kernel code CUSICK) with an optional clamp (docs/contact.md, 11)."""
+disc on a stem (one compiled body, kernel code CUSICK) with an optional clamp (docs/contact.md, 12)."""
 
 import math
 import os

@@ -60,7 +60,7 @@ Scene file format
     disc_thickness = 0.3                  #           side opposite the normal is solid)
     stem_diameter = 5.0                   # pedestal: shape = "square" (size = side) or "disc"
                                           #           (diameter); centre = centre of its top face;
-                                          #           height (default 10), edge_radius (default 0);
+                                          #           height (default: as long as the skirt, >= 10), edge_radius (default 0);
                                           #           support = "solid" (default: a column down to
                                           #           its base) or "cusick" (a disc of
                                           #           disc_thickness on a coaxial stem of

@@ -231,8 +231,10 @@ class Forces:
     def contact_stiffness(self, D, anchors, eps: float = 1e-7):
         """(rows, cols, vals) of the contact stiffness -dC/dx on the translation dofs at D, anchors
         held (stick springs count, slipping nodes only through their normal spring); None without
-        bodies.  Central differences: each node's contact force depends on its own position only,
-        so three perturbed pairs give every 3x3 nodal block."""
+        bodies.  Central differences: a node's own contact force depends on its own position only,
+        so three perturbed pairs give every 3x3 nodal block; the face points (contact_faces.py)
+        couple the nodes of an element, and moving all nodes at once lumps that coupling onto the
+        diagonal blocks (its row sums: the bound the critical step uses too)."""
         N = self.N
         if not self.bodies:
             return None

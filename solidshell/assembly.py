@@ -269,3 +269,16 @@ class FreeLowerPattern:
         keys = cols * nf + self.indices  # sorted: column-major order
         node_pos[ok] = np.searchsorted(keys, cc[ok] * nf + rr[ok])
         self.node_pos = node_pos
+        self._new = new  # global dof -> free dof (-1: fixed)
+        self._keys = None  # the keys above, kept once entry_positions needs them
+
+    def entry_positions(self, rows, cols):
+        """(data positions, mask) of entries (rows, cols) of the full 6N x 6N symmetric matrix given
+        by global dofs: those on free dofs in the stored triangle (row >= column, free numbering),
+        each once, and the mask of which they were (contact stiffness coupling an element's nodes:
+        the pattern holds every pair of dofs of one element)."""
+        if self._keys is None:
+            self._keys = np.repeat(np.arange(self.n, dtype=np.int64), np.diff(self.indptr)) * self.n + self.indices
+        r, c = self._new[rows], self._new[cols]
+        ok = (r >= 0) & (c >= 0) & (r >= c)
+        return np.searchsorted(self._keys, c[ok] * self.n + r[ok]), ok

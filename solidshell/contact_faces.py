@@ -98,7 +98,8 @@ def tri_points(n: int) -> np.ndarray:
 
 
 def shapes(tri: bool, uv) -> np.ndarray:
-    """(m, 4) shape-function values at the parameters uv (m, 2) (:func:`shape4` for many points)."""
+    """(m, 4) shape-function values at the parameters uv (m, 2): a quad's bilinear N_a(xi, eta), nodes
+    counter-clockwise from (-1, -1), or a triangle's barycentric (1 - s - t, s, t) and 0."""
     u, v = np.asarray(uv, float).T
     if tri:
         return np.column_stack([1.0 - u - v, u, v, np.zeros_like(u)])
@@ -118,10 +119,7 @@ class FacePoints:
         self.n = face_points_count(n)
         X = np.asarray(mesh.nodes, dtype=float)
         blocks = []  # (conn4, tri, areas) of the quads and the triangles
-        for conn, A_e, tri in (
-            (mesh.quads, mesh.element_areas()[0], False),
-            (mesh.tris, mesh.element_areas()[1], True),
-        ):
+        for conn, A_e, tri in zip((mesh.quads, mesh.tris), mesh.element_areas(), (False, True)):
             conn = np.asarray(conn, dtype=np.int64).reshape(-1, 3 if tri else 4)
             c4 = conn if not tri else np.column_stack([conn, conn[:, 0]])
             blocks.append((c4, np.full(len(c4), tri), np.asarray(A_e, float).reshape(-1)))
@@ -179,7 +177,6 @@ class FacePoints:
         return np.einsum("pa,pai->pi", self.w, np.asarray(x, dtype=float)[self.nodes])
 
 
-# ---------------------------------------------------------------------- compiled kernels
 # ---------------------------------------------------------------------- compiled pass (explicit solver)
 @njit(cache=True)
 def face_pass(codes, params, offsets, mus, X0, D, els, estart, pn, pw, kq, nodes, fx, Ff):

@@ -24,6 +24,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from .contact import PENETRATION_TOL
+from .contact_faces import shapes
 from .errors import InputError
 
 DEFAULT_GRID = 5
@@ -42,10 +43,7 @@ def quad_shape(grid: int = DEFAULT_GRID) -> np.ndarray:
     """(grid^2, 4) bilinear shape functions at xi, eta in linspace(-1, 1, grid), corners
     (-1,-1), (1,-1), (1,1), (-1,1) (the mesh's counter-clockwise order)."""
     s = np.linspace(-1.0, 1.0, _grid(grid))
-    xi, eta = (a.ravel() for a in np.meshgrid(s, s, indexing="ij"))
-    return 0.25 * np.column_stack(
-        [(1 - xi) * (1 - eta), (1 + xi) * (1 - eta), (1 + xi) * (1 + eta), (1 - xi) * (1 + eta)]
-    )
+    return shapes(False, np.column_stack([a.ravel() for a in np.meshgrid(s, s, indexing="ij")]))
 
 
 def tri_shape(grid: int = DEFAULT_GRID) -> np.ndarray:
@@ -53,8 +51,7 @@ def tri_shape(grid: int = DEFAULT_GRID) -> np.ndarray:
     m = _grid(grid) - 1
     i, j = np.meshgrid(np.arange(m + 1), np.arange(m + 1), indexing="ij")
     keep = (i + j) <= m
-    i, j = i[keep], j[keep]
-    return np.column_stack([m - i - j, i, j]).astype(float) / m
+    return shapes(True, np.column_stack([i[keep], j[keep]]) / m)[:, :3]
 
 
 def face_points(mesh, U=None, grid: int = DEFAULT_GRID) -> np.ndarray:

@@ -120,10 +120,9 @@ def record_state(summary: dict, sc: Scene, solved) -> list[str]:
 
 
 def contact_tables(scene: Scene) -> list[dict]:
-    """The scene's resolved contact tables, one per contact body of its problem (``Scene.bodies()``
-    where the scene has it: the implied pedestal included; else its [[contact]] tables)."""
-    bodies = getattr(scene, "bodies", None)  # Scene.bodies() is being added (issue 36); then call it
-    return [dict(c) for c in (bodies() if callable(bodies) else scene.contact)]
+    """The scene's resolved contact tables, one per contact body of its problem (``Scene.bodies()``:
+    the implied pedestal included)."""
+    return [dict(c) for c in scene.bodies()]
 
 
 def contact_check(summary: dict, sc: Scene, solved) -> list[str]:

@@ -96,14 +96,11 @@ def limit(omega_el, method, dyn: Dynamics, s, alpha, n_evals=0, seconds=0.0, mod
         # springs sit on the nodes and take the normal stiffness a node has when its faces lie flat
         # on the body (its own and the grid points' share): then normal and tangential springs ring
         # in step and a load inside the Coulomb cone stays inside it while they ring
-        k_n, k_flat = k_pen, k_pen
-        if dyn.faces is not None:
-            kq = dyn.faces.stiffness(k_pen)
-            k_n = k_flat = k_pen + dyn.faces.node_stiffness(kq)
-        k_max = np.maximum(k_n, s.friction_stiffness * k_flat) if n_fric else k_n
+        k_n = k_pen if dyn.faces is None else k_pen + dyn.faces.node_stiffness(dyn.faces.stiffness(k_pen))
+        k_max = np.maximum(k_n, s.friction_stiffness * k_n) if n_fric else k_n
         omega = 2.0 / combined_critical_time_step(omega_el, k_max, M[:, 0])
         if n_fric:
-            k_t = s.friction_stiffness * k_flat
+            k_t = s.friction_stiffness * k_n
     return StepLimit(
         omega_el, omega, critical_time_step(omega, alpha), method, k_pen, k_max, k_t, n_evals, seconds, mode
     )

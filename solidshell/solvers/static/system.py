@@ -105,7 +105,6 @@ class System:
                 contact_stiffness = 1e3 * max(w, 1e-12) / h
             self.k_contact = float(contact_stiffness)
         self.faces = None
-        self._lw_keys = None  # the lower pattern's entry keys (_lower_positions)
         if self.contact and isinstance(model, Model) and face_points:
             sp = spacing(self.contact, model.material.thickness)
             self.faces = FacePoints(model.mesh, model.nodal_areas(), face_points, sp)
@@ -252,24 +251,10 @@ class System:
                 m = pos >= 0
                 np.add.at(data, pos[m], nn[m])
             if entries and entries[0]:
-                pos, vals = self._lower_positions(lw, entries)
-                np.add.at(data, pos, vals)
+                r, c, v = (np.concatenate(a) for a in entries)
+                pos, ok = lw.entry_positions(r, c)
+                np.add.at(data, pos, v[ok])
         return F, LowerCSC(lw.indptr, lw.indices, data, lw.diag_pos, lw)
-
-    def _lower_positions(self, lw, entries):
-        """(positions in the lower free-dof data, values) of full-matrix entries (rows, cols, vals):
-        the entries on free dofs with row >= column (in the free numbering), each once -- the lower
-        triangle of the symmetric sum.  The pattern holds every pair of dofs of one element."""
-        if self._lw_keys is None or self._lw_keys[0] is not lw:
-            new = np.full(6 * self.n, -1, dtype=np.int64)
-            new[lw.free] = np.arange(lw.n)
-            cols = np.repeat(np.arange(lw.n, dtype=np.int64), np.diff(lw.indptr))
-            self._lw_keys = (lw, new, cols * lw.n + lw.indices)
-        _, new, keys = self._lw_keys
-        r, c, v = (np.concatenate(a) for a in entries)
-        r, c = new[r], new[c]
-        ok = (r >= 0) & (c >= 0) & (r >= c)
-        return np.searchsorted(keys, c[ok] * lw.n + r[ok]), v[ok]
 
     def ldl(self, A):
         """(solver, number of negative eigenvalues or None) of the symmetric free tangent ``A``:

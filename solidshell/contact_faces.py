@@ -179,11 +179,14 @@ class FacePoints:
 
 # ---------------------------------------------------------------------- compiled pass (explicit solver)
 @njit(cache=True)
-def face_pass(codes, params, offsets, mus, X0, D, els, estart, pn, pw, kq, nodes, fx, Ff):
+def face_pass(codes, params, offsets, mus, X0, D, els, estart, pn, pw, kq, nodes, fx, Ff, shift):
     """The face points of the elements ``els`` (ascending; their points estart[e]..estart[e+1]) on
     every body (code >= 0): their forces N_a k p n added into Ff (N, 3) and, per frictional body,
     their normal loads N_a k p into fx (n_fric, N), both zeroed first at ``nodes`` (the nodes of the
-    elements are among them).  Returns (penalty energy, points in contact, deepest penetration)."""
+    elements are among them).  ``shift`` (n_bodies, P): the points' augmented-Lagrangian shifts
+    (contact_augment.py; p counts from offset + shift), (0, 0): none.  Returns (penalty energy,
+    points in contact, deepest penetration)."""
+    shifted = shift.shape[0] > 0
     for j in range(nodes.size):
         i = nodes[j]
         Ff[i, 0] = Ff[i, 1] = Ff[i, 2] = 0.0
@@ -205,12 +208,13 @@ def face_pass(codes, params, offsets, mus, X0, D, els, estart, pn, pw, kq, nodes
             jf = 0
             for b in range(codes.size):
                 g, n0, n1, n2 = signed_distance(codes[b], params[b], x0, x1, x2)
-                p = offsets[b] - g
+                sq = shift[b, q] if shifted else 0.0
+                p = offsets[b] - g + sq
                 if p > 0.0:
                     kp = kq[q] * p
                     en += kp * p
                     nact += 1
-                    pen = max(pen, p)
+                    pen = max(pen, p - sq)  # the depth, not the shifted one
                     for a in range(4):
                         i = pn[q, a]
                         wa = pw[q, a]
@@ -225,9 +229,10 @@ def face_pass(codes, params, offsets, mus, X0, D, els, estart, pn, pw, kq, nodes
 
 
 # ---------------------------------------------------------------------- numpy (static solver, reports)
-def contact_terms(faces: FacePoints, bodies, x, k_points, tangent: bool = False):
+def contact_terms(faces: FacePoints, bodies, x, k_points, tangent: bool = False, shift=None):
     """Energy, node forces and (optionally) Gauss-Newton tangent of the face points for node positions
-    x (N, 3): (energy, F (N, 3) = gradient of the energy [force], entries or None).  ``entries``:
+    x (N, 3): (energy, F (N, 3) = gradient of the energy [force], entries or None).  ``shift``
+    (n_bodies, P): the points' augmented-Lagrangian shifts (contact_augment.py; None or empty: none).  ``entries``:
     (rows, cols, vals) over the translation dofs 6 a + i of the full 6N x 6N matrix, the blocks
     sum_q k_q N_a N_b n n^T of the points in contact (the curvature term k p grad n is of relative
     size p / R and left out, as for the nodes)."""
@@ -237,8 +242,10 @@ def contact_terms(faces: FacePoints, bodies, x, k_points, tangent: bool = False)
         return 0.0, F, entries if tangent else None
     xq = faces.positions(x)
     e = 0.0
-    for b in bodies:
+    for j, b in enumerate(bodies):
         gap, nrm = b.penetration(xq)
+        if shift is not None and np.size(shift):
+            gap = gap - shift[j]
         act = np.flatnonzero(gap < 0.0)
         if not act.size:
             continue

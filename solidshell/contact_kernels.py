@@ -132,26 +132,30 @@ def body_forces(code, p, offset, mu, x, k, kt, anchor, f, ft, new, g_in, n_in):
     where a node was not in contact).  A body of code < 0 (a user's own RigidBody) gives its signed
     distances and normals in g_in (N,), n_in (N,3).  Returns (penalty energy 1/2 sum k p^2, stick
     energy 1/2 sum |f_t|^2 / k_t, nodes in contact, slipping nodes, deepest |f_n| / k)."""
-    return node_forces(code, p, offset, mu, x, k, kt, anchor, f, ft, new, g_in, n_in, _G0)
+    return node_forces(code, p, offset, mu, x, k, kt, anchor, f, ft, new, g_in, n_in, _G0, _G0)
 
 
 @njit(cache=True)
-def node_forces(code, p, offset, mu, x, k, kt, anchor, f, ft, new, g_in, n_in, fx):
+def node_forces(code, p, offset, mu, x, k, kt, anchor, f, ft, new, g_in, n_in, fx, shift):
     """:func:`body_forces` with ``fx`` (N,) the normal load the face points of the node's elements
     carry on it (contact_faces.face_pass; empty: none): it adds to the node's Coulomb limit, and a
-    node with fx > 0 sticks or slips even when the node itself is just off the body (its face is on it)."""
+    node with fx > 0 sticks or slips even when the node itself is just off the body (its face is on it);
+    ``shift`` (N,): the nodes' augmented-Lagrangian shifts lambda / k (contact_augment.py; empty:
+    none): the penetration counts from offset + shift."""
     en = 0.0
     et = 0.0
     nact = 0
     nslip = 0
     pen = 0.0
     extra = fx.size > 0
+    shifted = shift.size > 0
     for i in range(x.shape[0]):
         if code < 0:
             g, n0, n1, n2 = g_in[i], n_in[i, 0], n_in[i, 1], n_in[i, 2]
         else:
             g, n0, n1, n2 = signed_distance(code, p, x[i, 0], x[i, 1], x[i, 2])
-        pi = max(-(g - offset), 0.0)
+        si = shift[i] if shifted else 0.0
+        pi = max(-(g - offset) + si, 0.0)
         kp = k[i] * pi
         fn0, fn1, fn2 = kp * n0, kp * n1, kp * n2
         fxi = fx[i] if extra else 0.0
@@ -161,7 +165,7 @@ def node_forces(code, p, offset, mu, x, k, kt, anchor, f, ft, new, g_in, n_in, f
         if pi > 0.0:
             en += kp * pi
             nact += 1
-            pen = max(pen, math.sqrt(fn0 * fn0 + fn1 * fn1 + fn2 * fn2) / k[i])
+            pen = max(pen, math.sqrt(fn0 * fn0 + fn1 * fn1 + fn2 * fn2) / k[i] - si)  # the depth, not the shifted one
         if mu > 0.0 and (pi > 0.0 or fxi > 0.0):
             t0, t1, t2, slip = _stick(
                 mu, kp + fxi, kt[i], x[i, 0], x[i, 1], x[i, 2], n0, n1, n2, anchor[i, 0], anchor[i, 1], anchor[i, 2]
@@ -178,20 +182,22 @@ def node_forces(code, p, offset, mu, x, k, kt, anchor, f, ft, new, g_in, n_in, f
 
 
 @njit(cache=True)
-def contact_pass(codes, params, offsets, mus, X0, D, nodes, k, kt, anchors, new, C, FT, fx, Ff):
+def contact_pass(codes, params, offsets, mus, X0, D, nodes, k, kt, anchors, new, C, FT, fx, Ff, shift):
     """Every body (each of code >= 0) on the mid-surface nodes ``nodes`` (ascending) of the sheet at D (6N,): their
     contact forces plus the face points' Ff (N,3) (contact_faces.face_pass; empty: none) into C (6N,)
     (the nodes' translation dofs overwritten), the frictional bodies' forces into FT (n_fric,
     len(nodes), 3) and their new anchors into new (n_fric, N, 3) at the nodes (anchors: (n_fric, N,
-    3), NaN off contact; fx (n_fric, N): the face points' normal load on the nodes, node_forces).
-    Returns (contact energy, stick energy, nodes in contact counted per body, slipping nodes,
-    deepest |f_n| / k) -- body_forces summed in body order."""
+    3), NaN off contact; fx (n_fric, N): the face points' normal load on the nodes, node_forces;
+    shift (n_bodies, N): the augmented-Lagrangian shifts, node_forces; (0, 0): none).  Returns (contact energy, stick energy, nodes in contact counted per body, slipping nodes,
+    deepest depth |f_n| / k - shift) -- node_forces summed in body order."""
     m = nodes.size
     x = np.empty((m, 3))
     kk = np.empty(m)
     kkt = np.empty(m)
     faces = Ff.shape[0] > 0
     fxj = np.zeros(m if faces else 0)
+    shifted = shift.shape[0] > 0
+    sj = np.zeros(m if shifted else 0)
     for j in range(m):
         i = nodes[j]
         x[j, 0], x[j, 1], x[j, 2] = X0[i, 0] + D[6 * i], X0[i, 1] + D[6 * i + 1], X0[i, 2] + D[6 * i + 2]
@@ -205,6 +211,9 @@ def contact_pass(codes, params, offsets, mus, X0, D, nodes, k, kt, anchors, new,
     jf = 0
     for b in range(codes.size):
         mu = mus[b]
+        if shifted:
+            for j in range(m):
+                sj[j] = shift[b, nodes[j]]
         if mu > 0.0:
             for j in range(m):
                 a[j, 0], a[j, 1], a[j, 2] = anchors[jf, nodes[j], 0], anchors[jf, nodes[j], 1], anchors[jf, nodes[j], 2]
@@ -212,13 +221,15 @@ def contact_pass(codes, params, offsets, mus, X0, D, nodes, k, kt, anchors, new,
                 for j in range(m):
                     fxj[j] = fx[jf, nodes[j]]
             e1, e2, n1, n2, pb = node_forces(
-                codes[b], params[b], offsets[b], mu, x, kk, kkt, a, f, FT[jf], na, _G0, _N0, fxj
+                codes[b], params[b], offsets[b], mu, x, kk, kkt, a, f, FT[jf], na, _G0, _N0, fxj, sj
             )
             for j in range(m):
                 new[jf, nodes[j], 0], new[jf, nodes[j], 1], new[jf, nodes[j], 2] = na[j, 0], na[j, 1], na[j, 2]
             jf += 1
         else:
-            e1, e2, n1, n2, pb = body_forces(codes[b], params[b], offsets[b], 0.0, x, kk, kkt, a, f, a, a, _G0, _N0)
+            e1, e2, n1, n2, pb = node_forces(
+                codes[b], params[b], offsets[b], 0.0, x, kk, kkt, a, f, a, a, _G0, _N0, _G0, sj
+            )
         ec += e1
         et += e2
         nact += n1

@@ -102,6 +102,7 @@ def test_forces_are_the_gradient_and_both_paths_agree():
         np.arange(len(x)),
         fx,
         Ff,
+        np.zeros((0, 0)),
     )
     assert ec == pytest.approx(e, rel=1e-12) and nact > 0
     np.testing.assert_allclose(Ff, -F, rtol=0, atol=1e-12 * np.abs(F).max())

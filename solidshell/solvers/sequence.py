@@ -274,8 +274,9 @@ def solve_sequenced(run, problem, settings: dict, progress, scene, density, make
     for i, d in enumerate(levels):
         pb = make_problem(d)
         # a coarse state is only a start: its saddle check stays (a saddle would be a poor start),
-        # the report of its smallest tangent eigenvalue (ARPACK, ~20 solves) is not needed
-        s = dict(settings, eig_max_dofs=0, **COARSE_TOLERANCES)
+        # the report of its smallest tangent eigenvalue (ARPACK, ~20 solves) is not needed, nor
+        # the contact's augmented-Lagrangian updates (the fine mesh's penetrations are what count)
+        s = dict(settings, eig_max_dofs=0, contact_augment=0, **COARSE_TOLERANCES)
         if prev is not None:
             s.update(U0=prolong(prev[0], prev[1], pb.model.mesh), predictor=False)
         t = time.perf_counter()

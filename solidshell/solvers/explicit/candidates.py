@@ -94,6 +94,13 @@ class Candidates:
         if self.faces is not None:
             self.elements = np.arange(len(self.faces.conn4))
         self.selections = 0
+        self.extra = 0.0  # the largest augmented-Lagrangian shift (contact_augment.py) [length]
+        self._fresh = True
+
+    def widen(self, extra: float) -> None:
+        """Contact now reaches ``extra`` beyond the offset (the largest augmented-Lagrangian shift: a
+        point feels the body while its gap is below its shift); select anew at the next update."""
+        self.extra = max(float(extra), 0.0)
         self._fresh = True
 
     def update(self, D) -> bool:
@@ -111,7 +118,7 @@ class Candidates:
             reach = float(np.max(np.linalg.norm(xe[:, :, None] - xe[:, None], axis=-1), initial=0.0))
         for b in self.bodies:
             gap, _ = b.penetration(x)
-            near |= ~(gap > self.margin + reach)  # NaN gaps stay candidates
+            near |= ~(gap > self.margin + reach + self.extra)  # NaN gaps stay candidates
         if self.faces is not None:
             elems = np.flatnonzero(near[self.faces.conn4].any(axis=1))
             near[self.faces.conn4[elems].ravel()] = True

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ... import contact_augment as augment
 from ... import contact_kernels as ck
 from ...contact import contact_forces, frictional_contact
 from ...contact_faces import face_pass
@@ -51,6 +52,9 @@ class Forces:
             self._ft = np.zeros((self.n_fric, self.N, 3))  # the friction forces of one pass
             self._no_anchor = np.zeros((0, self.N, 3))
         self.faces = faces if self.compiled and faces is not None and len(faces) else None
+        # the augmented-Lagrangian shifts of the nodes and face points (contact_augment.py): set
+        # by the integrator from its state; NONE: the plain penalty
+        self.shift_n, self.shift_q = augment.NONE, augment.NONE
         if self.faces is not None:
             self.kq = self.faces.stiffness(self.k_pen)
             self._all_els = np.arange(len(self.faces.conn4))
@@ -181,6 +185,7 @@ class Forces:
                 idx,
                 self._fx,
                 self._Ff,
+                self.shift_q,
             )
         if C is None:
             C = np.zeros(6 * self.N)
@@ -212,11 +217,25 @@ class Forces:
             FT,
             self._fx,
             self._Ff,
+            self.shift_n,
         )
         ec, nact, pen = ec + ef, nact + nf, max(pen, pf)
         if friction:
             return C, ec, et, nact, nslip, pen, FT, idx, new
         return C, ec, et, nact, nslip, pen
+
+    @property
+    def augmentable(self) -> bool:
+        """Whether the contact takes augmented-Lagrangian shifts (every body a compiled kind)."""
+        return self.compiled
+
+    def augment(self, D):
+        """One Uzawa update at D (contact_augment.update): (deepest raw penetration, node shifts
+        (n_bodies, N), face-point shifts (n_bodies, P))."""
+        x = self.X0 + D.reshape(self.shape)[:, :3]
+        xq = self.faces.positions(x) if self.faces is not None else np.zeros((0, 3))
+        shift_q = self.shift_q if self.faces is not None else np.zeros((len(self.bodies), 0))
+        return augment.update(self.bodies, x, xq, self.shift_n, shift_q)
 
     def contact_energy(self, D, anchors):
         """(C flat, contact energy incl. friction stick energy, the stick energy) at D (no books)."""

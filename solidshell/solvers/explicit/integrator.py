@@ -19,6 +19,7 @@ import time
 
 import numpy as np
 
+from ... import contact_augment as augment
 from ...contact_faces import FacePoints, spacing
 from ...contact_kernels import friction_work
 from ...errors import InputError, SolverError
@@ -239,6 +240,13 @@ class Integrator:
             anchors=anchors0,
             fric_work=0.0,
             max_slip=0,
+            shift_n=augment.NONE,
+            shift_q=augment.NONE,
+            augment_updates=0,
+            augment_jump=0.0,
+            augment_depth=-1.0,
+            augment_best=math.inf,
+            augment_stalls=0,
             max_interp=mi0,
             t_max_interp=0.0,
             max_contact=0,
@@ -284,6 +292,7 @@ class Integrator:
             self._keep(0.0, st.D, -1)
         self.frame_next_t = observers.next_frame_time(st)
         self._Dn1, self._R = np.empty_like(st.D), np.empty_like(st.D)
+        self.forces.shift_n, self.forces.shift_q = st.shift_n, st.shift_q
         if st.good_D is None or st.good_D.size != st.D.size:
             st.good_D, st.good_t = st.D.copy(), st.t
 
@@ -373,7 +382,7 @@ class Integrator:
                 # the internal forces including the reactions
                 st.last_rel_res = norm(R[self.free_idx]) / (self.Pn if self.Pn > 0 else max(norm(f["F"]), 1e-300))
             self._frames(n, D)
-            if check and n > 0 and self._steady(n, vMv):
+            if check and n > 0 and self._steady(n, vMv) and not self._augment(D):
                 return "steady"
             self.damper.after(self.damping_view, n, D, Dn1, R, vMv)
             if self.n_fric:
@@ -535,6 +544,37 @@ class Integrator:
         self.message = (
             f"steady state at t = {self.time_of(n):.6g} s after {n} steps: E_kin/W_ext = {rel_ke:.3g} "
             f"< {self.s.tol_kinetic:g}, residual {st.last_rel_res:.3g} < {self.s.tol_residual:g}"
+        )
+        return True
+
+    def _augment(self, D) -> bool:
+        """At a steady state: one augmented-Lagrangian update of the contact (contact_augment.py)
+        when a node or face point lies deeper than the target and updates are left; True when it
+        updated (the relaxation goes on)."""
+        st, forces = self.state, self.forces
+        if not (self.relax and self.bodies and forces.augmentable):
+            return False
+        limit = augment.target(self.model.material.thickness) if isinstance(self.model, Model) else 0.0
+        depth, s_n, s_q = forces.augment(D)
+        st.augment_depth = depth
+        if depth < st.augment_best:
+            st.augment_best, st.augment_stalls = depth, 0
+        elif st.augment_updates:
+            st.augment_stalls += 1  # the drape moved instead of lifting (contact_augment.STALLS)
+        if depth <= limit or st.augment_updates >= self.s.contact_augment or st.augment_stalls >= augment.STALLS:
+            return False
+        anchors = st.anchors
+        e_old = forces.contact_energy(D, anchors)[1]
+        st.shift_n, st.shift_q = forces.shift_n, forces.shift_q = s_n, s_q
+        jump = forces.contact_energy(D, anchors)[1] - e_old  # the potential changed, no work done
+        st.augment_jump += jump
+        st.Ec0 += jump
+        st.augment_updates += 1
+        if self.cand is not None:
+            self.cand.widen(max(float(s_n.max(initial=0.0)), float(s_q.max(initial=0.0))))
+        self.progress_cb(
+            self.progress.fraction(st, st.step, self.end_step),
+            f"contact update {st.augment_updates}: deepest {depth:.3g} > {limit:.3g}, relaxing on",
         )
         return True
 
@@ -779,6 +819,11 @@ class Integrator:
         st.D_prev = np.array(st.D_prev, dtype=float).ravel()
         if np.asarray(st.mode).size != n6:
             st.mode = np.zeros(n6)
+        nb, P = len(self.bodies), (len(self.faces) if self.faces is not None else 0)
+        if np.shape(st.shift_n) != (nb, self.N) or np.shape(st.shift_q) != (nb, P):
+            # another mesh: the updates start over
+            st.shift_n, st.shift_q, st.augment_updates = augment.NONE, augment.NONE, 0
+            st.augment_best, st.augment_stalls = math.inf, 0
 
     def _open_segment(self) -> None:
         """A new ledger segment at the current state (ledger.py), and the quasi-strain work and

@@ -71,6 +71,15 @@ def info(integ, ok: bool) -> dict:
                 "thickness_strain_corner_switches": int(st.q_corners),
             }
         )
+    if integ.relax and integ.bodies and integ.forces.augmentable:
+        info.update(
+            {
+                "contact_augment_updates": int(st.augment_updates),  # contact_augment.py
+                "contact_augment_energy_jump": float(st.augment_jump),
+                # the deepest raw penetration of a node or face point at the last steady state (-1: none reached)
+                "contact_augment_depth": float(st.augment_depth),
+            }
+        )
     if st.segments:
         info.update({"ledger_segments": int(st.segments) + 1, "remesh_energy_jump": float(st.remesh_energy_jump)})
     info.update(integ.info_dt)

@@ -14,6 +14,7 @@ from typing import Annotated, Any, Literal, Optional
 import numpy as np
 from pydantic import AfterValidator, BeforeValidator, Field, ValidationInfo, field_validator, model_validator
 
+from ...contact_augment import DEFAULT_UPDATES
 from ...contact_faces import DEFAULT_FACE_POINTS, MAX_FACE_POINTS
 from ...errors import InputError
 from ...settings import Finite, SettingsModel, StateArray, parse
@@ -147,6 +148,8 @@ class RelaxSettings(_Common):
     tol_kinetic: Pos = 1e-6  # E_kin / W_ext
     tol_residual: Pos = 1e-3  # |P - F + C|_free / |P|_free
     check_every: PosInt = 100  # steps between steady-state tests
+    # augmented-Lagrangian updates of the contact at steady states (contact_augment.py; 0: plain penalty)
+    contact_augment: NonNegInt = DEFAULT_UPDATES
     t_max: Pos = 60.0  # [s] simulated
     max_steps: Optional[PosInt] = None
 

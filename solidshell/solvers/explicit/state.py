@@ -60,6 +60,17 @@ FIELDS = {
     "anchors": "a",
     "fric_work": "f",
     "max_slip": "i",
+    # augmented-Lagrangian contact (contact_augment.py): the shifts lambda / k of the nodes
+    # (n_bodies, N) and face points (n_bodies, P), (0, 0) before the first update; updates made and
+    # the energy their changes of the contact potential booked apart; the deepest raw penetration
+    # [length] at the last steady state, the shallowest one so far and the updates since it
+    "shift_n": "a",
+    "shift_q": "a",
+    "augment_updates": "i",
+    "augment_jump": "f",
+    "augment_depth": "f",
+    "augment_best": "f",
+    "augment_stalls": "i",
     # watched maxima and the latest readings
     "max_interp": "i",
     "t_max_interp": "f",

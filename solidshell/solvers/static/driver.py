@@ -15,6 +15,7 @@ import time
 
 import numpy as np
 
+from ... import contact_augment as augment
 from ...errors import InputError
 from ...problem import SolveResult, no_progress
 from ...settings import parse
@@ -194,6 +195,8 @@ def _equilibrium(sys, D, o, s, stats, progress, path, warnings):
             D, ok, msg, rel = arc_length(sys, D, factors[-1], o, s, stats, progress, path)
         else:
             D, ok, msg, rel = _load_stepping(sys, D, factors, o, s, stats, progress, path)
+        if ok and sys.contact and s.contact_augment > 0:
+            D, ok, msg, rel = _augment(sys, D, o, s, stats, progress, path)
         if ok and s.check_stability and s.max_saddle_escapes > 0 and not zero:
             lam = stats["load_factor"]
             progress(0.97, "static: checking stability")
@@ -265,7 +268,49 @@ def _info(sys, o, s, stats, ok, status, rel, warnings) -> dict:
         info["min_multiplier"] = float(stats["min_multiplier"])
     if sys.contact:
         info["contact_stiffness"] = sys.k_contact
+        if "augment_updates" in stats:  # contact_augment.py
+            info["contact_augment_updates"] = int(stats["augment_updates"])
+            info["contact_augment_depth"] = float(stats["augment_depth"])
+            info["contact_augment_iterations"] = [int(i) for i in stats["augment_iterations"]]
     return info
+
+
+def _augment(sys, D, o, s, stats, progress, path):
+    """Augmented-Lagrangian updates of the contact at the last load factor (contact_augment.py):
+    while a node or face point lies deeper than the target, shift and solve again from D, at most
+    ``contact_augment`` times.  A soft drape may answer an update by moving its folds instead of
+    lifting (the deepest point moves elsewhere, unshifted): the solves stop after STALLS updates in
+    a row that did not make the deepest penetration shallower, and the shallowest solve is kept
+    (an equilibrium of its own shifts).  Returns (D, ok, message, rel) of the solve kept."""
+    lam = stats["load_factor"]
+    target = augment.target(sys.model.material.thickness)
+    stats["augment_updates"] = 0
+    stats["augment_iterations"] = []
+    msg, rel = "", stats.get("final_relative_residual", np.nan)
+    best = None  # (depth, D, rel, msg, shifts) of the shallowest converged solve
+    stalls = 0
+    while True:
+        depth, s_n, s_q = sys.augment(D)
+        if best is None or depth < best[0]:
+            best, stalls = (depth, D, rel, msg, (sys.shift_n, sys.shift_q)), 0
+        elif stats["augment_updates"]:
+            stalls += 1
+        if depth <= target or stats["augment_updates"] >= s.contact_augment or stalls >= augment.STALLS:
+            depth, D, rel, msg, (sys.shift_n, sys.shift_q) = best
+            stats["augment_depth"] = depth
+            stats["final_relative_residual"] = rel
+            if path:
+                path[-1] = (lam, D.reshape(sys.n, 6).copy())
+            return D, True, msg or "converged", rel
+        sys.shift_n, sys.shift_q = s_n, s_q
+        stats["augment_updates"] += 1
+        progress(0.95, f"static: contact update {stats['augment_updates']}, deepest {depth:.3g} > {target:.3g}")
+        it0 = stats["iterations"]
+        Dn, ok, msg, rel = newton_level(sys, D, lam, o, stats)
+        stats["augment_iterations"].append(stats["iterations"] - it0)
+        if not ok:
+            return Dn, False, f"after contact update {stats['augment_updates']}: {msg}", rel
+        D = Dn
 
 
 # ============================================================================ load stepping

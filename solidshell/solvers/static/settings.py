@@ -17,6 +17,7 @@ from typing import Literal, Optional, Union, get_args
 
 from pydantic import Field, field_validator, model_validator
 
+from ...contact_augment import DEFAULT_UPDATES
 from ...contact_faces import DEFAULT_FACE_POINTS, MAX_FACE_POINTS
 from ...settings import Finite, SettingsModel, StateArray
 from ..linear import FACTORIZATIONS
@@ -102,13 +103,18 @@ class StaticSettings(SettingsModel):
     max_saddle_escapes: int = Field(5, ge=0, description="saddles left before giving up")
     saddle_step: Finite = Field(0.05, gt=0.0, description="largest escape step, fraction of L_f")
     contact_stiffness: Optional[Finite] = Field(
-        None, gt=0.0, description="penalty [force/length] (None: 1e3 x heaviest nodal dead load / h)"
+        None, gt=0.0, description="penalty [force/length] (None: 1e4 x heaviest nodal dead load / h, system.py)"
     )
     contact_face_points: int = Field(
         DEFAULT_FACE_POINTS,
         ge=0,
         le=MAX_FACE_POINTS,
         description="contact points per element edge inside each element (contact_faces.py; 0: nodes only)",
+    )
+    contact_augment: int = Field(
+        DEFAULT_UPDATES,
+        ge=0,
+        description="augmented-Lagrangian updates of the contact after the solve (contact_augment.py; 0: plain penalty)",
     )
     factorization: Literal[FACTORIZATIONS] = Field(
         "auto",

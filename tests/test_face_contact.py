@@ -12,6 +12,7 @@ import pytest
 
 from solidshell import Fabric
 from solidshell.contact import PENETRATION_TOL, Pedestal, Sphere
+from solidshell.contact_augment import DEFAULT_UPDATES
 from solidshell.contact_faces import FacePoints, contact_terms, face_pass, spacing
 from solidshell.meshing import build_mesh
 from solidshell.model import Model
@@ -125,15 +126,16 @@ def _drop_on_sphere(n_face, n=8, size=8.0):
 
 def test_coarse_sheet_on_a_sphere_keeps_its_faces_out_further():
     """1 cm elements relaxed onto a 2 cm sphere: contact on the nodes leaves the element faces ~L^2 /
-    (8 R) = 0.06 cm (100 % of h) inside; the face points cut that by far more than 3 and keep every
-    node out.  Measured 0.007 cm with faces: above the contract's 2 % of h -- the explicit penalty
-    (0.1 m omega^2, omega with the director masses x100) sinks a flat 1 cm face resting on a 2 cm
-    sphere by ~sqrt(F / (pi kappa R)) (docs/contact.md, "What is not met yet")."""
+    (8 R) = 0.06 cm (100 % of h) inside; the face points cut that by far more than 5 and keep every
+    node out.  Measured with the default augmented-Lagrangian updates (contact_augment.py): 2.9 % of h
+    after 1 update (11.8 % with the plain penalty) -- 1 cm faces over R = 2 cm are coarser than any
+    paper scene's (docs/contact.md, "What is not met yet"), so asserted is the factor 5 and 5 % of h."""
     nodes_only, _ = _drop_on_sphere(0)
     assert nodes_only["deepest_face_point_cm"] > 10 * TOL  # what contact on the nodes lets through
     faces, res = _drop_on_sphere(3)
     assert faces["nodes_beyond"] == 0, faces
     assert faces["deepest_face_point_cm"] < nodes_only["deepest_face_point_cm"] / 5, (faces, nodes_only)
+    assert faces["deepest_face_point_cm"] < 2.5 * TOL, faces
     assert res.info["max_contact_nodes"] > 0
 
 
@@ -143,11 +145,13 @@ def test_sheet_over_a_pedestal_edge_face_points_cut_the_edge_through(shape, edge
     """A 6 x 6 cm sheet (0.5 cm elements) held at its centre on a 2 cm wide pedestal top (its lower
     face on it), solved statically: the overhang folds down over the edge (sharp or rounded).  With
     contact on the nodes only the edge cuts through the elements lying over it; the face points
-    keep them out to a fraction of that.  Measured deepest face point (nodes only -> faces), cm:
-    box sharp 0.102 -> 0.011, cylinder sharp 0.069 -> 0.019, box rounded 0.116 -> 0.010, cylinder
-    rounded 0.072 -> 0.020; the contract's 2 % of h (0.0012 cm) is NOT met over an edge (a line
-    load on a bilinear face between points; docs/contact.md, "What is not met yet"): asserted is a
-    third of the nodes-only depth and 0.4 h, above what was measured."""
+    keep them out to a fraction of that.  Measured deepest face point in units of h (nodes only ->
+    face points with the default augmented-Lagrangian updates): box sharp 1.68 -> 0.179, cylinder
+    sharp 1.16 -> 0, box rounded 1.85 -> 0.039, cylinder rounded 1.15 -> 0.077.  The contract's 2 %
+    of h is NOT met over an edge on these 0.5 cm elements (a line load on a bilinear face between its
+    points; docs/contact.md, "What is not met yet"): asserted is a third of the nodes-only depth and
+    0.4 h, above what was measured."""
+
     from solidshell.solvers.static import solve_static
 
     mesh = _sheet(12, 6.0, z=H / 2)
@@ -169,9 +173,12 @@ def test_sheet_over_a_pedestal_edge_face_points_cut_the_edge_through(shape, edge
 
 def test_static_drape_on_a_sphere_stable_and_faces_out_further():
     """Static solve of a sheet on a sphere, its centre node held in-plane (frictionless: a centred
-    drape slides off otherwise): a converged stable minimum (positive-definite tangent), and the
-    face points keep the 1 cm elements' faces a fraction as deep as contact on the nodes only
-    (chord sag L^2 / (8 R) ~ 0.06 cm); printed numbers in the closing note of issue 36."""
+    drape slides off otherwise): a converged stable minimum (positive-definite tangent) with contact
+    on the nodes only, on the face points with the plain penalty, and with the augmented-Lagrangian
+    updates (the default).  Measured deepest face point (5 x 5 lattice) in units of h: 1.75 (nodes
+    only; chord sag L^2 / (8 R) of the 1 cm elements) -> 0.055 (face points, penalty k = 1e4
+    K_sheet) -> 0.027 (4 updates).  Asserted: faces a third as deep as nodes only, the updates 1.5 x
+    shallower again and within 2 x the contract (1 cm faces over R = 2 cm; the drape above)."""
     from solidshell.solvers.static import solve_static
 
     mesh = _sheet(8, 8.0)
@@ -182,10 +189,11 @@ def test_static_drape_on_a_sphere_stable_and_faces_out_further():
     loads[:, 2] = -model.lumped_mass()[:, 0] * G0
     sph = Sphere((0.0, 0.0, -2.0 - H / 2), 2.0, offset=H / 2)
     deep = {}
-    for n in (0, 3):
-        r = solve_static(model, fixed, loads, contact=[sph], contact_face_points=n)
+    for n, updates in ((0, 0), (3, 0), (3, DEFAULT_UPDATES)):
+        r = solve_static(model, fixed, loads, contact=[sph], contact_face_points=n, contact_augment=updates)
         assert r.converged, r.message
         assert r.info["positive_definite"]
-        deep[n] = check(mesh, r.U, [sph], H)[0]["deepest_face_point_cm"]
-    # measured 0.104 cm (nodes only) -> 0.012 cm (faces)
-    assert deep[3] < deep[0] / 3, deep
+        deep[n, updates] = check(mesh, r.U, [sph], H)[0]["deepest_face_point_cm"]
+    assert r.info["contact_augment_updates"] >= 1
+    assert deep[3, 0] < deep[0, 0] / 3, deep
+    assert deep[3, DEFAULT_UPDATES] < min(deep[3, 0] / 1.5, 2 * TOL), deep

@@ -338,8 +338,9 @@ def square(counts: tuple[int, int], size: float = 20.0) -> ShellMesh:
     """Whole size x size cm sheet centred at the origin (Section 4.1: 20x20 as 40x40, 100x100 as
     50x50; Section 4.2/6.4: 30x30 cloth as 60x60, 100x100, level 0 16x16).  counts = (N along X,
     M along Y).  Sets ``outer``, ``corners`` (4), ``corner_sw``/``corner_se``/``corner_ne``/
-    ``corner_nw`` (s/n = -/+Y, w/e = -/+X) and ``hung`` = the two corners at y = +size/2 that the
-    hang scenes fix (Section 4.1)."""
+    ``corner_nw`` (s/n = -/+Y, w/e = -/+X), ``hung`` = the two corners at y = +size/2 that the
+    hang scenes fix (Section 4.1), ``centre`` = the node nearest the centre and ``centre_east`` = the
+    next node from it along +X (the static sphere holds them: scenes/paper/sphere.toml)."""
     (a,) = _positive(size=size)
     n, m = counts
     names = ("corner_sw", "corner_se", "corner_ne", "corner_nw")
@@ -357,7 +358,13 @@ def square(counts: tuple[int, int], size: float = 20.0) -> ShellMesh:
             b.points_group(name, [q])
         b.points_group("corners", p)
         b.points_group("hung", [p[2], p[3]])
-        return b.mesh()
+        mesh = b.mesh()
+    xy = mesh.nodes[:, :2]
+    c = int(np.argmin(np.hypot(xy[:, 0], xy[:, 1])))
+    row = np.flatnonzero((np.abs(xy[:, 1] - xy[c, 1]) <= 1e-9 * a) & (xy[:, 0] > xy[c, 0] + 1e-9 * a))
+    mesh.add_node_set("centre", [c])
+    mesh.add_node_set("centre_east", row[np.argmin(xy[row, 0])])
+    return mesh
 
 
 def from_file(path) -> ShellMesh:

@@ -73,20 +73,20 @@ def test_scene_contents():
     (ball,) = sph.contact
     assert ball["type"] == "sphere" and ball["radius"] == 5.0
     assert ball["centre"][2] + ball["radius"] == pytest.approx(-0.0593 / 2)  # top touches the lower face
-    assert sph.supports == {}
+    assert sph.supports == {"static": {"fixed_x": ("centre",), "fixed_y": ("centre", "centre_east")}}
 
 
 @pytest.mark.parametrize("name", PAPER_SCENES)
 def test_meshes_build_with_paper_counts(name):
+    from solidshell.scenes.build import support_mask
+
     s = scenes.load(name)
     params = {k: v for k, v in s.geometry.items() if k != "recipe"}
     for density in dict.fromkeys([s.density, *s.mesh["paper_meshes"]]):
         m = meshing.build_mesh(s.recipe, density, **params)
         nodes, quads = expected_counts(s.recipe, density)
         assert (m.n_nodes, m.n_quads, m.n_tris) == (nodes, quads, 0), (name, density)
-        for kind, sets in s.supports.items():
-            for set_name in sets:
-                assert m.node_set(set_name).size > 0
+        support_mask(s, m, "static")  # every support set, [supports.static]'s too, exists and is not empty
     m = meshing.build_mesh(s.recipe, s.density, **params)
     if s.recipe == "square_on_square":
         g = s.geometry
@@ -251,6 +251,28 @@ def test_file_geometry_relative_to_scene(tmp_path):
     assert (mesh.n_nodes, mesh.n_quads) == (12, 6) and mesh.node_set("hung").size == 2
     with pytest.raises(InputError, match="density"):
         scenes.load(write(tmp_path, 'name = "f"\ntitle = "t"\n[geometry]\nfile = "x.msh"\n[mesh]\ndensity = "4x4"\n'))
+
+
+def test_component_and_static_supports(tmp_path):
+    """fixed_x / _y / _z fix one component of U_o; [supports.static] holds only in a static solve
+    (the packaged sphere: its centre in-plane and the next node along +X in y, so the frictionless
+    static drape can neither slide nor turn); a missing set there is one InputError naming the key."""
+    from solidshell.scenes.build import build_scene_mesh, support_mask
+
+    sph = scenes.load("sphere")
+    mesh, _ = build_scene_mesh(sph, "4x4")
+    assert not support_mask(sph, mesh).any() and not support_mask(sph, mesh, "relax").any()
+    fixed = support_mask(sph, mesh, "static")
+    c, e = mesh.node_set("centre")[0], mesh.node_set("centre_east")[0]
+    np.testing.assert_array_equal(mesh.nodes[[c, e]], [[0, 0, 0], [7.5, 0, 0]])  # 30 cm / 4
+    assert fixed[c].tolist() == [True, True] + [False] * 4 and fixed[e].tolist() == [False, True] + [False] * 4
+    assert fixed.sum() == 3
+    p = write(tmp_path, BASE + '[supports]\nfixed_z = "corners"\n[supports.static]\nfixed_x = "nowhere"\n')
+    sc = scenes.load(p)
+    m, _ = build_scene_mesh(sc, "2x2")
+    assert support_mask(sc, m)[:, [0, 1, 3, 4, 5]].sum() == 0 and support_mask(sc, m)[:, 2].sum() == 4
+    with pytest.raises(InputError, match=r"supports\.static\.fixed_x: .*nowhere"):
+        support_mask(sc, m, "static")
 
 
 # ----------------------------------------------------------------------------- overrides

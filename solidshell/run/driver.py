@@ -245,7 +245,7 @@ def _solve(plan: RunPlan, setup, arun, cb, timings: dict) -> Solved:
             progress,
             sc,
             setup.mesh_name,
-            lambda d: build_problem(sc, build_scene_mesh(sc, d, kind, plan.allow_large)[0]),
+            lambda d: build_problem(sc, build_scene_mesh(sc, d, kind, plan.allow_large)[0], kind=kind),
         )
     else:
         result = fn(problem, dict(setup.solver_settings), progress)

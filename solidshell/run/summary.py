@@ -28,6 +28,11 @@ def _peak_memory_mb() -> float:
     return round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0, 1)
 
 
+def _supports(table: dict) -> dict:
+    """[supports] as lists of node-set names ([supports.static] nested the same way)."""
+    return {k: (_supports(v) if isinstance(v, dict) else list(v)) for k, v in table.items()}
+
+
 def _material_summary(m) -> dict:
     return {
         "type": type(m).__name__,
@@ -65,7 +70,7 @@ def describe_run(
         "pedestal_area": pedestal_area(sc),
         "material": _material_summary(setup.material),
         "model": dict(sc.model),
-        "supports": {k: list(v) for k, v in sc.supports.items()},
+        "supports": _supports(sc.supports),
         "contact": [dict(c) for c in sc.contact],
         "units": dict(sio.UNITS),
         "versions": sio.package_versions(),

@@ -44,6 +44,9 @@ Scene file format
     [supports]                            # node sets of the mesh (a name or a list of names)
     clamped = "clamped"                   # all six dofs fixed (U_o = U_n = 0)
     # fixed_translations = "hung"         # U_o = 0 only (corners a sheet hangs from)
+    # fixed_x = "centre"                  # one component of U_o (also fixed_y, fixed_z)
+    # [supports.static]                   # the same keys, held only by the static solver (its
+    # fixed_y = ["centre", "centre_east"] #   contact is frictionless: paper/sphere.toml)
 
     [loads]
     gravity = true                        # self-weight, Fabric.weight [gf/cm^2]

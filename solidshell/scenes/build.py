@@ -113,16 +113,25 @@ def _guard(mesh, what, kind, allow_large):
 
 
 # --------------------------------------------------------------------------- supports, loads, contact
-def support_mask(scene: Scene, mesh) -> np.ndarray:
-    """(N,6) bool: clamped sets fix all six dofs, fixed_translations sets fix U_o."""
+SUPPORT_DOFS = {"clamped": slice(0, 6), "fixed_translations": slice(0, 3), "fixed_x": 0, "fixed_y": 1, "fixed_z": 2}
+"""The dofs (of U_o, U_n) each kind of [supports] key fixes."""
+
+
+def support_mask(scene: Scene, mesh, kind: str = "none") -> np.ndarray:
+    """(N,6) bool: the [supports] node sets' dofs (SUPPORT_DOFS), and those of [supports.static]
+    when ``kind`` is "static"."""
     fixed = np.zeros((mesh.n_nodes, 6), dtype=bool)
-    for kind, dofs in (("clamped", slice(0, 6)), ("fixed_translations", slice(0, 3))):
-        for name in scene.supports.get(kind, ()):
-            try:
-                idx = mesh.node_set(name)
-            except InputError as e:
-                raise InputError(f"{scene.source}: supports.{kind}: {e}") from None
-            fixed[idx, dofs] = True
+    tables = [("supports", scene.supports)]
+    if kind == "static" and scene.supports.get("static"):
+        tables.append(("supports.static", scene.supports["static"]))
+    for where, table in tables:
+        for key, dofs in SUPPORT_DOFS.items():
+            for name in table.get(key, ()):
+                try:
+                    idx = mesh.node_set(name)
+                except InputError as e:
+                    raise InputError(f"{scene.source}: {where}.{key}: {e}") from None
+                fixed[idx, dofs] = True
     return fixed
 
 
@@ -273,7 +282,7 @@ def setup_scene(
     the perturbed start, each checked (InputError) before anything is solved or written.
     ``settings``: the run's checked solver settings (:func:`run_settings`), None for mesh only."""
     m, mesh_name = build_scene_mesh(scene, mesh, kind, allow_large)
-    fixed = support_mask(scene, m)  # unknown / empty node sets fail here, before solving
+    fixed = support_mask(scene, m, kind)  # unknown / empty node sets fail here, before solving
     material = scene.material_object()
     check_load_sets(scene, m)
     bodies = contact_bodies(scene)
@@ -287,19 +296,19 @@ def setup_scene(
 
 
 # --------------------------------------------------------------------------- the problem
-def build_problem(scene: Scene, mesh, fixed=None, membrane=None, constants=None):
+def build_problem(scene: Scene, mesh, fixed=None, membrane=None, constants=None, kind: str = "none"):
     """The solidshell.problem.Problem of a scene on a mesh: the Model (section, thickness-strain
     model), supports, loads (self-weight, point, line, surface) and contact bodies -- everything a
     solver needs.  Unknown or empty node sets raise InputError.  The adaptive driver calls this for
     every new mesh.  ``membrane``: the quads' membrane strains (Model's argument: one choice or one
     per quad) instead of the scene's ``model.membrane``; ``constants``: a model.ElementConstants
-    cache shared by the problems of one adaptive run."""
+    cache shared by the problems of one adaptive run; ``kind``: the solver (support_mask)."""
     from ..model import Model
     from ..problem import Problem
 
     sc = load(scene)
     if fixed is None:
-        fixed = support_mask(sc, mesh)
+        fixed = support_mask(sc, mesh, kind)
     check_load_sets(sc, mesh)
     if membrane is None:
         membrane = sc.model.get("membrane", "full")

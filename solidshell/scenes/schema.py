@@ -429,9 +429,29 @@ class ModelTable(Table):
     membrane: choice(MEMBRANES) = "full"
 
 
-class SupportsTable(Table):
+class StaticSupports(Table):
+    """Node sets held fixed: all six dofs (clamped), U_o (fixed_translations) or one component of
+    U_o (fixed_x / _y / _z; build.SUPPORT_DOFS)."""
+
     clamped: Optional[Names] = None
     fixed_translations: Optional[Names] = None
+    fixed_x: Optional[Names] = None
+    fixed_y: Optional[Names] = None
+    fixed_z: Optional[Names] = None
+
+
+class SupportsTable(StaticSupports):
+    """[supports]; its [supports.static] holds more only in a static solve: the static solver's
+    contact is frictionless, so a drape that friction keeps in place (the sphere) needs its rigid
+    in-plane motions held there."""
+
+    static: Optional[StaticSupports] = None
+
+    def given(self) -> dict:
+        out = super().given()
+        if self.static is not None:
+            out["static"] = self.static.given()
+        return out
 
 
 class PointLoad(Table):

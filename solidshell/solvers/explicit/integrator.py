@@ -293,6 +293,7 @@ class Integrator:
         self.frame_next_t = observers.next_frame_time(st)
         self._Dn1, self._R = np.empty_like(st.D), np.empty_like(st.D)
         self.forces.shift_n, self.forces.shift_q = st.shift_n, st.shift_q
+        self._widen_candidates()  # a restart after an update selects as the uninterrupted run did
         if st.good_D is None or st.good_D.size != st.D.size:
             st.good_D, st.good_t = st.D.copy(), st.t
 
@@ -570,13 +571,18 @@ class Integrator:
         st.augment_jump += jump
         st.Ec0 += jump
         st.augment_updates += 1
-        if self.cand is not None:
-            self.cand.widen(max(float(s_n.max(initial=0.0)), float(s_q.max(initial=0.0))))
+        self._widen_candidates()
         self.progress_cb(
             self.progress.fraction(st, st.step, self.end_step),
             f"contact update {st.augment_updates}: deepest {depth:.3g} > {limit:.3g}, relaxing on",
         )
         return True
+
+    def _widen_candidates(self) -> None:
+        """A point feels a body while its gap is below its shift: the candidates reach that far."""
+        st = self.state
+        if self.cand is not None and (st.shift_n.size or st.shift_q.size):
+            self.cand.widen(max(float(st.shift_n.max(initial=0.0)), float(st.shift_q.max(initial=0.0))))
 
     def _friction_work(self, f, Dn1, Dp) -> None:
         """Friction work by the scheme's own central rule f_t,n.(x_n+1 - x_n-1)/2; new anchors."""

@@ -39,8 +39,7 @@ def make(out_dir: Path, quick: bool = False) -> dict:
     diff = [
         f"from the flat sheet {recs[0].get('fold_count')} folds (paper: 12); from a 12-fold start "
         f"{recs[1].get('fold_count')} folds: see positive_definite of each run for stability",
-        "the scene has no pedestal body (the paper's clamped edge only), so the hanging cloth may swing under "
-        "the rim into the pedestal's footprint",
+        "the pedestal is a solid contact body (docs/contact.md section 12): both states hang outside it",
     ] + interp
     if quick:
         diff.append("quick: 10x80 instead of 30x240")

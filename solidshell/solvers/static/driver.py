@@ -278,7 +278,8 @@ def _info(sys, o, s, stats, ok, status, rel, warnings) -> dict:
 def _augment(sys, D, o, s, stats, progress, path):
     """Augmented-Lagrangian updates of the contact at the last load factor (contact_augment.py):
     while a node or face point lies deeper than the target, shift and solve again from D, at most
-    ``contact_augment`` times.  A soft drape may answer an update by moving its folds instead of
+    ``contact_augment`` times, by the trust-region Newton whatever the method (a correction of a
+    fraction of h; the paper's lambda-scaled steps would spend hundreds of iterations on it).  A soft drape may answer an update by moving its folds instead of
     lifting (the deepest point moves elsewhere, unshifted): the solves stop after STALLS updates in
     a row that did not make the deepest penetration shallower, and the shallowest solve is kept
     (an equilibrium of its own shifts).  Returns (D, ok, message, rel) of the solve kept."""

@@ -20,13 +20,12 @@ import os
 import statistics
 import time
 
-import numba
 import numpy as np
 
 from solidshell.run import run_scene
 from solidshell.scenes import load
 from solidshell.scenes.build import build_problem
-from solidshell.solvers.explicit import Integrator
+from solidshell.solvers.explicit import Integrator, threads_for
 from solidshell.solvers.explicit.settings import RELAX_PRESETS
 
 
@@ -39,25 +38,19 @@ def draped(n: int):
 
 
 def one_pass(prob, bare, U, steps: int, rounds: int, threads: int | None) -> dict:
-    s = {
-        **RELAX_PRESETS["fast"],
-        "U0": U,
-        "max_steps": 10 * steps * rounds,
-        "check_every": 10 * steps * rounds,
-    }  # no steady stop
-    if threads:
-        s["threads"] = threads
-    integ = {"contact": Integrator(prob, s, relax=True), "bare": Integrator(bare, s, relax=True)}
-    for it in integ.values():
-        it.advance(5)  # compile / warm
-    wall = {k: [] for k in integ}
-    cpu = {k: [] for k in integ}
-    for _ in range(rounds):
-        for k, it in integ.items():
-            t, c = time.perf_counter(), time.process_time()
-            it.advance(steps)
-            wall[k].append(time.perf_counter() - t)
-            cpu[k].append(time.process_time() - c)
+    s = {**RELAX_PRESETS["fast"], "U0": U, "max_steps": 10 * steps * rounds, "check_every": 10 * steps * rounds}
+    with threads_for(prob, threads) as n_threads:  # the solver's own choice when threads is None
+        integ = {"contact": Integrator(prob, s, relax=True), "bare": Integrator(bare, s, relax=True)}
+        for it in integ.values():
+            it.advance(5)  # compile / warm
+        wall = {k: [] for k in integ}
+        cpu = {k: [] for k in integ}
+        for _ in range(rounds):
+            for k, it in integ.items():
+                t, c = time.perf_counter(), time.process_time()
+                it.advance(steps)
+                wall[k].append(time.perf_counter() - t)
+                cpu[k].append(time.process_time() - c)
     M = prob.model.mesh.n_elements
     rate = {k: M * steps / statistics.median(v) for k, v in wall.items()}
     rate_cpu = {k: M * steps / statistics.median(v) for k, v in cpu.items()}
@@ -66,7 +59,7 @@ def one_pass(prob, bare, U, steps: int, rounds: int, threads: int | None) -> dic
         elements=M,
         steps_per_round=steps,
         rounds=rounds,
-        threads=numba.get_num_threads(),
+        threads=int(n_threads),
         face_points=int(len(f.faces)) if f.faces is not None else 0,
         el_steps_per_s_contact=rate["contact"],
         el_steps_per_s_bare=rate["bare"],

@@ -76,6 +76,18 @@ def update(bodies, x, xq, shift_n, shift_q):
     return deepest, np.ascontiguousarray(np.maximum(s_n, 0.0)), np.ascontiguousarray(np.maximum(s_q, 0.0))
 
 
+def tally(depth: float, best: float, stalls: int, updates: int, limit: int, goal: float):
+    """After a converged solve whose deepest raw penetration is ``depth``, with ``updates`` made so
+    far (at most ``limit``) and the shallowest depth ``best`` and ``stalls`` before it: (stop?, best,
+    stalls) -- stop once at the goal, out of updates, or after STALLS updates without a shallower
+    deepest point."""
+    if depth < best:
+        best, stalls = depth, 0
+    elif updates:
+        stalls += 1
+    return depth <= goal or updates >= limit or stalls >= STALLS, best, stalls
+
+
 def target(h: float) -> float:
     """The depth [length] the updates aim below for a sheet of thickness h."""
     return TARGET * PENETRATION_TOL * float(h)

@@ -234,8 +234,7 @@ class Forces:
         (n_bodies, N), face-point shifts (n_bodies, P))."""
         x = self.X0 + D.reshape(self.shape)[:, :3]
         xq = self.faces.positions(x) if self.faces is not None else np.zeros((0, 3))
-        shift_q = self.shift_q if self.faces is not None else np.zeros((len(self.bodies), 0))
-        return augment.update(self.bodies, x, xq, self.shift_n, shift_q)
+        return augment.update(self.bodies, x, xq, self.shift_n, self.shift_q)
 
     def contact_energy(self, D, anchors):
         """(C flat, contact energy incl. friction stick energy, the stick energy) at D (no books)."""

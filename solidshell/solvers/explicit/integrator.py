@@ -558,11 +558,10 @@ class Integrator:
         limit = augment.target(self.model.material.thickness) if isinstance(self.model, Model) else 0.0
         depth, s_n, s_q = forces.augment(D)
         st.augment_depth = depth
-        if depth < st.augment_best:
-            st.augment_best, st.augment_stalls = depth, 0
-        elif st.augment_updates:
-            st.augment_stalls += 1  # the drape moved instead of lifting (contact_augment.STALLS)
-        if depth <= limit or st.augment_updates >= self.s.contact_augment or st.augment_stalls >= augment.STALLS:
+        stop, st.augment_best, st.augment_stalls = augment.tally(
+            depth, st.augment_best, st.augment_stalls, st.augment_updates, self.s.contact_augment, limit
+        )
+        if stop:
             return False
         anchors = st.anchors
         e_old = forces.contact_energy(D, anchors)[1]

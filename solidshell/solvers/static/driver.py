@@ -289,14 +289,15 @@ def _augment(sys, D, o, s, stats, progress, path):
     stats["augment_iterations"] = []
     msg, rel = "", stats.get("final_relative_residual", np.nan)
     best = None  # (depth, D, rel, msg, shifts) of the shallowest converged solve
-    stalls = 0
+    shallowest, stalls = math.inf, 0
     while True:
         depth, s_n, s_q = sys.augment(D)
-        if best is None or depth < best[0]:
-            best, stalls = (depth, D, rel, msg, (sys.shift_n, sys.shift_q)), 0
-        elif stats["augment_updates"]:
-            stalls += 1
-        if depth <= target or stats["augment_updates"] >= s.contact_augment or stalls >= augment.STALLS:
+        if depth < shallowest:
+            best = (depth, D, rel, msg, (sys.shift_n, sys.shift_q))
+        stop, shallowest, stalls = augment.tally(
+            depth, shallowest, stalls, stats["augment_updates"], s.contact_augment, target
+        )
+        if stop:
             depth, D, rel, msg, (sys.shift_n, sys.shift_q) = best
             stats["augment_depth"] = depth
             stats["final_relative_residual"] = rel

@@ -196,8 +196,7 @@ class System:
         [length], node shifts, face-point shifts); the caller sets ``shift_n``, ``shift_q``."""
         x = self.model.mesh.nodes + D.reshape(self.n, 6)[:, :3]
         xq = self.faces.positions(x) if self.faces is not None else np.zeros((0, 3))
-        shift_q = self.shift_q if self.faces is not None else np.zeros((len(self.contact), 0))
-        return augment.update(self.contact, x, xq, self.shift_n, shift_q)
+        return augment.update(self.contact, x, xq, self.shift_n, self.shift_q)
 
     def _contact_matrix(self, blocks, entries=None):
         """The contact tangent blocks (and face entries) as a (6N, 6N) CSR matrix, or None."""

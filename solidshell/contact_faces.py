@@ -44,8 +44,9 @@ friction capacity of a face is its whole normal load, and the stick springs take
 stiffness a node has when its faces lie flat on the body (its own plus its grid share), so that
 normal and tangential springs ring in step.
 
-Cost: one compiled pass over the points of the elements near a body (the explicit solver's
-candidates), n_e^2 distance evaluations per element and body.
+Cost: one compiled pass over the elements near a body (the explicit solver's candidates): per
+element and body one distance at its centre, which skips the element when it bounds all its points
+off the body (:func:`face_pass`), else n_e^2 distances.
 """
 
 from __future__ import annotations
@@ -179,13 +180,21 @@ class FacePoints:
 
 # ---------------------------------------------------------------------- compiled pass (explicit solver)
 @njit(cache=True)
-def face_pass(codes, params, offsets, mus, X0, D, els, estart, pn, pw, kq, nodes, fx, Ff, shift):
+def face_pass(codes, params, offsets, mus, X0, D, els, estart, pn, pw, kq, nodes, fx, Ff, shift, reach):
     """The face points of the elements ``els`` (ascending; their points estart[e]..estart[e+1]) on
     every body (code >= 0): their forces N_a k p n added into Ff (N, 3) and, per frictional body,
     their normal loads N_a k p into fx (n_fric, N), both zeroed first at ``nodes`` (the nodes of the
     elements are among them).  ``shift`` (n_bodies, P): the points' augmented-Lagrangian shifts
-    (contact_augment.py; p counts from offset + shift), (0, 0): none.  Returns (penalty energy,
-    points in contact, deepest penetration)."""
+    (contact_augment.py; p counts from offset + shift), (0, 0): none; ``reach`` (n_bodies,): the
+    offset plus the body's largest shift (:func:`reach`).  Returns (penalty energy, points in
+    contact, deepest penetration).
+
+    An element whose points are all farther than ``reach`` from a body is skipped for it: its points
+    are convex combinations of its nodes, so they lie within r = max_a |x_a - c| of the mean c of its
+    nodes, and a 1-Lipschitz distance (every compiled body's) is at least g(c) - r there.  Skipped
+    points would add nothing, so the sums are those over every point, term for term.  Bodies
+    outermost: each body's parameter row is taken once (a row view per point costs more than the
+    distance itself)."""
     shifted = shift.shape[0] > 0
     for j in range(nodes.size):
         i = nodes[j]
@@ -195,37 +204,63 @@ def face_pass(codes, params, offsets, mus, X0, D, els, estart, pn, pw, kq, nodes
     en = 0.0
     nact = 0
     pen = 0.0
-    for je in range(els.size):
-        e = els[je]
-        for q in range(estart[e], estart[e + 1]):
-            x0 = x1 = x2 = 0.0
+    xa = np.empty((4, 3))
+    jf = 0
+    for b in range(codes.size):
+        code, p, off, fric, rb = codes[b], params[b], offsets[b], mus[b] > 0.0, reach[b]
+        for je in range(els.size):
+            e = els[je]
+            q0 = estart[e]
+            c0 = c1 = c2 = 0.0
             for a in range(4):
-                i = pn[q, a]
-                wa = pw[q, a]
-                x0 += wa * (X0[i, 0] + D[6 * i])
-                x1 += wa * (X0[i, 1] + D[6 * i + 1])
-                x2 += wa * (X0[i, 2] + D[6 * i + 2])
-            jf = 0
-            for b in range(codes.size):
-                g, n0, n1, n2 = signed_distance(codes[b], params[b], x0, x1, x2)
+                i = pn[q0, a]
+                xa[a, 0] = X0[i, 0] + D[6 * i]
+                xa[a, 1] = X0[i, 1] + D[6 * i + 1]
+                xa[a, 2] = X0[i, 2] + D[6 * i + 2]
+                c0 += 0.25 * xa[a, 0]
+                c1 += 0.25 * xa[a, 1]
+                c2 += 0.25 * xa[a, 2]
+            r2 = 0.0
+            for a in range(4):
+                r2 = max(r2, (xa[a, 0] - c0) ** 2 + (xa[a, 1] - c1) ** 2 + (xa[a, 2] - c2) ** 2)
+            if signed_distance(code, p, c0, c1, c2)[0] - math.sqrt(r2) > rb:
+                continue
+            for q in range(q0, estart[e + 1]):
+                # the sum of N_a x_a in node order, as FacePoints.positions takes it
+                x0 = x1 = x2 = 0.0
+                for a in range(4):
+                    wa = pw[q, a]
+                    x0 += wa * xa[a, 0]
+                    x1 += wa * xa[a, 1]
+                    x2 += wa * xa[a, 2]
+                g, n0, n1, n2 = signed_distance(code, p, x0, x1, x2)
                 sq = shift[b, q] if shifted else 0.0
-                p = offsets[b] - g + sq
-                if p > 0.0:
-                    kp = kq[q] * p
-                    en += kp * p
+                pq = off - g + sq
+                if pq > 0.0:
+                    kp = kq[q] * pq
+                    en += kp * pq
                     nact += 1
-                    pen = max(pen, p - sq)  # the depth, not the shifted one
+                    pen = max(pen, pq - sq)  # the depth, not the shifted one
                     for a in range(4):
                         i = pn[q, a]
                         wa = pw[q, a]
                         Ff[i, 0] += wa * kp * n0
                         Ff[i, 1] += wa * kp * n1
                         Ff[i, 2] += wa * kp * n2
-                        if mus[b] > 0.0:
+                        if fric:
                             fx[jf, i] += wa * kp
-                if mus[b] > 0.0:
-                    jf += 1
+        if fric:
+            jf += 1
     return 0.5 * en, nact, pen
+
+
+def reach(bodies, shift) -> np.ndarray:
+    """(n_bodies,) how far from each body a face point still feels it: its offset plus its largest
+    augmented-Lagrangian shift (``shift`` (n_bodies, P) or empty: none) [length]."""
+    off = np.array([b.offset for b in bodies], dtype=float)
+    if np.size(shift):
+        off = off + np.max(np.asarray(shift, float), axis=1, initial=0.0)
+    return off
 
 
 # ---------------------------------------------------------------------- numpy (static solver, reports)

@@ -13,7 +13,7 @@ import pytest
 from solidshell import Fabric
 from solidshell.contact import PENETRATION_TOL, Pedestal, Sphere
 from solidshell.contact_augment import DEFAULT_UPDATES
-from solidshell.contact_faces import FacePoints, contact_terms, face_pass, spacing
+from solidshell.contact_faces import FacePoints, contact_terms, face_pass, reach, spacing
 from solidshell.meshing import build_mesh
 from solidshell.model import Model
 from solidshell.penetration import check
@@ -104,10 +104,71 @@ def test_forces_are_the_gradient_and_both_paths_agree():
         fx,
         Ff,
         np.zeros((0, 0)),
+        reach([body], np.zeros((0, 0))),
     )
     assert ec == pytest.approx(e, rel=1e-12) and nact > 0
     np.testing.assert_allclose(Ff, -F, rtol=0, atol=1e-12 * np.abs(F).max())
     assert pen == pytest.approx(-np.min(body.penetration(fp.positions(x))[0]), rel=1e-12)
+
+
+def test_the_compiled_pass_skips_far_elements_exactly():
+    """face_pass skips an element whose points are all beyond a body's reach (the bound g(c) - r of
+    contact_faces.face_pass); the sums must stay those over every point.  Two bodies, one
+    frictional, and augmented-Lagrangian shifts (which widen the reach): energy, point count, depth,
+    forces and normal loads against the numpy contact_terms on every point (1e-12 relative: the same
+    terms in another order) -- on a sheet with most elements far from both bodies."""
+    mesh = _sheet(10, 10.0)
+    rng = np.random.default_rng(3)
+    x = mesh.nodes + 0.02 * rng.standard_normal(mesh.nodes.shape)
+    fp = FacePoints(mesh, np.ones(mesh.n_nodes), 3)
+    # a small ball under one point next to an element's corner: its element's centre is ~0.4 cm off
+    # the ball, but the corner point is in: only the full bound g(c) - r keeps the element
+    q = int(np.argmin(np.linalg.norm(fp.positions(x)[:, :2] - (0.1, 0.1), axis=1)))
+    ball = fp.positions(x)[q] - (0.0, 0.0, 0.09)
+    bodies = [
+        Sphere((3.0, 3.0, -2.0), 2.03, offset=0.02, friction=0.3),
+        Sphere((-4.0, -4.0, -1.0), 1.01),
+        Sphere(ball, 0.1),
+    ]
+    kq = fp.stiffness(np.full(mesh.n_nodes, 10.0))
+    shift = np.zeros((3, len(fp)))
+    shift[:, ::7] = 0.05  # some points feel a body 0.05 beyond its offset
+    e, F = 0.0, np.zeros_like(x)
+    for j, b in enumerate(bodies):
+        ej, Fj, _ = contact_terms(fp, [b], x, kq, shift=shift[j : j + 1])
+        e, F = e + ej, F + Fj
+    xq = fp.positions(x)
+    gaps = np.array([b.penetration(xq)[0] - s for b, s in zip(bodies, shift)])
+    fx_ref = np.zeros(len(x))  # the frictional body's normal loads sum_q N_a k_q p_q
+    np.add.at(fx_ref, fp.nodes.ravel(), (fp.w * (kq * np.maximum(-gaps[0], 0.0))[:, None]).ravel())
+    D = np.zeros(6 * len(x))
+    D.reshape(-1, 6)[:, :3] = x - mesh.nodes
+    Ff, fx = np.zeros((len(x), 3)), np.full((1, len(x)), np.nan)
+    ec, nact, pen = face_pass(
+        np.array([b.code for b in bodies]),
+        np.array([b.params for b in bodies]),
+        np.array([b.offset for b in bodies]),
+        np.array([b.friction for b in bodies]),
+        np.ascontiguousarray(mesh.nodes),
+        D,
+        np.arange(len(fp.conn4)),
+        fp.estart,
+        fp.nodes,
+        fp.w,
+        kq,
+        np.arange(len(x)),
+        fx,
+        Ff,
+        shift,
+        reach(bodies, shift),
+    )
+    assert nact == np.count_nonzero(gaps < 0.0) > 0
+    assert np.count_nonzero((gaps < 1.0).any(axis=0)) < len(fp) / 2  # most points far: the skip is exercised
+    assert ec == pytest.approx(e, rel=1e-12)
+    np.testing.assert_allclose(Ff, -F, rtol=0, atol=1e-12 * np.abs(F).max())
+    np.testing.assert_allclose(fx[0], fx_ref, rtol=1e-12, atol=1e-12 * fx_ref.max())
+    raw = np.array([b.penetration(xq)[0] for b in bodies])
+    assert pen == pytest.approx(np.max(np.where(gaps < 0.0, -raw, 0.0)), rel=1e-12)
 
 
 def _drop_on_sphere(n_face, n=8, size=8.0):

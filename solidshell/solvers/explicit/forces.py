@@ -11,7 +11,7 @@ import numpy as np
 from ... import contact_augment as augment
 from ... import contact_kernels as ck
 from ...contact import contact_forces, frictional_contact
-from ...contact_faces import face_pass
+from ...contact_faces import face_pass, reach
 from ...interfaces import QuasiStrainModel, SolverProblem
 from ...model import Model
 
@@ -54,7 +54,8 @@ class Forces:
         self.faces = faces if self.compiled and faces is not None and len(faces) else None
         # the augmented-Lagrangian shifts of the nodes and face points (contact_augment.py): set
         # by the integrator from its state; NONE: the plain penalty
-        self.shift_n, self.shift_q = augment.NONE, augment.NONE
+        self.shift_n = augment.NONE
+        self.shift_q = augment.NONE  # (a property: sets the points' reach too)
         if self.faces is not None:
             self.kq = self.faces.stiffness(self.k_pen)
             self._all_els = np.arange(len(self.faces.conn4))
@@ -62,6 +63,16 @@ class Forces:
             self._Ff = np.zeros((self.N, 3))  # the face points' forces on the nodes
         else:
             self._fx, self._Ff = np.zeros((0, 0)), np.zeros((0, 3))
+
+    @property
+    def shift_q(self) -> np.ndarray:
+        """The face points' augmented-Lagrangian shifts (n_bodies, P), or augment.NONE."""
+        return self._shift_q
+
+    @shift_q.setter
+    def shift_q(self, s) -> None:
+        self._shift_q = s
+        self._reach = reach(self.bodies, s) if self.faces is not None else np.zeros(0)
 
     def internal(self, D, want_energy):
         """(F(D) flat, strain energy or None)."""
@@ -185,7 +196,8 @@ class Forces:
                 idx,
                 self._fx,
                 self._Ff,
-                self.shift_q,
+                self._shift_q,
+                self._reach,
             )
         if C is None:
             C = np.zeros(6 * self.N)

@@ -121,7 +121,26 @@ def record_state(summary: dict, sc: Scene, solved) -> list[str]:
             for k, v in a.items():
                 summary.setdefault(k, v)
         warnings += contact_check(summary, sc, solved)
+        warnings += layers_check(summary, solved)
     return warnings + _state_warnings(summary, info)
+
+
+def layers_check(summary: dict, solved) -> list[str]:
+    """Enter the sheet-against-itself measures (solidshell.layers.report: ``self_intersections``,
+    ``min_layer_gap``, ``layer_pairs_close``) into the summary for a sheet of known thickness;
+    returns their warnings."""
+    h = (summary.get("material") or {}).get("thickness")
+    if not isinstance(h, (int, float)) or not h > 0.0:
+        return []
+    from .. import layers
+
+    try:
+        entry = layers.report(solved.mesh, solved.U, float(h))
+    except Exception as e:  # the check must never lose a solved state
+        summary["layers_error"] = f"{type(e).__name__}: {e}"
+        return [f"the self-intersection check failed ({type(e).__name__}: {e})"]
+    summary.update(entry)
+    return layers.warnings(entry)
 
 
 def contact_tables(scene: Scene) -> list[dict]:

@@ -1,9 +1,11 @@
 """solidshell: fabric drape with ANS solid-shell elements (Xie, Sze & Zhou, FEAD 106 (2015) 85-102).
 
-Public face (DESIGN.md): ShellMesh, Fabric, IsotropicShell, Model, solve_static, run_scene,
-build_problem.
+Public face (DESIGN.md; ``__all__``): ShellMesh, Fabric, IsotropicShell, Model, solve_static,
+run_scene (-> RunOutput), build_problem (-> Problem), load_scene (-> Scene), available_scenes,
+SolveResult, the errors (InputError, SolverError, IOFailure) and ``__version__``.
 Model (numba kernels), solvers and scene entry points are imported on first use, so ``import
-solidshell`` -- and ``solidshell scenes`` / ``solidshell mesh`` -- stay light.
+solidshell`` -- and ``solidshell scenes`` / ``solidshell mesh`` -- stay light; ``dir(solidshell)``
+lists them all the same.
 """
 
 from .errors import InputError, IOFailure, SolverError
@@ -19,18 +21,31 @@ __all__ = [
     "Model",
     "solve_static",
     "run_scene",
+    "RunOutput",
     "build_problem",
+    "Problem",
+    "SolveResult",
+    "load_scene",
+    "available_scenes",
+    "Scene",
     "InputError",
     "SolverError",
     "IOFailure",
     "__version__",
 ]
 
+# name -> (module, attribute there)
 _LAZY = {
-    "Model": "solidshell.model",
-    "solve_static": "solidshell.solvers.static",
-    "run_scene": "solidshell.run.driver",
-    "build_problem": "solidshell.scenes.build",
+    "Model": ("solidshell.model", "Model"),
+    "solve_static": ("solidshell.solvers.static", "solve_static"),
+    "run_scene": ("solidshell.run.driver", "run_scene"),
+    "RunOutput": ("solidshell.run.driver", "RunOutput"),
+    "build_problem": ("solidshell.scenes.build", "build_problem"),
+    "Problem": ("solidshell.problem", "Problem"),
+    "SolveResult": ("solidshell.problem", "SolveResult"),
+    "load_scene": ("solidshell.scenes", "load"),
+    "available_scenes": ("solidshell.scenes", "available"),
+    "Scene": ("solidshell.scenes", "Scene"),
 }
 
 
@@ -38,5 +53,10 @@ def __getattr__(name):
     if name in _LAZY:
         import importlib
 
-        return getattr(importlib.import_module(_LAZY[name]), name)
+        module, attr = _LAZY[name]
+        return getattr(importlib.import_module(module), attr)
     raise AttributeError(f"module 'solidshell' has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))

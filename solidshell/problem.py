@@ -46,9 +46,9 @@ class Problem:
         return np.flatnonzero(~self.fixed.ravel())
 
 
-@dataclass
+@dataclass(repr=False)
 class SolveResult:
-    """What a solver returns.
+    """What a solver returns (its repr is one line: converged, the state's size and the message).
 
     U         : (N,6) final displacements
     converged : whether the solver met its own convergence / steady-state criterion
@@ -68,6 +68,19 @@ class SolveResult:
     @property
     def path(self) -> list:
         return self.frames
+
+    def __repr__(self) -> str:
+        U = np.asarray(self.U)
+        size = "x".join(map(str, U.shape))
+        umax = ""
+        if U.ndim and U.size and U.size % 6 == 0 and np.all(np.isfinite(U)):
+            umax = f", max |U_o| {float(np.max(np.linalg.norm(U.reshape(-1, 6)[:, :3], axis=1))):.4g}"
+        msg = " ".join(str(self.message or "").split())
+        msg = msg if len(msg) <= 100 else msg[:99] + "..."
+        return (
+            f"<SolveResult {'converged' if self.converged else 'NOT converged'}, U {size}{umax}, "
+            f"{len(self.frames or [])} frame(s), {len(self.info or {})} info keys: {msg!r}>"
+        )
 
 
 Progress = Callable[[float, str], None]

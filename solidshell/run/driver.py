@@ -35,9 +35,11 @@ from .summary import close_summary, describe_run, record_state
 log = logging.getLogger("solidshell")
 
 
-@dataclass
+@dataclass(repr=False)
 class RunOutput:
-    """What :func:`run_scene` returns."""
+    """What :func:`run_scene` returns: ``out.summary`` (the summary.json dict), ``out.U`` (N,6),
+    ``out.mesh`` (the ShellMesh solved on), ``out.run_id``, ``out.converged``, ... .  It also unpacks
+    as ``summary, U, mesh, run_id = run_scene(...)``; its repr is one line (:meth:`__repr__`)."""
 
     summary: dict
     U: np.ndarray
@@ -63,6 +65,36 @@ class RunOutput:
     @property
     def warnings(self) -> list:
         return list(self.summary.get("warnings", []))
+
+    def __iter__(self):
+        """``summary, U, mesh, run_id = out``: the four a script most often wants, in that order."""
+        return iter((self.summary, self.U, self.mesh, self.run_id))
+
+    def __repr__(self) -> str:
+        """One line: scene, solver, mesh and its size, the outcome, the scene's headline figure
+        (DC and folds, or the strip's tip), the run id and the folder -- not the arrays."""
+        s = self.summary or {}
+        c = s.get("counts") or {}
+        size = f"{c.get('nodes', '?')} nodes, {c.get('elements', '?')} elements"
+        if s.get("solver") == "none":
+            outcome = "mesh only"
+        elif s.get("interrupted"):
+            outcome = "interrupted"
+        else:
+            outcome = "converged" if s.get("converged") else "NOT converged"
+        what = "mesh" if s.get("solver") == "none" else f"{s.get('solver', '?')} on"
+        parts = [f"{s.get('scene', '?')}: {what} {s.get('mesh', '?')} ({size})", outcome]
+        dc = s.get("drape_coefficient")
+        if isinstance(dc, (int, float)):
+            parts.append(f"DC {dc:.4g}" + (f", {s['fold_count']} folds" if s.get("fold_count") is not None else ""))
+        tip = s.get("tip_position")
+        if tip is not None and len(tip) == 3:
+            parts.append("tip (" + ", ".join(f"{round(float(v), 3) + 0.0:.3f}" for v in tip) + ") cm")
+        if s.get("warnings"):
+            parts.append(f"{len(s['warnings'])} warning(s)")
+        parts.append(f"run_id {self.run_id[:8]}")
+        parts.append(f"out_dir {str(self.out_dir) if self.out_dir is not None else None}")
+        return f"<RunOutput {', '.join(parts)}>"
 
 
 @dataclass

@@ -63,10 +63,12 @@ def _install_log_handler() -> None:
 
 
 class _Parser(argparse.ArgumentParser):
-    """argparse with usage errors as one line and exit status 2."""
+    """argparse with usage errors as one line and exit status 2.  The line names the subcommand
+    (``solidshell: error: run: argument --solver: ...``); main() prints the one ``solidshell:`` prefix."""
 
     def error(self, message):
-        raise InputError(f"{self.prog}: {message}")
+        sub = self.prog.removeprefix("solidshell").strip()
+        raise InputError(f"{sub}: {message}" if sub else message)
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -275,7 +277,7 @@ def _cmd_sweep(args) -> int:
             print(f"{name}  ({spec.n_runs} runs, scene {spec.scene})  {spec.description}")
         return EXIT_OK
     if not args.sweep:
-        raise InputError("solidshell sweep: give a sweep file or a packaged study name (--list)")
+        raise InputError("sweep: give a sweep file or a packaged study name (--list)")
     from .sweep.engine import require_dask
 
     require_dask()  # before the sweep is parsed: the one thing to install first
@@ -356,7 +358,7 @@ def main(argv=None) -> int:
             return _cmd_bench(args)
         return _cmd_run(args)
     except InputError as e:
-        _say(f"solidshell: error: {e}")
+        _say(f"solidshell: error: {_unprefixed(e)}")
         return EXIT_INPUT
     except tomllib.TOMLDecodeError as e:
         _say(f"solidshell: error: not valid TOML: {e}")
@@ -374,6 +376,14 @@ def main(argv=None) -> int:
     except KeyboardInterrupt:
         _say("solidshell: interrupted; this run's summary.json was not written")
         return EXIT_INTERRUPTED
+
+
+def _unprefixed(e: Exception) -> str:
+    """The error's text without a leading ``solidshell:`` of its own (the line has one already)."""
+    text = str(e).strip()
+    while text.lower().startswith("solidshell:"):
+        text = text[len("solidshell:") :].strip()
+    return text
 
 
 def _say(msg: str) -> None:

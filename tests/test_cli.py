@@ -176,6 +176,29 @@ def test_bad_input_in_process(tmp_path, capsys, bad_files, args, needle):
     _check_one_line(code, err, needle.format(**bad_files), tmp_path / "out")
 
 
+@pytest.mark.parametrize(
+    "argv, line",
+    [
+        (["frobnicate"], "solidshell: error: argument COMMAND: invalid choice: 'frobnicate' (choose from"),
+        (
+            ["run", "sp", "--solver", "implicit"],
+            "solidshell: error: run: argument --solver: invalid choice: 'implicit'",
+        ),
+        (["run"], "solidshell: error: run: the following arguments are required: scene"),
+        (["sweep"], "solidshell: error: sweep: give a sweep file or a packaged study name"),
+    ],
+)
+def test_usage_error_one_prefix(capsys, argv, line):
+    """A usage error says ``solidshell: error:`` once (was ``solidshell: error: solidshell: argument ...``)
+    and names the subcommand it belongs to."""
+    from solidshell.cli import main
+
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(line), err
+    assert err[0].count("solidshell") == 1
+
+
 def test_version_and_help(capsys):
     from solidshell.cli import main
 

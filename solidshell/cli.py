@@ -1,9 +1,10 @@
 """Command line: ``solidshell scenes | mesh | run | sweep | verify | figures | bench`` (also ``python -m solidshell ...``).
 
     solidshell scenes
-    solidshell mesh SCENE [--mesh 48x16x4] [--out DIR] [--force] [--allow-large]
+    solidshell mesh SCENE [--mesh 48x16x4] [--out DIR] [--force] [--allow-large] [-q | -v]
     solidshell run  SCENE [--mesh M] [--solver static|explicit|relax] [--set key=value ...] [--out DIR]
                           [--checkpoint FILE] [--restart FILE] [--no-pictures] [--force] [--allow-large]
+                          [--no-progress] [-q | -v]
     solidshell sweep SWEEP [--scheduler tcp://HOST:PORT] [--workers N] [--threads N] [--out DIR]
                            [--retries N] [--limit N] [--list]     (solidshell.sweep; needs dask)
     solidshell verify [NAME ...] [--quick] [--out DIR] [--list] [--references] [--fenicsx]
@@ -20,7 +21,11 @@ memory against the available memory; ``--allow-large`` to try anyway) or a sheet
 contact body stops the command with one line on stderr and nothing written.  An output folder
 holding files solidshell did not write is refused unless ``--force``; an earlier run's files there
 are replaced once the new run has a result (every file carries the run's ``run_id``).  Warnings
-go to stderr, one line each (logger ``solidshell``), and to summary.json ``warnings``.
+go to stderr, one line each (logger ``solidshell``), and to summary.json ``warnings``.  Progress: a
+bar when stderr is a terminal, else a ``solidshell: progress: ...`` line every 10 s (environment
+variable SOLIDSHELL_PROGRESS_INTERVAL) with the fraction done, time elapsed, ETA and the solver's
+figures; ``--quiet`` prints only errors and one final line, ``-v`` adds the solver's figures and
+timings.
 
 Exit status: 0 done (``run``: converged), 1 the solver did not converge or stopped (the last state
 is written), 2 bad input (one line on stderr, no traceback, nothing written), 3 an I/O failure
@@ -43,23 +48,47 @@ EXIT_OK, EXIT_NOT_CONVERGED, EXIT_INPUT, EXIT_IO, EXIT_INTERRUPTED = 0, 1, 2, 3,
 
 class _StderrLines(logging.Handler):
     """Log records of the "solidshell" logger as ``solidshell: warning: ...`` lines on the stderr of
-    the moment (sys.stderr looked up at each record, so a redirected stderr is honoured)."""
+    the moment (sys.stderr looked up at each record, so a redirected stderr is honoured); the
+    progress lines (logger "solidshell.progress", off a terminal) as ``solidshell: progress: ...``."""
 
     def emit(self, record):
         try:
-            _say(f"solidshell: {record.levelname.lower()}: {record.getMessage()}")
+            kind = "progress" if record.name == PROGRESS_LOGGER else record.levelname.lower()
+            _say(f"solidshell: {kind}: {record.getMessage()}")
         except Exception:  # pragma: no cover - logging must never break a run
             self.handleError(record)
 
 
-_HANDLER = _StderrLines(logging.WARNING)
+class _Verbosity(logging.Filter):
+    """Which records reach stderr: -1 (--quiet) errors only; 0 (default) warnings and errors and
+    the progress lines; 1 (-v) also the library's info lines; 2 (-vv) also its debug lines."""
+
+    level = 0
+
+    def filter(self, record):
+        if record.levelno >= logging.ERROR:
+            return True
+        if self.level < 0:
+            return False
+        if record.levelno >= logging.WARNING or record.name == PROGRESS_LOGGER:
+            return True
+        return record.levelno >= (logging.INFO if self.level == 1 else logging.DEBUG) and self.level >= 1
 
 
-def _install_log_handler() -> None:
+PROGRESS_LOGGER = "solidshell.progress"  # solidshell.run.progress.plog
+_HANDLER = _StderrLines()
+_FILTER = _Verbosity()
+_HANDLER.addFilter(_FILTER)
+
+
+def _install_log_handler(verbosity: int = 0) -> None:
+    """The "solidshell" logger's records on stderr, as many as ``verbosity`` asks (_Verbosity)."""
     log = logging.getLogger("solidshell")
     if _HANDLER not in log.handlers:
         log.addHandler(_HANDLER)
     log.propagate = False  # one line per warning (not a second one from a root handler)
+    _FILTER.level = verbosity
+    log.setLevel(logging.ERROR if verbosity < 0 else logging.INFO if verbosity < 2 else logging.DEBUG)
 
 
 class _Parser(argparse.ArgumentParser):
@@ -118,7 +147,7 @@ def _parser() -> argparse.ArgumentParser:
         help="reversible adaptive 1-to-4 subdivision (paper §5; explicit/relax only), from the "
         "scene's mesh.adaptive_level0 or --mesh; settings: --set adapt.KEY=VALUE",
     )
-    r.add_argument("--no-progress", action="store_true", help="no progress bar")
+    r.add_argument("--no-progress", action="store_true", help="no progress bar or progress lines")
     r.add_argument(
         "--no-pictures",
         action="store_true",
@@ -171,6 +200,21 @@ def _common(p):
     p.add_argument(
         "--allow-large", action="store_true", help="skip the size guard (estimated memory against the available memory)"
     )
+    g = p.add_mutually_exclusive_group()
+    g.add_argument(
+        "-q",
+        "--quiet",
+        action="store_true",
+        help="print nothing but errors and one final line (no progress; warnings only in summary.json)",
+    )
+    g.add_argument(
+        "-v",
+        "--verbose",
+        action="count",
+        default=0,
+        help="more detail: the solver's figures and the timings at the end, the library's info log lines "
+        "(-vv: and its debug lines)",
+    )
 
 
 def _cmd_scenes(args) -> int:
@@ -203,15 +247,19 @@ def _cmd_mesh(args) -> int:
         mesh=args.mesh,
         solver="none",
         out_dir=out_dir,
-        progress=True,
+        progress=not args.quiet,
         overrides=parse_overrides(args.set),
         force=args.force,
         allow_large=args.allow_large,
     )
     c = res.summary["counts"]
+    size = f"{c['nodes']} nodes, {c['quads']} quads, {c['triangles']} triangles"
+    if args.quiet:
+        print(f"{res.summary['scene']}: mesh {res.summary['mesh']}: {size}; wrote {res.out_dir}/")
+        return EXIT_OK
     print(
-        f"{res.summary['scene']}: mesh {res.summary['mesh']}: {c['nodes']} nodes, {c['quads']} quads, "
-        f"{c['triangles']} triangles; node sets: " + ", ".join(f"{k} ({v})" for k, v in c["node_sets"].items())
+        f"{res.summary['scene']}: mesh {res.summary['mesh']}: {size}; node sets: "
+        + ", ".join(f"{k} ({v})" for k, v in c["node_sets"].items())
     )
     print(f"wrote {res.out_dir}/: " + ", ".join(res.summary["files"]))
     return EXIT_OK
@@ -231,7 +279,7 @@ def _cmd_run(args) -> int:
         mesh=args.mesh,
         solver=args.solver,
         out_dir=out_dir,
-        progress=not args.no_progress,
+        progress=not (args.no_progress or args.quiet),
         overrides=overrides,
         force=args.force,
         allow_large=args.allow_large,
@@ -242,6 +290,10 @@ def _cmd_run(args) -> int:
     c = s["counts"]
     status = "INTERRUPTED" if s.get("interrupted") else "converged" if s.get("converged") else "NOT converged"
     line = f"{s['scene']}: {s['solver']} on mesh {s['mesh']} ({c['nodes']} nodes, {c['elements']} elements): {status}"
+    total = s["timings"].get("total", 0.0)
+    if args.quiet:  # one line
+        print(f"{line}; {total:.1f} s; wrote {res.out_dir}/")
+        return _run_status(s)
     if s.get("message"):
         line += f" -- {s['message']}"
     print(line)
@@ -260,10 +312,57 @@ def _cmd_run(args) -> int:
     ]
     if extras:
         print("  " + ", ".join(extras))
-    print(f"  {s['timings'].get('total', 0.0):.1f} s; wrote {res.out_dir}/: " + ", ".join(s["files"]))
+    if args.verbose:
+        for ln in _details(s):
+            print("  " + ln)
+    print(f"  {total:.1f} s; wrote {res.out_dir}/: " + ", ".join(s["files"]))
+    return _run_status(s)
+
+
+def _run_status(s: dict) -> int:
     if s.get("interrupted"):
         return EXIT_INTERRUPTED
     return EXIT_OK if s.get("converged") else EXIT_NOT_CONVERGED
+
+
+# the solver's figures -v prints, when the summary has them
+_DETAIL_KEYS = (
+    "method",
+    "load_steps",
+    "iterations",
+    "linear_solves",
+    "factorizations",
+    "final_relative_residual",
+    "positive_definite",
+    "min_tangent_eigenvalue",
+    "steps",
+    "t_final",
+    "dt",
+    "critical_time_step",
+    "damping",
+    "mass_scaling",
+    "final_kinetic_energy",
+    "energy_balance_error",
+    "element_steps_per_second",
+    "self_intersections",
+    "min_layer_gap",
+    "peak_memory_mb",
+)
+
+
+def _details(s: dict) -> list[str]:
+    """-v: the solver's figures, the timings by phase and the warnings' count."""
+    figs = [
+        f"{k} = {s[k]:.4g}" if isinstance(s[k], float) else f"{k} = {s[k]}"
+        for k in _DETAIL_KEYS
+        if s.get(k) is not None and not isinstance(s[k], (dict, list))
+    ]
+    out = ["solver: " + ", ".join(figs)] if figs else []
+    t = s.get("timings") or {}
+    if t:
+        out.append("timings: " + ", ".join(f"{k} {v:.2f} s" for k, v in t.items()))
+    out.append(f"warnings: {len(s.get('warnings') or [])} (summary.json)")
+    return out
 
 
 def _cmd_sweep(args) -> int:
@@ -340,6 +439,7 @@ def main(argv=None) -> int:
     _install_log_handler()
     try:
         args = _parser().parse_args(argv)
+        _install_log_handler(-1 if getattr(args, "quiet", False) else getattr(args, "verbose", 0) or 0)
         if args.command == "scenes":
             return _cmd_scenes(args)
         if args.command == "mesh":

@@ -1,4 +1,6 @@
-"""A run's progress: a callback(fraction, text) -- the caller's, a tqdm bar on a terminal, or none.
+"""A run's progress: a callback(fraction, text) -- the caller's, a tqdm bar on a terminal, a
+``logging`` line every :data:`INTERVAL` seconds elsewhere (a pipe, a log file, CI, a notebook, a
+Dask worker), or none.
 
 with reporting(progress, "square-pedestal") as cb:
     cb(0.5, "solving")
@@ -6,9 +8,21 @@ with reporting(progress, "square-pedestal") as cb:
 
 from __future__ import annotations
 
+import logging
+import math
+import os
 import sys
 import threading
+import time
 from contextlib import contextmanager
+
+#: seconds of wall time between two progress lines off a terminal (environment variable
+#: SOLIDSHELL_PROGRESS_INTERVAL; read when a run starts, so tests may patch it)
+INTERVAL = float(os.environ.get("SOLIDSHELL_PROGRESS_INTERVAL", "10") or 10)
+
+#: the logger of the progress lines (INFO); the CLI prints them on stderr, a library user sees them
+#: with e.g. ``logging.basicConfig(level=logging.INFO)``
+plog = logging.getLogger("solidshell.progress")
 
 
 class _Bar:
@@ -67,6 +81,67 @@ class _Bar:
             self.bar.close()
 
 
+def duration(seconds: float) -> str:
+    """``4.2 s``, ``42 s``, ``3 min 05 s``, ``1 h 02 min``."""
+    if seconds < 9.95:
+        return f"{max(0.0, seconds):.1f} s"
+    s = int(round(seconds))
+    if s < 60:
+        return f"{s} s"
+    if s < 3600:
+        return f"{s // 60} min {s % 60:02d} s"
+    return f"{s // 3600} h {s % 3600 // 60:02d} min"
+
+
+class _Lines:
+    """progress(fraction, text) as a ``logging`` line on :data:`plog` every ``interval`` seconds of
+    wall time, with the figures the bar shows: the label, the fraction done, the time elapsed, the
+    ETA (from the average rate since the start, as the bar's) and the solver's own text (t, E_kin,
+    residual for the dynamics; load factor and residual for the static solvers).  A ticker thread
+    writes them, so a line comes even while the solver is busy between two calls; a run shorter
+    than ``interval`` logs nothing, a longer one ends with a ``done`` line."""
+
+    def __init__(self, label: str, interval: float | None = None):
+        self.label = label
+        self.interval = max(0.01, float(INTERVAL if interval is None else interval))
+        self.t0 = time.perf_counter()
+        self.frac, self.text, self.lines = 0.0, "", 0
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._tick, name="solidshell-progress-lines", daemon=True)
+        self._thread.start()
+
+    def __call__(self, fraction: float, text: str = "") -> None:
+        try:
+            f = min(max(float(fraction), 0.0), 1.0)
+        except (TypeError, ValueError):
+            return
+        if math.isfinite(f):
+            self.frac = max(self.frac, f)
+        if text:
+            self.text = " ".join(str(text).split())[:200]
+
+    def line(self) -> str:
+        """The line as it would be logged now."""
+        elapsed = time.perf_counter() - self.t0
+        f = self.frac
+        eta = f", ETA {duration(elapsed * (1.0 - f) / f)}" if 0.01 <= f < 1.0 and elapsed >= 1.0 else ""
+        return f"{self.label}: {100.0 * f:3.0f}% after {duration(elapsed)}{eta}" + (
+            f" -- {self.text}" if self.text else ""
+        )
+
+    def _tick(self) -> None:
+        while not self._stop.wait(self.interval):
+            if plog.isEnabledFor(logging.INFO):
+                plog.info(self.line())
+                self.lines += 1
+
+    def close(self) -> None:
+        self._stop.set()
+        self._thread.join(1.0)
+        if self.lines and plog.isEnabledFor(logging.INFO):
+            plog.info(f"{self.label}: done after {duration(time.perf_counter() - self.t0)}")
+
+
 def _is_terminal(stream) -> bool:
     """Whether ``stream`` is an open terminal (a replaced sys.stderr may have no isatty)."""
     try:
@@ -82,12 +157,13 @@ def _phase(cb, lo, hi):
 
 @contextmanager
 def reporting(progress, label: str):
-    """The run's progress callback: ``progress`` itself when callable, a :class:`_Bar` labelled
-    ``label`` when true (closed on leaving), a no-op when false."""
+    """The run's progress callback: ``progress`` itself when callable; when true, a :class:`_Bar`
+    labelled ``label`` if stderr is a terminal, else :class:`_Lines` (closed on leaving); a no-op
+    when false."""
     if callable(progress):
         yield progress
     elif progress:
-        bar = _Bar(label)
+        bar: _Bar | _Lines = _Bar(label) if _is_terminal(sys.stderr) else _Lines(label)
         try:
             yield bar
         finally:

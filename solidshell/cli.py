@@ -25,7 +25,9 @@ go to stderr, one line each (logger ``solidshell``), and to summary.json ``warni
 bar when stderr is a terminal, else a ``solidshell: progress: ...`` line every 10 s (environment
 variable SOLIDSHELL_PROGRESS_INTERVAL) with the fraction done, time elapsed, ETA and the solver's
 figures; ``--quiet`` prints only errors and one final line, ``-v`` adds the solver's figures and
-timings.
+timings.  ``run`` ends with the scene's own figures: a strip's tip deflection against the heavy
+elastica (reference/elastica_strip.json), a drape's DC with its definition and areas, a hung
+sheet's corners.
 
 Exit status: 0 done (``run``: converged), 1 the solver did not converge or stopped (the last state
 is written), 2 bad input (one line on stderr, no traceback, nothing written), 3 an I/O failure
@@ -291,12 +293,16 @@ def _cmd_run(args) -> int:
     status = "INTERRUPTED" if s.get("interrupted") else "converged" if s.get("converged") else "NOT converged"
     line = f"{s['scene']}: {s['solver']} on mesh {s['mesh']} ({c['nodes']} nodes, {c['elements']} elements): {status}"
     total = s["timings"].get("total", 0.0)
+    head = _headline(res)
     if args.quiet:  # one line
-        print(f"{line}; {total:.1f} s; wrote {res.out_dir}/")
+        brief = "".join(f"; {b}" for b, _ in head if b)
+        print(f"{line}{brief}; {total:.1f} s; wrote {res.out_dir}/")
         return _run_status(s)
     if s.get("message"):
         line += f" -- {s['message']}"
     print(line)
+    for _, full in head:
+        print("  " + full)
     extras = [
         f"{k} = {s[k]:.4g}" if isinstance(s[k], float) else f"{k} = {s[k]}"
         for k in (
@@ -317,6 +323,128 @@ def _cmd_run(args) -> int:
             print("  " + ln)
     print(f"  {total:.1f} s; wrote {res.out_dir}/: " + ", ".join(s["files"]))
     return _run_status(s)
+
+
+# ----------------------------------------------------------------------------- each scene's figures
+def _headline(res) -> list[tuple[str, str]]:
+    """What the scene's user wants at the end, as (brief for --quiet, full line) pairs: a strip's tip
+    against the heavy elastica, a drape's DC with its definition and areas, a hung sheet's corners."""
+    s = res.summary
+    if s.get("finite") is False or res.U is None:
+        return []
+    out = []
+    try:
+        if s.get("tip_position") is not None:
+            out.append(_tip_line(res))
+        if s.get("drape_coefficient") is not None:
+            out.append(_dc_line(s))
+        elif not out and s.get("solver") != "none":
+            corners = _corners_line(res)
+            if corners:
+                out.append(corners)
+    except Exception as e:  # the figures must never lose a written run
+        out.append(("", f"(closing figures unavailable: {type(e).__name__}: {e})"))
+    return out
+
+
+def _dc_line(s: dict) -> tuple[str, str]:
+    dc, folds = s["drape_coefficient"], s.get("fold_count")
+    A, As, Ap = s.get("projected_area"), s.get("sheet_area"), s.get("pedestal_area")
+    f = f", {folds} folds" if folds is not None else ""
+    brief = f"DC {dc:.4g}{f}"
+    if not isinstance(A, (int, float)) or not isinstance(As, (int, float)):
+        return brief, f"drape coefficient DC = {dc:.4g}{f}"
+    if isinstance(Ap, (int, float)) and Ap > 0:
+        how = f"(A_projected - A_pedestal)/(A_sheet - A_pedestal) = ({A:.4g} - {Ap:.4g})/({As:.4g} - {Ap:.4g}) cm^2"
+    else:
+        how = f"A_projected/A_sheet = {A:.4g}/{As:.4g} cm^2 (no pedestal)"
+    return brief, f"drape coefficient DC = {dc:.4g} = {how}{f}"
+
+
+def _strip_reference(s: dict) -> tuple[str, dict] | None:
+    """The stored heavy elastica (reference/elastica_strip.json) this strip is, if it is one of them:
+    the strip recipe of the same length under gravity alone, clamped at one end, with the same weight
+    per area and bending rigidity along the strip (warp along it or across it)."""
+    g, m = s.get("geometry") or {}, s.get("material") or {}
+    loads = (s.get("scene_inputs") or {}).get("loads") or {}
+    if (
+        s.get("recipe") != "strip"
+        or not loads.get("gravity")
+        or any(loads.get(k) for k in ("point", "line", "surface"))
+    ):
+        return None
+    if list(loads.get("gravity_direction") or [0, 0, -1]) != [0.0, 0.0, -1.0] or s.get("perturbation"):
+        return None
+    if s.get("supports") != {"clamped": ["clamped"]}:
+        return None
+    angle = float(m.get("warp_angle_deg", 0.0)) % 180.0
+    Cb = m.get("C_b")
+    if Cb is None or not (abs(angle) < 1e-9 or abs(angle - 90.0) < 1e-9):
+        return None
+    B = float(Cb[0][0] if angle < 45.0 else Cb[1][1])
+    import json
+    from importlib import resources
+
+    try:
+        table = json.loads((resources.files("reference") / "elastica_strip.json").read_text())["strip"]
+    except (ImportError, OSError, KeyError, ValueError):
+        return None
+    for cut, ref in table.items():
+        same = [
+            (float(g.get("length", -1.0)), ref["L"]),
+            (B, ref["B"]),
+            (float(m.get("weight_per_area", -1.0)), ref["w"] / ref["width"]),
+        ]
+        if all(abs(a - b) <= 1e-9 * abs(b) for a, b in same):
+            return cut, ref
+    return None
+
+
+def _tip_line(res) -> tuple[str, str]:
+    """The strip's tip deflection (downwards, from its clamped end) [cm], against the heavy elastica
+    when the strip is one of the stored ones."""
+    import numpy as np
+
+    s, mesh = res.summary, res.mesh
+    tip = np.asarray(s["tip_position"], float)
+    clamp = mesh.node_sets.get("clamped") if mesh is not None else None
+    origin = np.asarray(mesh.nodes, float)[clamp].mean(0) if clamp is not None and len(clamp) else np.zeros(3)
+    x, d = tip[0] - origin[0], origin[2] - tip[2]
+    where = f"tip deflection {d:.4g} cm (tip {x:.4g} cm along x from the clamp, {-d:.4g} cm in z)"
+    ref = _strip_reference(s)
+    if ref is None:
+        return f"tip deflection {d:.4g} cm", where + "; no stored reference for this strip"
+    cut, r = ref
+    dr = -float(r["tip_z"])
+    rel = (d - dr) / dr
+    return (
+        f"tip deflection {d:.4g} cm (elastica {dr:.4g}, {rel:+.2%})",
+        f"{where}; heavy elastica ({cut}-cut, reference/elastica_strip.json): {dr:.4g} cm "
+        f"({float(r['tip_x']):.4g} cm along x): {rel:+.2%}",
+    )
+
+
+def _corners_line(res) -> tuple[str, str] | None:
+    """A sheet's corners (node sets corner_sw/se/ne/nw of the square recipe) at the end [cm], the
+    held ones marked."""
+    import numpy as np
+
+    mesh = res.mesh
+    sets = getattr(mesh, "node_sets", None) or {}
+    names = [n for n in ("corner_sw", "corner_se", "corner_ne", "corner_nw") if len(sets.get(n, ())) == 1]
+    if not names:
+        return None
+    fixed = None if res.problem is None else np.asarray(res.problem.fixed, bool).reshape(-1, 6)
+    parts, lowest = [], None
+    for n in names:
+        i = int(sets[n][0])
+        p = np.asarray(mesh.nodes[i], float) + np.asarray(res.U[i, :3], float)
+        held = fixed is not None and i < len(fixed) and bool(fixed[i, :3].all())
+        parts.append(f"{n[7:]} ({', '.join(f'{round(v, 3) + 0.0:.4g}' for v in p)})" + (" held" if held else ""))
+        if not held and (lowest is None or p[2] < lowest):
+            lowest = float(p[2])
+    brief = f"lowest free corner z {lowest:.4g} cm" if lowest is not None else ""
+    return brief, "corners at the end [cm]: " + ", ".join(parts)
 
 
 def _run_status(s: dict) -> int:

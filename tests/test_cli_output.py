@@ -12,6 +12,7 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -150,3 +151,95 @@ def test_duration(seconds, text):
     from solidshell.run.progress import duration
 
     assert duration(seconds) == text
+
+
+# ----------------------------------------------------------------------------- each scene's closing figures
+def _run(capsys, *argv):
+    from solidshell.cli import main
+
+    code = main(["run", *map(str, argv), "--no-pictures", "--no-progress"])
+    return code, capsys.readouterr().out.splitlines()
+
+
+def _elastica(cut):
+    return json.loads((ROOT / "reference" / "elastica_strip.json").read_text())["strip"][cut]
+
+
+def test_strip_prints_tip_against_elastica(tmp_path, capsys):
+    out = tmp_path / "o"
+    code, lines = _run(capsys, "strip-warp", "--mesh", "10x1", "--out", out)
+    assert code == 0 and lines[0].startswith("strip-warp: static on mesh 10x1 (22 nodes, 10 elements): converged")
+    s = json.loads((out / "summary.json").read_text())
+    m = re.fullmatch(
+        r"  tip deflection ([\d.]+) cm \(tip ([\d.]+) cm along x from the clamp, (-[\d.]+) cm in z\); heavy elastica "
+        r"\(warp-cut, reference/elastica_strip.json\): ([\d.]+) cm \(([\d.]+) cm along x\): ([+-][\d.]+)%",
+        lines[1],
+    )
+    assert m, lines
+    d, x, z, dr, xr, rel = map(float, m.groups())
+    ref = _elastica("warp")
+    # the clamp is at x = 0, z = 0: the tip's position is its offset from the clamp
+    assert d == pytest.approx(-s["tip_position"][2], rel=1e-3) and x == pytest.approx(s["tip_position"][0], rel=1e-3)
+    assert z == -d and dr == pytest.approx(-ref["tip_z"], rel=1e-3) and xr == pytest.approx(ref["tip_x"], rel=1e-3)
+    exact = 100 * (-s["tip_position"][2] + ref["tip_z"]) / -ref["tip_z"]
+    assert rel == pytest.approx(exact, abs=0.006) and 0.0 < rel < 1.0  # 10x1: 0.45 % (docs/verification.md)
+    assert lines[2].startswith("  interpenetrated_nodes = 0, max_displacement = ")  # the line parsers read, kept
+    code, lines = _run(capsys, "strip-weft", "--mesh", "10x1", "--out", out, "-q")
+    m = re.search(r"; tip deflection ([\d.]+) cm \(elastica ([\d.]+), ([+-][\d.]+)%\); ", lines[0])
+    assert len(lines) == 1 and m and float(m.group(2)) == pytest.approx(-_elastica("weft")["tip_z"], rel=1e-3)
+
+
+def test_strip_without_reference_says_so(tmp_path, capsys):
+    code, lines = _run(capsys, "strip-warp", "--mesh", "4x1", "--set", "geometry.length=4.0", "--out", tmp_path / "o")
+    assert code == 0 and lines[1].startswith("  tip deflection ") and "no stored reference" in lines[1]
+
+
+def test_pedestal_prints_dc_with_its_definition(tmp_path, capsys):
+    out = tmp_path / "o"
+    code, lines = _run(capsys, "square-pedestal", "--mesh", "24x8x4", "--out", out)
+    s = json.loads((out / "summary.json").read_text())
+    m = re.fullmatch(
+        r"  drape coefficient DC = ([\d.]+) = \(A_projected - A_pedestal\)/\(A_sheet - A_pedestal\) = "
+        r"\(([\d.]+) - ([\d.]+)\)/\(([\d.]+) - ([\d.]+)\) cm\^2, (\d+) folds",
+        lines[1],
+    )
+    assert code == 0 and m, lines
+    dc, A, Ap, As, Ap2, folds = map(float, m.groups())
+    assert Ap == Ap2 == 100.0 and As == 400.0 and (A - Ap) / (As - Ap) == pytest.approx(dc, abs=1e-3)
+    assert dc == pytest.approx(s["drape_coefficient"], abs=1e-4) and folds == s["fold_count"] == 4
+    assert lines[2].startswith(f"  drape_coefficient = {s['drape_coefficient']:.4g}, fold_count = 4")
+
+
+def test_dc_without_pedestal_says_relative_to_what():
+    from solidshell.cli import _dc_line
+
+    brief, full = _dc_line({"drape_coefficient": 0.2387, "fold_count": 4, "projected_area": 214.8,
+                            "sheet_area": 900.0, "pedestal_area": None})  # fmt: skip
+    assert brief == "DC 0.2387, 4 folds"
+    assert full == "drape coefficient DC = 0.2387 = A_projected/A_sheet = 214.8/900 cm^2 (no pedestal), 4 folds"
+
+
+def test_hung_sheet_prints_its_corners(tmp_path, capsys):
+    from solidshell import io as sio
+
+    out = tmp_path / "o"
+    code, lines = _run(capsys, "hang-20", "--mesh", "8x8", "--set", "solver.explicit.t_end=0.3", "--out", out)
+    assert code == 0 and lines[1].startswith("  corners at the end [cm]: "), lines
+    corners = {
+        name: (np.array([float(v) for v in xyz.split(", ")]), held == " held")
+        for name, xyz, held in re.findall(r"(sw|se|ne|nw) \(([^)]*)\)( held)?", lines[1])
+    }
+    assert set(corners) == {"sw", "se", "ne", "nw"}
+    # the hung corners (node set "hung": ne, nw) stay at (+-10, 10, 0); the free ones fell and swung
+    assert corners["ne"][1] and corners["nw"][1] and not corners["sw"][1] and not corners["se"][1]
+    np.testing.assert_allclose(corners["ne"][0], [10, 10, 0], atol=1e-3)
+    np.testing.assert_allclose(corners["nw"][0], [-10, 10, 0], atol=1e-3)
+    mesh, U = sio.read_state(out / "result.vtu")
+    X = mesh.nodes
+    for name in ("sw", "se"):
+        i = int(np.argmin(np.linalg.norm(X - [(-10 if name == "sw" else 10), -10, 0], axis=1)))
+        np.testing.assert_allclose(corners[name][0], X[i] + U[i, :3], rtol=1e-3, atol=1e-3)
+        assert corners[name][0][2] < -10.0
+    assert corners["sw"][0][0] == pytest.approx(-corners["se"][0][0], abs=1e-3)  # a symmetric swing
+    code, lines = _run(capsys, "hang-20", "--mesh", "8x8", "--set", "solver.explicit.t_end=0.3", "--out", out, "-q")
+    assert len(lines) == 1 and f"; lowest free corner z {corners['sw'][0][2]:.4g} cm; " in lines[0]

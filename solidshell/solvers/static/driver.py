@@ -165,7 +165,21 @@ def _setup(model, fixed, loads, prescribed, contact, s):
     if loads.size != 6 * n:
         raise InputError(f"loads must have shape ({n}, 6), got {loads.shape}")
     factorization = resolve_factorization(s.factorization, int(np.count_nonzero(~fixed)))
-    sys = System(model, fixed, loads, prescribed, contact, s.contact_stiffness, factorization, s.contact_face_points)
+    if s.self_contact and s.method != "newton":
+        raise InputError(
+            f"self_contact works with method 'newton' (its step searches keep the layers apart), not {s.method!r}"
+        )
+    sys = System(
+        model,
+        fixed,
+        loads,
+        prescribed,
+        contact,
+        s.contact_stiffness,
+        factorization,
+        s.contact_face_points,
+        s.self_contact,
+    )
     if sys.free.size == 0:
         raise InputError("every dof is fixed: nothing to solve")
     if s.U0 is None:
@@ -251,6 +265,10 @@ def _info(sys, o, s, stats, ok, status, rel, warnings) -> dict:
         "saddle_eigenvalues": saddles,
         "warnings": warnings,
     }
+    if sys.selfc is not None:  # contact_self.py: the barrier's kappa, its evaluations, the steps CCD cut
+        info["self_contact_stiffness"] = sys.selfc.stiffness
+        info["self_contact_evaluations"] = int(sys.selfc.evaluations)
+        info["self_contact_ccd_cuts"] = int(sys.selfc.ccd_cuts)
     if s.method == "newton":
         info["shifted_iterations"] = int(stats["shifted_iterations"])
         info["max_tangent_shift"] = float(stats["max_shift"])
@@ -394,6 +412,7 @@ def _start(sys, D, hist, lam, trial, predict):
             pass
     if len(cands) == 1:
         return cands[0]
+    cands = [cands[0]] + [cd for cd in cands[1:] if sys.step_cut(D, cd) >= 1.0]  # no layers taken through
     pis = [sys.potential_and_gradient(cd, trial)[0] for cd in cands]
     pis = [pi if np.isfinite(pi) and np.all(np.isfinite(cd)) else np.inf for pi, cd in zip(pis, cands)]
     return cands[int(np.argmin(pis))]

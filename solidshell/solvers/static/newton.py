@@ -267,6 +267,21 @@ def _trial(D, alpha, step):
     return D + alpha * step.p + 0.5 * alpha * alpha * step.acc
 
 
+def _free_trial(sys, D, alpha, step):
+    """(alpha, trial point) with the step cut until the straight path from D to the trial point
+    takes no two layers of the sheet through each other (System.step_cut: continuous collision
+    detection of the self-contact; a step is taken unchanged without it).  A curvilinear trial is
+    checked again after each cut, its path being no longer a part of the first one."""
+    Dt = _trial(D, alpha, step)
+    for _ in range(MAX_TRIALS):
+        c = sys.step_cut(D, Dt)
+        if c >= 1.0:
+            break
+        alpha *= c
+        Dt = _trial(D, alpha, step)
+    return alpha, Dt
+
+
 def _trust_step(sys, D, lam, Pi, g, step, o, stats):
     """A 1-D trust region along the (shifted) Newton step, radius in max-norm (kept in
     ``stats["radius"]`` from one iteration and load level to the next).  Model decrease
@@ -280,7 +295,7 @@ def _trust_step(sys, D, lam, Pi, g, step, o, stats):
     radius = max(stats.get("radius", o.radius0), o.radius_min)
     alpha = min(1.0, radius / pmax)
     for _ in range(MAX_TRIALS):
-        Dt = _trial(D, alpha, step)
+        alpha, Dt = _free_trial(sys, D, alpha, step)
         Pit, Gt = sys.potential_and_gradient(Dt, lam)
         if not np.isfinite(Pit):
             alpha *= 0.25
@@ -325,6 +340,8 @@ def _extend(sys, D, lam, step, radius, point, stats):
     alpha, Dt, Pit, Gt = point
     while 2.0 * alpha * step.pmax <= radius:
         D2 = D + 2.0 * alpha * step.p
+        if sys.step_cut(D, D2) < 1.0:
+            break  # the longer step would take layers through each other
         Pi2, G2 = sys.potential_and_gradient(D2, lam)
         if not (np.isfinite(Pi2) and Pi2 < Pit):
             break
@@ -342,7 +359,7 @@ def _armijo_step(sys, D, lam, Pi, g, step, o, stats):
     gnorm = float(np.linalg.norm(g))
     alpha = min(1.0, o.max_step / step.pmax)
     for _ in range(MAX_TRIALS):
-        Dt = _trial(D, alpha, step)
+        alpha, Dt = _free_trial(sys, D, alpha, step)
         Pit, Gt = sys.potential_and_gradient(Dt, lam)
         if not np.isfinite(Pit):
             alpha *= 0.25
@@ -362,7 +379,7 @@ def _full_step(sys, D, lam, Pi, g, step, o, stats):
     Returns (alpha, D, Pi, G) or None."""
     alpha = min(1.0, o.max_step / step.pmax)
     for _ in range(MAX_TRIALS):
-        Dt = _trial(D, alpha, step)
+        alpha, Dt = _free_trial(sys, D, alpha, step)
         Pit, Gt = sys.potential_and_gradient(Dt, lam)
         if np.isfinite(Pit):
             return alpha, Dt, Pit, Gt

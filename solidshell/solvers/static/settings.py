@@ -111,6 +111,11 @@ class StaticSettings(SettingsModel):
         le=MAX_FACE_POINTS,
         description="contact points per element edge inside each element (contact_faces.py; 0: nodes only)",
     )
+    self_contact: bool = Field(
+        False,
+        description="the barrier between the sheet's layers, steps cut by continuous collision detection "
+        "(contact_self.py; method 'newton' only)",
+    )
     contact_augment: int = Field(
         DEFAULT_UPDATES,
         ge=0,

@@ -84,9 +84,11 @@ class System:
         contact_stiffness,
         factorization,
         face_points=DEFAULT_FACE_POINTS,
+        self_contact=False,
     ):
         # factorization: a resolved kind (linear.resolve_factorization); face_points: per element edge
-        # (contact_faces.py, 0: contact on the nodes only)
+        # (contact_faces.py, 0: contact on the nodes only); self_contact: the barrier between the
+        # sheet's layers (contact_self.py; a shell Model only)
         n = model.n_nodes
         self.model = model
         self.n = n
@@ -119,6 +121,14 @@ class System:
             sp = spacing(self.contact, model.material.thickness)
             self.faces = FacePoints(model.mesh, model.nodal_areas(), face_points, sp)
             self.k_faces = self.faces.stiffness(np.full(n, self.k_contact))
+        self.selfc = None
+        if self_contact:
+            if not isinstance(model, Model):
+                raise InputError("self_contact needs a shell Model (its mesh's triangles)")
+            from ...contact_self import SelfContact
+
+            w = float(np.abs(self.P.reshape(n, 6)[:, :3]).max())
+            self.selfc = SelfContact(model.mesh, float(model.material.thickness), max(w, 1e-12))
         self.n_energy = 0
         self.n_tangent = 0
         self.n_solves = 0
@@ -232,7 +242,17 @@ class System:
             ec, fc, _, _ = self._contact(D)
             W += ec
             F = F + fc
+        if self.selfc is not None:
+            es, fs, _ = self.selfc.energy_gradient(D)
+            W += es
+            F = F + fs
         return float(W) - lam * float(np.dot(self.P, D)), F - lam * self.P
+
+    def step_cut(self, D0, D1) -> float:
+        """The factor a trial step D0 -> D1 is cut by so that no two layers cross or come closer
+        than the self-contact's minimum distance (contact_self.SelfContact.cut); 1.0 without
+        self-contact or for a free step."""
+        return 1.0 if self.selfc is None else self.selfc.cut(D0, D1)
 
     def force_tangent(self, D):
         """(F internal (+contact) full vector, K (6N,6N) CSR)."""
@@ -248,6 +268,12 @@ class System:
             Kc = self._contact_matrix(blocks, entries)
             if Kc is not None:
                 K = K + Kc
+        if self.selfc is not None:
+            _, fs, entries = self.selfc.energy_gradient(D, want_tangent=True)
+            F = F + fs
+            Ks = self._contact_matrix([], entries)
+            if Ks is not None:
+                K = K + Ks
         return F, K
 
     def free_tangent(self, D):
@@ -255,7 +281,12 @@ class System:
 
         The tangent is assembled straight into the lower triangle of its free-dof pattern, the
         form CHOLMOD factorises (assembly.FreeLowerPattern): no 6N x 6N matrix, no restriction
-        and no conversion per iteration.  Same values, to the last bit, as ``Kff(force_tangent)``."""
+        and no conversion per iteration.  Same values, to the last bit, as ``Kff(force_tangent)``.
+        With self-contact the barrier couples nodes of elements far apart, outside that pattern: then
+        the 6N x 6N path, its pattern changing with the collision set."""
+        if self.selfc is not None:
+            F, K = self.force_tangent(D)
+            return F, LowerCSC.from_symmetric(self.Kff(K))
         self.n_tangent += 1
         lw = self._lower
         if lw is None:
@@ -269,11 +300,17 @@ class System:
                 pos = lw.node_pos[act]
                 m = pos >= 0
                 np.add.at(data, pos[m], nn[m])
-            if entries and entries[0]:
-                r, c, v = (np.concatenate(a) for a in entries)
-                pos, ok = lw.entry_positions(r, c)
-                np.add.at(data, pos, v[ok])
+            self._add_entries(lw, data, entries)
         return F, LowerCSC(lw.indptr, lw.indices, data, lw.diag_pos, lw)
+
+    @staticmethod
+    def _add_entries(lw, data, entries) -> None:
+        """Add tangent entries (rows, cols, vals) of the 6N x 6N numbering into the free lower
+        pattern's data (entries off the pattern -- fixed dofs, the upper triangle -- dropped)."""
+        if entries and entries[0]:
+            r, c, v = (np.concatenate(a) for a in entries)
+            pos, ok = lw.entry_positions(r, c)
+            np.add.at(data, pos, v[ok])
 
     def ldl(self, A):
         """(solver, number of negative eigenvalues or None) of the symmetric free tangent ``A``:
@@ -505,6 +542,8 @@ def _leave_saddle(sys, D, lam, L_f, step_frac):
         for sgn in (1.0, -1.0):
             Dt = D.copy()
             Dt[f] += sgn * t * v
+            if sys.step_cut(D, Dt) < 1.0:
+                continue  # the escape would take layers through each other
             Pit, _ = sys.potential_and_gradient(Dt, lam)
             if np.isfinite(Pit) and Pit < best - ROUNDOFF * energy_scale(sys, D, lam, Pi0):
                 best, Dbest = Pit, Dt

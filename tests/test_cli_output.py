@@ -44,10 +44,12 @@ def test_piped_run_logs_progress_lines(tmp_path):
     assert len(steps) >= 2 and all(steps), lines
     pct = [int(m.group(1)) for m in steps]
     assert pct == sorted(pct) and 0 <= pct[0] and pct[-1] <= 100  # the fraction never goes back
-    # the explicit solver's figures: simulated time and kinetic energy, the time within the run's span
-    dyn = [re.search(r"t = ([\d.e+-]+) s, E_kin = ([\d.e+-]+)", ln) for ln in lines]
-    ts = [float(m.group(1)) for m in dyn if m]
+    # the explicit solver's figures: step, simulated time and kinetic energy, the time within the run's span
+    dyn = [re.search(r"step (\d+), t = ([\d.e+-]+) s, E_kin = ([\d.e+-]+)", ln) for ln in lines]
+    ts = [float(m.group(2)) for m in dyn if m]
     assert ts and all(0.0 < t <= 0.6 for t in ts) and ts == sorted(ts), lines
+    n = [int(m.group(1)) for m in dyn if m]
+    assert all(k > 0 for k in n) and n == sorted(n), lines  # the step count with the time
     assert any(m.group(3) for m in steps if m.group(4) and "t = " in m.group(4)), "an ETA once the solver runs"
     # the final lines are as before (stdout)
     out = r.stdout.splitlines()

@@ -99,7 +99,7 @@ class Progress:
 
     def report(self, st: RunReadings, step: int, end_step: int, t: float) -> None:
         frac = self.fraction(st, step, end_step)
-        text = f"t = {t:.4g} s, E_kin = {st.last_ekin:.3g}"
+        text = f"step {step}, t = {t:.4g} s, E_kin = {st.last_ekin:.3g}"
         if self.s.relax:
             text += f", residual {st.last_rel_res:.2e}"
         self.t_last = time.perf_counter()

@@ -18,7 +18,8 @@ H = 0.06
 
 def _crossings(x, F) -> int:
     """Brute force: the triangle pairs sharing no node of which an edge of one crosses the other
-    (segment against triangle, Moller-Trumbore on every pair and edge at once), counted once per pair."""
+    (self_check's segment-triangle test on every pair and edge at once, no broad phase), counted
+    once per pair."""
     i, j = np.triu_indices(len(F), 1)
     keep = ~(F[i][:, :, None] == F[j][:, None, :]).any(axis=(1, 2))
     i, j = i[keep], j[keep]
@@ -26,25 +27,8 @@ def _crossings(x, F) -> int:
     for a, b in ((i, j), (j, i)):
         for k in range(3):
             p, q = x[F[a, k]], x[F[a, (k + 1) % 3]]
-            hit |= _segment_hits(p, q, x[F[b, 0]], x[F[b, 1]], x[F[b, 2]])
+            hit |= self_check.segment_hits(p, q, x[F[b, 0]], x[F[b, 1]], x[F[b, 2]])
     return int(np.count_nonzero(hit))
-
-
-def _segment_hits(p, q, a, b, c):
-    """(M,) whether the segments p-q cross the triangles a-b-c (all (M, 3))."""
-    d, e1, e2, t0 = q - p, b - a, c - a, p - a
-    s = np.cross(d, e2)
-    r = np.cross(t0, e1)
-    det = np.einsum("ij,ij->i", e1, s)
-    # a segment (nearly) in the triangle's plane does not cross it: coplanar touching, e.g. clamped
-    # edges on one line, is not an intersection (relative 1e-12: round-off of the triple product)
-    scale = np.linalg.norm(d, axis=1) * np.linalg.norm(e1, axis=1) * np.linalg.norm(e2, axis=1)
-    ok = np.abs(det) > 1e-12 * scale
-    det = np.where(ok, det, 1.0)
-    u = np.einsum("ij,ij->i", t0, s) / det
-    v = np.einsum("ij,ij->i", d, r) / det
-    t = np.einsum("ij,ij->i", e2, r) / det
-    return ok & (u >= 0.0) & (v >= 0.0) & (u + v <= 1.0) & (t >= 0.0) & (t <= 1.0)
 
 
 def _fold(mesh, lift, seed):

@@ -129,6 +129,10 @@ class SelfContact:
             entries = ([6 * (r // 3) + r % 3], [6 * (c // 3) + c % 3], [np.asarray(H.data, float)])
         return e, g, entries
 
+    def active(self, D) -> bool:
+        """Whether some pair of layers lies within h at D (the barrier acts)."""
+        return len(self._collisions(self._V(D))) > 0
+
     def free_fraction(self, D0, D1) -> float:
         """The largest fraction t in [0, 1] of the straight step D0 -> D1 along which no pair comes
         closer than d_min (ipctk.compute_collision_free_stepsize)."""

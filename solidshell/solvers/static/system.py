@@ -284,7 +284,7 @@ class System:
         and no conversion per iteration.  Same values, to the last bit, as ``Kff(force_tangent)``.
         With layers in contact the self-contact barrier couples nodes of elements far apart, outside
         that pattern: then the 6N x 6N path, its pattern changing with the collision set."""
-        if self.selfc is not None and self.selfc.energy_gradient(D, want_tangent=True)[2][0]:
+        if self.selfc is not None and self.selfc.active(D):
             F, K = self.force_tangent(D)
             return F, LowerCSC.from_symmetric(self.Kff(K))
         self.n_tangent += 1

@@ -7,8 +7,8 @@ Reads ``RUN_DIR/result.vtu`` (meshio: the undeformed nodes, the quad / triangle 
 triangles (each quad split along its 0-2 diagonal, as solidshell.layers does) that share no node
 and intersect: a pair intersects exactly when an edge of one crosses the other.  Its own geometry,
 not solidshell's nor the IPC Toolkit's: candidate pairs from a k-d tree on the triangles' centroids
-(scipy.spatial.cKDTree, radius = the largest triangle diameter: two triangles farther apart than
-that cannot meet), each tested segment against triangle by Moller-Trumbore in numpy.
+(scipy.spatial.cKDTree, radius 2 r with r the largest distance of a triangle's corner from its
+centroid: two triangles whose centroids lie farther apart than that cannot meet), each tested segment against triangle by Moller-Trumbore in numpy.
 
 One line per run; exit 0 when no run passes through itself and every summary that states
 ``self_intersections`` states this count, 1 otherwise, 2 for unreadable input.
@@ -52,8 +52,8 @@ def intersecting_pairs(x: np.ndarray, F: np.ndarray) -> np.ndarray:
 
     P = x[F]  # (T, 3, 3)
     cen = P.mean(axis=1)
-    diam = float(np.max(np.linalg.norm(P - np.roll(P, 1, axis=1), axis=2)))
-    pairs = cKDTree(cen).query_pairs(diam, output_type="ndarray")
+    rad = float(np.max(np.linalg.norm(P - cen[:, None], axis=2)))  # every point within rad of its centroid
+    pairs = cKDTree(cen).query_pairs(2.0 * rad, output_type="ndarray")
     if not len(pairs):
         return np.zeros((0, 2), np.int64)
     i, j = pairs[:, 0], pairs[:, 1]

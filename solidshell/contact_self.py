@@ -18,19 +18,18 @@ directors feel no self-contact (as with the rigid bodies).
 
 kappa is set so that the barrier's force at the middle of the band equals the heaviest nodal dead
 load w (``stiffness``): a layer pressed by its own weight rests about halfway into the band.  The
-force at the middle of the band per unit kappa is measured once on two parallel triangles
-(:func:`band_force`), so the rule holds for whatever form ipctk gives b.
+force at the middle of the band per unit kappa is measured once on a small triangle over a large
+one (:func:`band_force`), so the rule holds for whatever form ipctk gives b.
 
 Steps free of crossings: a barrier alone cannot stop a step that jumps a layer through another
 (both ends of the step outside the band).  :meth:`SelfContact.free_fraction` is the largest
-fraction of a straight step D0 -> D1 along which no pair comes closer than d_min (ipctk's
-additive/tight-inclusion CCD); the static solver's step-length searches cut their trial steps to
-it (solvers/static/newton.py). The CCD is ipctk's additive CCD (conservative: the fraction it
-gives is never beyond the true one).  Starting from a state without intersections the iterates then
+fraction of a straight step D0 -> D1 along which no pair comes closer than d_min (ipctk's additive
+CCD: conservative, the fraction it gives is never beyond the true one); the static solver's
+step-length searches cut their trial steps to it (solvers/static/newton.py).  Starting from a state without intersections the iterates then
 never intersect (IPC's guarantee).
 
 Frictionless: friction between layers is not modelled (issue 37 item 1 makes it optional).
-Cost per evaluation: one broad phase (ipctk's hash grid) and the pairs' barrier terms.
+Cost per evaluation: one broad phase (ipctk's LBVH) and the pairs' barrier terms.
 """
 
 from __future__ import annotations
@@ -128,10 +127,6 @@ class SelfContact:
             r, c = np.asarray(H.row, np.int64), np.asarray(H.col, np.int64)
             entries = ([6 * (r // 3) + r % 3], [6 * (c // 3) + c % 3], [np.asarray(H.data, float)])
         return e, g, entries
-
-    def active(self, D) -> bool:
-        """Whether some pair of layers lies within h at D (the barrier acts)."""
-        return len(self._collisions(self._V(D))) > 0
 
     def free_fraction(self, D0, D1) -> float:
         """The largest fraction t in [0, 1] of the straight step D0 -> D1 along which no pair comes

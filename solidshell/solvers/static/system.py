@@ -254,8 +254,9 @@ class System:
         self-contact or for a free step."""
         return 1.0 if self.selfc is None else self.selfc.cut(D0, D1)
 
-    def force_tangent(self, D):
-        """(F internal (+contact) full vector, K (6N,6N) CSR)."""
+    def force_tangent(self, D, self_terms=None):
+        """(F internal (+contact) full vector, K (6N,6N) CSR).  ``self_terms``: the self-contact's
+        energy_gradient(D, want_tangent=True) when the caller has it already."""
         import scipy.sparse as sp
 
         self.n_tangent += 1
@@ -269,7 +270,7 @@ class System:
             if Kc is not None:
                 K = K + Kc
         if self.selfc is not None:
-            _, fs, entries = self.selfc.energy_gradient(D, want_tangent=True)
+            _, fs, entries = self_terms or self.selfc.energy_gradient(D, want_tangent=True)
             F = F + fs
             Ks = self._contact_matrix([], entries)
             if Ks is not None:
@@ -284,9 +285,11 @@ class System:
         and no conversion per iteration.  Same values, to the last bit, as ``Kff(force_tangent)``.
         With layers in contact the self-contact barrier couples nodes of elements far apart, outside
         that pattern: then the 6N x 6N path, its pattern changing with the collision set."""
-        if self.selfc is not None and self.selfc.active(D):
-            F, K = self.force_tangent(D)
-            return F, LowerCSC.from_symmetric(self.Kff(K))
+        if self.selfc is not None:
+            terms = self.selfc.energy_gradient(D, want_tangent=True)
+            if terms[2][0]:  # layers in contact
+                F, K = self.force_tangent(D, terms)
+                return F, LowerCSC.from_symmetric(self.Kff(K))
         self.n_tangent += 1
         lw = self._lower
         if lw is None:

@@ -60,6 +60,35 @@ def test_spacing_from_the_bodies_curvature():
     assert np.all(fp.per_edge == min(8, math.ceil(1.0 / s)))
 
 
+def _face_pass(mesh, fp, bodies, x, kq, shift):
+    """The explicit solver's compiled face_pass on every element and node at node positions x:
+    (energy, points in contact, deepest penetration, Ff (N, 3), fx (n_frictional, N)); fx starts as
+    NaN, so that a load left unset shows."""
+    D = np.zeros(6 * len(x))
+    D.reshape(-1, 6)[:, :3] = x - mesh.nodes
+    n_fric = sum(b.friction > 0.0 for b in bodies)
+    Ff, fx = np.zeros((len(x), 3)), np.full((n_fric, len(x)), np.nan)
+    ec, nact, pen = face_pass(
+        np.array([b.code for b in bodies]),
+        np.array([b.params for b in bodies]),
+        np.array([b.offset for b in bodies]),
+        np.array([b.friction for b in bodies]),
+        np.ascontiguousarray(mesh.nodes),
+        D,
+        np.arange(len(fp.conn4)),
+        fp.estart,
+        fp.nodes,
+        fp.w,
+        kq,
+        np.arange(len(x)),
+        fx,
+        Ff,
+        shift,
+        reach(bodies, shift),
+    )
+    return ec, nact, pen, Ff, fx
+
+
 def test_forces_are_the_gradient_and_both_paths_agree():
     """contact_terms' F is dE/dx (central differences, 1e-6 relative: the FD error of a quadratic
     penalty is round-off), its tangent is symmetric, and the explicit solver's compiled face_pass
@@ -85,27 +114,7 @@ def test_forces_are_the_gradient_and_both_paths_agree():
 
     K = sp.coo_matrix((np.concatenate(v), (np.concatenate(r), np.concatenate(c))), shape=(6 * len(x),) * 2).toarray()
     assert np.abs(K - K.T).max() < 1e-14 * np.abs(K).max()
-    D = np.zeros(6 * len(x))
-    D.reshape(-1, 6)[:, :3] = x - mesh.nodes
-    Ff, fx = np.zeros((len(x), 3)), np.zeros((0, len(x)))
-    ec, nact, pen = face_pass(
-        np.array([body.code]),
-        np.array([body.params]),
-        np.array([body.offset]),
-        np.zeros(1),
-        np.ascontiguousarray(mesh.nodes),
-        D,
-        np.arange(len(fp.conn4)),
-        fp.estart,
-        fp.nodes,
-        fp.w,
-        kq,
-        np.arange(len(x)),
-        fx,
-        Ff,
-        np.zeros((0, 0)),
-        reach([body], np.zeros((0, 0))),
-    )
+    ec, nact, pen, Ff, _ = _face_pass(mesh, fp, [body], x, kq, np.zeros((0, 0)))
     assert ec == pytest.approx(e, rel=1e-12) and nact > 0
     np.testing.assert_allclose(Ff, -F, rtol=0, atol=1e-12 * np.abs(F).max())
     assert pen == pytest.approx(-np.min(body.penetration(fp.positions(x))[0]), rel=1e-12)
@@ -141,27 +150,7 @@ def test_the_compiled_pass_skips_far_elements_exactly():
     gaps = np.array([b.penetration(xq)[0] - s for b, s in zip(bodies, shift)])
     fx_ref = np.zeros(len(x))  # the frictional body's normal loads sum_q N_a k_q p_q
     np.add.at(fx_ref, fp.nodes.ravel(), (fp.w * (kq * np.maximum(-gaps[0], 0.0))[:, None]).ravel())
-    D = np.zeros(6 * len(x))
-    D.reshape(-1, 6)[:, :3] = x - mesh.nodes
-    Ff, fx = np.zeros((len(x), 3)), np.full((1, len(x)), np.nan)
-    ec, nact, pen = face_pass(
-        np.array([b.code for b in bodies]),
-        np.array([b.params for b in bodies]),
-        np.array([b.offset for b in bodies]),
-        np.array([b.friction for b in bodies]),
-        np.ascontiguousarray(mesh.nodes),
-        D,
-        np.arange(len(fp.conn4)),
-        fp.estart,
-        fp.nodes,
-        fp.w,
-        kq,
-        np.arange(len(x)),
-        fx,
-        Ff,
-        shift,
-        reach(bodies, shift),
-    )
+    ec, nact, pen, Ff, fx = _face_pass(mesh, fp, bodies, x, kq, shift)
     assert nact == np.count_nonzero(gaps < 0.0) > 0
     assert np.count_nonzero((gaps < 1.0).any(axis=0)) < len(fp) / 2  # most points far: the skip is exercised
     assert ec == pytest.approx(e, rel=1e-12)

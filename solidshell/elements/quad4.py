@@ -233,6 +233,16 @@ def _assumed_membrane(Xo, Cm_gp, Jw):
     W_g F_g is the rigidity on them (F_g: the field at Gauss point g, W_g: Cartesian to natural
     strains there), from the natural-strain rigidities Cm_gp (M,4,3,3) = T^T C_m T J_o w at the
     Gauss points.  The rigidity on the 22 raw strains is P^T C5 P: of rank 5."""
+    P, WF = assumed_membrane_field(Xo, Jw)
+    C5 = _sum_gauss_quadratic(WF, Cm_gp)
+    return P, 0.5 * (C5 + np.swapaxes(C5, 1, 2))
+
+
+def assumed_membrane_field(Xo, Jw):
+    """The assumed membrane field's geometry of quads with initial positions Xo (M,4,3) and J_o w
+    Jw (M,4): P (M,5,22), the five parameters from the 22 raw strains, and W F (M,4,3,5), the
+    natural membrane strains at the Gauss points from the parameters -- so the natural strains at
+    Gauss point g are (W F)_g P (raw - raw_ref) (solidshell/fields.py reads them out this way)."""
     M = len(Xo)
     A1c = np.einsum("i,mic->mc", _DC[:, 0], Xo)  # centre tangents
     A2c = np.einsum("i,mic->mc", _DC[:, 1], Xo)
@@ -288,8 +298,7 @@ def _assumed_membrane(Xo, Cm_gp, Jw):
     F[:, :, 0, 0] = F[:, :, 1, 1] = F[:, :, 2, 2] = 1.0
     F[:, :, 0, 3] = GAUSS[None, :, 1] - eta_c[:, None]
     F[:, :, 1, 4] = GAUSS[None, :, 0] - xi_c[:, None]
-    C5 = _sum_gauss_quadratic(W @ F, Cm_gp)
-    return P, 0.5 * (C5 + np.swapaxes(C5, 1, 2))
+    return P, W @ F
 
 
 def dense_membrane(Xo, c, C_m):

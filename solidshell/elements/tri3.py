@@ -57,12 +57,28 @@ def bending_raw_strains(xo, xn):
     return _bending_raw(xo[:, 1] - xo[:, 0], xo[:, 2] - xo[:, 0], xn[:, 1] - xn[:, 0], xn[:, 2] - xn[:, 0])[:, None, :]
 
 
+def shear_map(Xo, ex, ey):
+    """(M,3,2,3): the Cartesian transverse shears (gamma_zx, gamma_zy) at the three Gauss points
+    from the three tying values (Eqs. 13-14) of triangles with initial positions Xo (M,3,3) in the
+    local frame (ex, ey) (M,3)."""
+    M = len(Xo)
+    # Eq. (13): Cartesian shear at node k from the two tying values of the edges meeting there
+    d = np.einsum("ti,mic->mtc", ALPHA, Xo)  # edge tangents d_r, d_s, d_t
+    dl = np.stack([np.sum(d * ex[:, None], -1), np.sum(d * ey[:, None], -1)], -1)  # (M,3,2)
+    G = np.zeros((M, 3, 2, 3))  # node k: (2 x 3 tying values)
+    for k, (p, q) in enumerate(_PAIRS):  # three fixed nodes, not a mesh loop
+        Mk = np.stack([dl[:, p], dl[:, q]], 1)  # rows: the two edge tangents
+        inv = np.linalg.inv(Mk)
+        G[:, k, :, p] += inv[:, :, 0]
+        G[:, k, :, q] += inv[:, :, 1]
+    return np.einsum("gk,mkat->mgat", GAUSS_RST, G)  # Eq. (14) at the Gauss points
+
+
 def precompute(Xo, Xn, C_m, C_b, C_t, E_z, warp_angle, membrane="full"):
     """Fold Eqs. (6)-(8), (13)-(14) into per-element constants for triangles, initial (M,3,3) Xo, Xn.
 
     ``membrane`` is accepted for symmetry with quad4 and ignored: the linear triangle's membrane
     strain is constant and depends only on its edge lengths, so it has no membrane locking to cure."""
-    M = len(Xo)
     A1 = Xo[:, 1] - Xo[:, 0]
     A2 = Xo[:, 2] - Xo[:, 0]
     Xn_g = np.einsum("gi,mic->mgc", GAUSS_RST, Xn)
@@ -74,16 +90,7 @@ def precompute(Xo, Xn, C_m, C_b, C_t, E_z, warp_angle, membrane="full"):
     _, T = covariant_maps(A1, A2, ex, ey)
     Jsum = Jw.sum(1)
     Cmb = np.stack([fold(T, C_m, Jsum), fold(T, C_b, Jsum)], axis=1)[:, None]  # (M,1,2,3,3)
-    # Eq. (13): Cartesian shear at node k from the two tying values of the edges meeting there
-    d = np.einsum("ti,mic->mtc", ALPHA, Xo)  # edge tangents d_r, d_s, d_t
-    dl = np.stack([np.sum(d * ex[:, None], -1), np.sum(d * ey[:, None], -1)], -1)  # (M,3,2)
-    G = np.zeros((M, 3, 2, 3))  # node k: (2 x 3 tying values)
-    for k, (p, q) in enumerate(_PAIRS):  # three fixed nodes, not a mesh loop
-        Mk = np.stack([dl[:, p], dl[:, q]], 1)  # rows: the two edge tangents
-        inv = np.linalg.inv(Mk)
-        G[:, k, :, p] += inv[:, :, 0]
-        G[:, k, :, q] += inv[:, :, 1]
-    Gg = np.einsum("gk,mkat->mgat", GAUSS_RST, G)  # Eq. (14) at the Gauss points
+    Gg = shear_map(Xo, ex, ey)
     Cs = np.einsum("mgat,ab,mgbu,mg->mtu", Gg, C_t, Gg, Jw)
     Cz = E_z * np.einsum("gi,gj,mg->mij", GAUSS_RST, GAUSS_RST, Jw)
     r_mb, r_s, r_z = raw_strains(Xo, Xn)

@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import MISSING, dataclass, field, fields
-from typing import Any
 
 import numpy as np
 
@@ -117,20 +116,11 @@ class Fabric:
 
     @classmethod
     def wool(cls, **overrides) -> "Fabric":
-        """The wool fabric of Table 1 (Kang & Yu [10]), gf-cm-s units; keywords override fields."""
-        data: dict[str, Any] = dict(
-            tensile_warp=1118.2,
-            tensile_weft=759.5,
-            shear=41.8,
-            bending_warp=0.083,
-            bending_weft=0.063,
-            torsion=0.027,
-            weight=0.019,
-            thickness=0.0593,
-            name="wool",
-        )
-        data.update(overrides)
-        return cls(**data)
+        """The wool fabric of Table 1 (Kang & Yu [10]), gf-cm-s units; keywords override fields.
+        Its numbers live in the fabric library (solidshell/fabrics.toml, entry "wool")."""
+        from .fabrics import fabric  # the library builds Fabrics: imported here, not at the top
+
+        return fabric("wool", **overrides)
 
     @property
     def tensile_mean(self) -> float:

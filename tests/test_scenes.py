@@ -31,8 +31,13 @@ def expected_counts(recipe, density):
     return (n[0] + 1) * n[1], n[0] * n[1]  # R radial/outward x C around (closed ring)
 
 
-def test_available_is_the_paper_set():
-    assert scenes.available() == PAPER_SCENES
+EXAMPLE_SCENES = ["drape-tester"]
+
+
+def test_available_is_the_paper_set_and_the_examples():
+    assert sorted(p.stem for p in scenes.SCENE_DIR.glob("*.toml")) == PAPER_SCENES
+    assert set(EXAMPLE_SCENES) <= {p.stem for p in scenes.EXAMPLE_DIR.glob("*.toml")}
+    assert set(PAPER_SCENES) | set(EXAMPLE_SCENES) <= set(scenes.available())
 
 
 @pytest.mark.parametrize("name", PAPER_SCENES)

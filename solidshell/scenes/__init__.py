@@ -141,10 +141,16 @@ __all__ = [
     "parse_overrides",
     "parse_value",
     "SCENE_DIR",
+    "EXAMPLE_DIR",
     "FABRICS",
 ]
 
 SCENE_DIR = Path(__file__).with_name("paper")
+"""The paper's scenes (Sections 3, 4 and 6), each loadable by its file name."""
+EXAMPLE_DIR = Path(__file__).with_name("examples")
+"""Scenes beyond the paper (e.g. the drape tester), loadable by name like the paper's; a name is
+unique across both folders."""
+_SCENE_DIRS = (SCENE_DIR, EXAMPLE_DIR)
 
 
 @dataclass(frozen=True)
@@ -276,8 +282,13 @@ class Scene:
 
 # --------------------------------------------------------------------------- loading
 def available() -> list[str]:
-    """Names of the scenes shipped with the package, sorted."""
-    return sorted(p.stem for p in SCENE_DIR.glob("*.toml"))
+    """Names of the scenes shipped with the package (the paper's and the examples), sorted."""
+    return sorted({p.stem for d in _SCENE_DIRS for p in d.glob("*.toml")})
+
+
+def _builtin(name: str) -> Path | None:
+    """The packaged scene file of ``name`` (paper folder first), or None."""
+    return next((d / f"{name}.toml" for d in _SCENE_DIRS if (d / f"{name}.toml").is_file()), None)
 
 
 def read_toml(path: Path) -> dict:
@@ -300,9 +311,9 @@ def load(name_or_path) -> Scene:
         return name_or_path
     s = str(name_or_path)
     p = Path(s)
-    builtin = SCENE_DIR / f"{s}.toml"
+    builtin = _builtin(s)
     if "/" not in s and "\\" not in s and not s.endswith(".toml"):
-        if not builtin.is_file():
+        if builtin is None:
             raise InputError(
                 f"unknown scene {s!r}; available: {', '.join(available())} (or give the path of a .toml scene file)"
             )
@@ -311,6 +322,6 @@ def load(name_or_path) -> Scene:
         raise InputError(f"scene file not found: {p}")
     data = read_toml(p)
     scene = Scene.from_dict(data, source=str(p), base_dir=p.resolve().parent)
-    if p.parent.resolve() == SCENE_DIR.resolve() and scene.name != p.stem:
+    if any(p.parent.resolve() == d.resolve() for d in _SCENE_DIRS) and scene.name != p.stem:
         raise InputError(f"{p}: name {scene.name!r} differs from the file name {p.stem!r}")
     return scene

@@ -58,6 +58,11 @@ def apply(raw: dict, overrides: dict) -> dict:
         for k in ("density", "paper_meshes", "adaptive_level0"):
             if f"mesh.{k}" not in overrides:
                 raw.get("mesh", {}).pop(k, None)
+    # a fabric is named (material.fabric) or given by its KES data (material.kes): setting one
+    # replaces the other the file gave; setting both is the schema's error
+    kes = any(k == "material.kes" or k.startswith("material.kes.") for k in overrides)
+    if kes != ("material.fabric" in overrides) and isinstance(raw.get("material"), dict):
+        raw["material"].pop("fabric" if kes else "kes", None)
     return raw
 
 

@@ -30,7 +30,7 @@ from pydantic import (
     model_validator,
 )
 
-from .. import meshing
+from .. import fabrics, meshing
 from ..elements import THICKNESS_STRAINS
 from ..elements.quad4 import MEMBRANES
 from ..errors import InputError
@@ -51,8 +51,9 @@ __all__ = [
     "resolve_bodies",
 ]
 
-FABRICS = {"wool": Fabric.wool}
-"""Named fabrics a scene's ``material.fabric`` may start from (Table 1)."""
+FABRICS = {name: (lambda n: lambda **kw: fabrics.fabric(n, **kw))(name) for name in fabrics.names()}
+"""Named fabrics a scene's ``material.fabric`` may start from: the fabric library
+(solidshell/fabrics.toml; ``solidshell fabrics`` lists it), each a callable taking field overrides."""
 RECIPES = {k: r for k, r in meshing.RECIPES.items() if r.form is not None}  # from_file: geometry.file
 PEDESTAL_RECIPES = {
     "square_on_square": ("square", "size", "pedestal"),
@@ -376,10 +377,15 @@ class MeshTable(Table):
 
 
 def make_material(material: dict):
-    """The Fabric or IsotropicShell of a scene's material dict."""
+    """The Fabric or IsotropicShell of a scene's material dict: a library fabric (``fabric``), a
+    fabric from KES-FB data (``kes``, solidshell.fabrics.from_kes) or an isotropic shell; the other
+    keys override Fabric fields."""
     if "isotropic" in material:
         return IsotropicShell(**material["isotropic"])
-    return FABRICS[material["fabric"]](**{k: v for k, v in material.items() if k != "fabric"})
+    rest = {k: v for k, v in material.items() if k not in ("fabric", "kes")}
+    if "kes" in material:
+        return Fabric(**{**fabrics.from_kes(material["kes"]), "name": "kes", **rest})
+    return FABRICS[material["fabric"]](**rest)
 
 
 class _Section(Table):
@@ -388,7 +394,8 @@ class _Section(Table):
         try:  # built once so that zero/negative rigidities are reported now, with the file
             make_material(self.given())
         except InputError as e:
-            raise Bad("", str(e)) from None
+            key, _, msg = str(e).partition(": ") if str(e).startswith("kes.") else ("", "", str(e))
+            raise Bad(key, msg) from None
         return self
 
 
@@ -406,6 +413,40 @@ IsotropicTable = create_model(
 )
 
 
+def _kes_value(key: str):
+    def check(v):
+        try:
+            return fabrics.check_kes_value(key, v)
+        except InputError as e:
+            raise ValueError(str(e).removeprefix(f"kes.{key}: ")) from None
+
+    return Annotated[float, PlainValidator(check)]
+
+
+KesTable = create_model("KesTable", __base__=Table, **{k: (Optional[_kes_value(k)], None) for k in fabrics.KES_KEYS})
+
+
+class _KesSection(_Section):
+    """[material] kes = {...}: a fabric from its KES-FB data (solidshell.fabrics), Fabric fields after."""
+
+    kes: KesTable
+
+    @model_validator(mode="before")
+    @classmethod
+    def _not_both(cls, data):
+        if isinstance(data, dict) and "fabric" in data:
+            raise Bad("fabric", "give either fabric (a library name) or kes (measured KES data), not both")
+        return data
+
+    def given(self) -> dict:
+        return {**{k: v for k, v in super().given().items() if k != "kes"}, "kes": self.kes.given()}
+
+
+KesMaterial = create_model(
+    "KesMaterial", __base__=_KesSection, name=(Optional[Str], None), **{k: (Optional[Num], None) for k in FABRIC_FIELDS}
+)
+
+
 class IsotropicMaterial(_Section):
     isotropic: IsotropicTable
 
@@ -414,11 +455,11 @@ class IsotropicMaterial(_Section):
 
 
 Material = _tagged(
-    {"fabric": FabricMaterial, "isotropic": IsotropicMaterial},
-    lambda d: "isotropic" if "isotropic" in d else "fabric",
+    {"fabric": FabricMaterial, "kes": KesMaterial, "isotropic": IsotropicMaterial},
+    lambda d: "isotropic" if "isotropic" in d else "kes" if "kes" in d else "fabric",
     key="fabric",
     what="material",
-    known="fabric, isotropic",
+    known="fabric, kes, isotropic",
     missing="",
 )
 

@@ -1,6 +1,7 @@
-"""Command line: ``solidshell scenes | mesh | run | sweep | verify | figures | bench`` (also ``python -m solidshell ...``).
+"""Command line: ``solidshell scenes | fabrics | mesh | run | sweep | verify | figures | bench`` (also ``python -m solidshell ...``).
 
     solidshell scenes
+    solidshell fabrics                          (the fabric library: solidshell/fabrics.toml)
     solidshell mesh SCENE [--mesh 48x16x4] [--out DIR] [--force] [--allow-large] [-q | -v]
     solidshell run  SCENE [--mesh M] [--solver static|explicit|relax] [--set key=value ...] [--out DIR]
                           [--checkpoint FILE] [--restart FILE] [--no-pictures] [--force] [--allow-large]
@@ -115,6 +116,7 @@ def _parser() -> argparse.ArgumentParser:
     sub.required = True
 
     sub.add_parser("scenes", help="list the packaged scenes (name, paper section, default mesh, title)")
+    sub.add_parser("fabrics", help="list the fabric library (B, G, W, T, tensile rigidity, measured DC; sources)")
 
     m = sub.add_parser("mesh", help="build a scene's mesh and write it with pictures and a summary")
     m.add_argument("scene", help="scene name or path of a .toml scene file")
@@ -570,6 +572,11 @@ def main(argv=None) -> int:
         _install_log_handler(-1 if getattr(args, "quiet", False) else getattr(args, "verbose", 0) or 0)
         if args.command == "scenes":
             return _cmd_scenes(args)
+        if args.command == "fabrics":
+            from .fabrics import listing
+
+            print("\n".join(listing()))
+            return EXIT_OK
         if args.command == "mesh":
             return _cmd_mesh(args)
         if args.command == "sweep":

@@ -289,3 +289,40 @@ def fabric(name: str, **overrides) -> Fabric:
     if name not in lib:
         raise InputError(f"unknown fabric {name!r} (known: {', '.join(lib)})")
     return lib[name].fabric(**overrides)
+
+
+# --------------------------------------------------------------------------- listings (solidshell fabrics)
+def listing() -> list[str]:
+    """The lines ``solidshell fabrics`` prints: one row per fabric in KES units, then the sources."""
+    head = ("name", "B warp/weft", "G", "shear", "W", "T", "tensile warp/weft", "torsion", "DC measured")
+    units = ("", "gf*cm^2/cm", "gf/(cm*deg)", "gf/cm", "mg/cm^2", "mm", "gf/cm", "gf*cm^2/cm", "")
+    rows = [head, units]
+    for f in library().values():
+        k = to_kes(f.fabric())
+        dc = f"{f.drape['dc']:.3g}" if "dc" in f.drape else "-"
+        rows.append(
+            (
+                f.name,
+                f"{k['B_warp']:.4g} / {k['B_weft']:.4g}",
+                f"{k['G']:.4g}",
+                f"{f.fields['shear']:.4g}",
+                f"{k['W']:.4g}",
+                f"{k['T']:.4g}",
+                f"{k['tensile_warp']:.5g} / {k['tensile_weft']:.5g}",
+                f"{k['torsion']:.4g}",
+                dc,
+            )
+        )
+    w = [max(len(r[i]) for r in rows) for i in range(len(head))]
+    lines = ["  ".join(f"{c:<{w[i]}}" for i, c in enumerate(r)).rstrip() for r in rows]
+    lines.append("")
+    for f in library().values():
+        lines.append(
+            f"{f.name}: {f.title}; as published ({f.kind}): "
+            + ", ".join(f"{k} = {v:g}" for k, v in f.published.items())
+        )
+        lines.append(f"  source: {f.source}")
+        lines.append(f"  where: {f.table}")
+        if f.note:
+            lines.append(f"  note: {f.note}")
+    return lines

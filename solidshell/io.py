@@ -193,14 +193,52 @@ def _fields(mesh, U=None) -> dict:
     }
 
 
-def write_mesh_file(path, mesh, U=None, deformed: bool = False, run_id: str | None = None) -> Path:
+def _with_fields(m, mesh, fields, patches):
+    """The meshio mesh ``m`` with the state's fields: point and cell data (solidshell.fields), and
+    the clamped patches (fields.clamped_patches) as one polygon cell each, where every cell field
+    is 0 and ``clamped_part`` 1 (the solver's elements 0)."""
+    import meshio
+
+    point, cell = fields if fields is not None else ({}, {})
+    for k, v in point.items():
+        m.point_data[k] = _plain(v)
+    blocks = [len(mesh.quads)] * bool(len(mesh.quads)) + [len(mesh.tris)] * bool(len(mesh.tris))
+    cell = dict(cell)
+    if patches:
+        cell["clamped_part"] = np.zeros(mesh.n_elements, dtype=np.int32)
+    for k, v in cell.items():
+        v = _plain(v)
+        parts = np.split(v, np.cumsum(blocks)[:-1]) if len(blocks) > 1 else [v]
+        m.cell_data[k] = parts + [
+            np.full((1,) + v.shape[1:], 1 if k == "clamped_part" else 0, dtype=v.dtype) for _ in patches
+        ]
+    for lp in patches:
+        m.cells.append(meshio.CellBlock("polygon", np.asarray(lp, dtype=np.int64)[None, :]))
+    return m
+
+
+def _plain(v) -> np.ndarray:
+    """A field as meshio's writers take it: float64, or int32 for integer and boolean flags."""
+    v = np.asarray(v)
+    return np.ascontiguousarray(v, dtype=np.int32 if v.dtype.kind in "biu" else np.float64)
+
+
+def write_mesh_file(
+    path, mesh, U=None, deformed: bool = False, run_id: str | None = None, fields=None, patches=()
+) -> Path:
     """Write the mesh (and the state U, if given) with meshio; the format comes from the suffix
     (.xdmf -> XDMF with inline XML data, .vtu -> VTU).  ``deformed`` puts the points at X_o + U_o;
-    ``run_id`` is stamped into the file (:func:`stamp_xml`)."""
+    ``run_id`` is stamped into the file (:func:`stamp_xml`).  ``fields``: (point data, cell data)
+    of the state (solidshell.fields.state_fields); ``patches``: node loops of the sheet's clamped,
+    unmeshed parts (fields.clamped_patches), written as polygon cells in VTU files only (meshio's
+    XDMF has no polygon cell)."""
     import meshio
 
     path = Path(path)
     m = mesh.to_meshio(point_data=_fields(mesh, U))
+    vtu = path.suffix.lower() == ".vtu"
+    if fields is not None or (patches and vtu):
+        m = _with_fields(m, mesh, fields, list(patches) if vtu else [])
     if deformed and U is not None:
         m.points = m.points + np.asarray(U, float).reshape(-1, 6)[:, :3]
     # meshio's XDMF writer wants float/int data only; sets are int32 already
@@ -392,18 +430,20 @@ def series_frame_paths(path, n: int) -> list[Path]:
     return [path.with_name(f"{path.stem}_{i:05d}.vtu") for i in range(n)]
 
 
-def write_mesh_series(path, frames, run_id: str | None = None) -> Path:
+def write_mesh_series(path, frames, run_id: str | None = None, fields_of=None) -> Path:
     """ParaView collection (``.pvd``) of ``frames`` = [(t, ShellMesh, U (N,6)), ...] whose meshes may
     differ from frame to frame (an adaptive run): one VTU per frame beside the .pvd
     (:func:`series_frame_paths`), each with its undeformed mesh and the ``displacement`` /
     ``director_displacement`` fields (in ParaView, Warp By Vector on ``displacement`` shows the
-    drape); the .pvd is written last, atomically."""
+    drape); the .pvd is written last, atomically.  ``fields_of(t, mesh, U) -> (fields, patches)``
+    adds each frame's fields and clamped patches (:func:`write_mesh_file`)."""
     from xml.sax.saxutils import quoteattr
 
     path = Path(path)
     rows = []
     for p, (t, mesh, U) in zip(series_frame_paths(path, len(frames)), frames):
-        write_mesh_file(p, mesh, U, run_id=run_id)
+        fields, patches = fields_of(t, mesh, U) if fields_of is not None else (None, ())
+        write_mesh_file(p, mesh, U, run_id=run_id, fields=fields, patches=patches)
         rows.append(f'    <DataSet timestep="{float(t)!r}" part="0" file={quoteattr(p.name)}/>\n')
     with atomic_path(path) as tmp:
         with open(tmp, "w", encoding="utf-8") as f:

@@ -84,6 +84,9 @@ class ShellMesh:
         self.node_sets = {}
         for k, v in (node_sets or {}).items():
             self.add_node_set(k, v)
+        # per-element labels written with the run's fields (quads, then triangles), e.g. an
+        # adaptive mesh's refinement level (adapt/forest.py, solidshell/fields.py)
+        self.cell_tags: dict[str, np.ndarray] = {}
         if check:
             self.validate()
 

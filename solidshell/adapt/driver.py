@@ -118,6 +118,10 @@ class AdaptiveRun:
         self.frozen = None  # (t, step) at which adapt.freeze_leaves stopped the passes
         self.integ = None
         self.restart_path = restart
+        # the step whose pass was last looked at (-1: none).  Checkpoints are written inside
+        # Integrator.advance, before the driver looks at that step's pass: a restart at a pass step
+        # the checkpoint did not look at takes that look first, as the uninterrupted run did
+        self.looked = -1
 
     # ------------------------------------------------------------------ start / restart
     def _problem(self, act: ActiveMesh):
@@ -126,7 +130,11 @@ class AdaptiveRun:
         if self.adapt.coarse_membrane == "scene":
             return self.make_problem(act.mesh)
         nq = len(act.mesh.quads)
-        return self.make_problem(act.mesh, coarse_quads=act.elem_leaf[:nq, 0] < self.adapt.levels)
+        coarse = act.elem_leaf[:nq, 0] < self.adapt.levels
+        ans = np.zeros(act.mesh.n_elements, dtype=np.int8)
+        ans[:nq] = coarse
+        act.mesh.cell_tags["assumed_membrane"] = ans  # written with the fields (solidshell/fields.py)
+        return self.make_problem(act.mesh, coarse_quads=coarse)
 
     def start(self) -> None:
         act = self.forest.active_mesh()
@@ -164,6 +172,8 @@ class AdaptiveRun:
             g[:] = np.asarray(extra.get(f"{_STATE_PREFIX}guard_{l}", g), dtype=bool)
         phases = np.asarray(extra.get(_STATE_PREFIX + "phase_seconds", np.zeros(len(_PHASES))), dtype=float)
         self.phase_seconds = dict(zip(_PHASES, map(float, phases)))
+        # a checkpoint without it (written before the key) was written inside advance: not looked at
+        self.looked = int(np.asarray(extra.get(_STATE_PREFIX + "looked", -1)))
         frozen = np.asarray(extra.get(_STATE_PREFIX + "frozen", np.zeros(0)), dtype=float)
         counters = np.asarray(extra.get(_STATE_PREFIX + "counters", np.zeros(3)), dtype=np.int64)
         self.settle_failures, self.new_node_fallbacks, self.pushed_out = map(int, counters)
@@ -222,6 +232,7 @@ class AdaptiveRun:
             _STATE_PREFIX + "settings": np.asarray(json.dumps(self._adapt_key(), sort_keys=True)),
             _STATE_PREFIX + "frozen": np.array(self.frozen if self.frozen is not None else [], dtype=float),
             _STATE_PREFIX + "counters": np.array(self._counters(), dtype=np.int64),
+            _STATE_PREFIX + "looked": np.asarray(self.looked, dtype=np.int64),
             **{f"{_STATE_PREFIX}born_{l}": b.copy() for l, b in enumerate(self.born)},
             **{f"{_STATE_PREFIX}guard_{l}": g.copy() for l, g in enumerate(self.by_guard)},
         }
@@ -238,20 +249,33 @@ class AdaptiveRun:
             with self._threads(self.bg.level0):  # the first critical-step estimate included
                 self.restart(self.restart_path) if self.restart_path else self.start()
         check = self._check
+        step = self.integ.state.step
+        if step > 0 and step % check == 0 and self.looked != step:
+            # restarted from a checkpoint written at a look step before the look (bit for bit):
+            # advance(0) ends an advance there as the uninterrupted run's did (the ledger's end
+            # readings a remesh closes its segment with), then the look
+            with self._threads(self.active.mesh):
+                self.integ.advance(0)
+                self._look()
         while True:
             with self._threads(self.active.mesh):  # 1 thread on small meshes, remeshing included
                 status = self.integ.advance(check - self.integ.state.step % check)
                 if status != "running":
                     break
-                if (self.frozen is None or self._guarded) and self._pass_due():
-                    t0 = time.perf_counter()
-                    self._adapt_pass()
-                    self.remesh_seconds += time.perf_counter() - t0
+                self._look()
         out = self._output()
         wall = time.perf_counter() - wall0
         out.result.info["adaptive_wall_time_s"] = float(wall)
         out.result.info["remesh_share"] = float(self.remesh_seconds / wall) if wall > 0 else 0.0
         return out
+
+    def _look(self) -> None:
+        """At a multiple of ``_check`` steps: the adaptive pass when one is due (§5.5 d-f)."""
+        if (self.frozen is None or self._guarded) and self._pass_due():
+            t0 = time.perf_counter()
+            self._adapt_pass()
+            self.remesh_seconds += time.perf_counter() - t0
+        self.looked = self.integ.state.step
 
     @property
     def _check(self) -> int:
@@ -314,6 +338,7 @@ class AdaptiveRun:
     def _adapt_pass(self) -> None:
         """Steps d-f: mark, split/merge, and when the mesh changed continue on the new one (past a
         freeze: the guard's splits only)."""
+        self.looked = self.integ.state.step
         with self._timed("mark"):
             marks, leaves, guard_only = self._marks()
         merge = self._held(marks.merge)

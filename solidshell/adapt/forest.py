@@ -42,6 +42,10 @@ class ActiveMesh:
     elem_kind: np.ndarray
     active: np.ndarray
 
+    def __post_init__(self):
+        # the labels written with the run's fields (solidshell/fields.py)
+        self.mesh.cell_tags.update(refinement_level=self.elem_level, transition_pattern=self.elem_kind)
+
     @property
     def elem_level(self) -> np.ndarray:
         """Level of each element; transition elements between levels i and i+1 are i + 1/2."""

@@ -9,6 +9,7 @@ from .. import io as sio
 from .. import solvers
 from ..rundir import RunFolder
 from ..scenes import Scene
+from . import state_fields
 
 
 def prepare_folder(out_dir, run_id: str, force: bool, settings: dict | None, output: dict):
@@ -79,7 +80,7 @@ def _write_outputs(folder, sc: Scene, kind: str, mesh_name: str, solved, summary
     files = [folder.write(name, sio.write_mesh_file, mesh, run_id=rid) for name in ("mesh.xdmf", "mesh.vtu")]
     finite = result is not None and bool(np.all(np.isfinite(U)))
     if result is not None:
-        files += _state_files(folder, kind, solved, summary, finite)
+        files += _state_files(folder, sc, kind, solved, summary, finite)
     boundary = summary.get("projected_boundary")
     if boundary is not None:
 
@@ -127,23 +128,30 @@ def _write_outputs(folder, sc: Scene, kind: str, mesh_name: str, solved, summary
     return files
 
 
-def _state_files(folder, kind: str, solved, summary: dict, finite: bool) -> list:
+def _state_files(folder, sc, kind: str, solved, summary: dict, finite: bool) -> list:
     """The solved state's files: result (and deformed) mesh files and the run's series."""
     rid = folder.run_id
     mesh, U, result, series = solved.mesh, solved.U, solved.result, solved.series
+    # the fields users colour by (solidshell.fields) and the clamped, unmeshed parts of the sheet
+    fields_of = state_fields.series_fields(sc, kind, solved) if finite else None
+    fp = fields_of(state_fields.final_load_factor(kind, result), mesh, U) if fields_of else (None, ())
+    kw = dict(run_id=rid, fields=fp[0], patches=fp[1])
     files = [
-        folder.write("result.xdmf", sio.write_mesh_file, mesh, U, run_id=rid),
-        folder.write("result.vtu", sio.write_mesh_file, mesh, U, run_id=rid),
+        folder.write("result.xdmf", sio.write_mesh_file, mesh, U, **kw),
+        folder.write("result.vtu", sio.write_mesh_file, mesh, U, **kw),
     ]
     if finite:
-        files.append(folder.write("deformed.vtu", sio.write_mesh_file, mesh, U, deformed=True, run_id=rid))
+        files.append(folder.write("deformed.vtu", sio.write_mesh_file, mesh, U, deformed=True, **kw))
     frames = [(float(tf), Uf) for tf, Uf in (result.frames or [])]
-    if series is not None and len(series) > 1:
-        files.append(folder.write("series.pvd", sio.write_mesh_series, series, run_id=rid))
+    if series is None:  # a fixed mesh: the displacement-only XDMF series, and the same frames in series.pvd
+        if not solvers.dynamic(kind) and frames and frames[0][0] != 0.0:
+            frames = [(0.0, np.zeros_like(np.asarray(frames[0][1], float)))] + frames  # the load path from rest
+        if len(frames) > 1:
+            files.append(folder.write("series.xdmf", sio.write_time_series, mesh, frames, run_id=rid))
+        series = [(t, mesh, Uf) for t, Uf in frames] if fields_of is not None else []
+    if len(series) > 1:
+        files.append(folder.write("series.pvd", sio.write_mesh_series, series, run_id=rid, fields_of=fields_of))
         files += sio.series_frame_paths(folder.path / "series.pvd", len(series))
-        summary["series_parameter"] = "time [s]"
-    elif len(frames) > 1:
-        files.append(folder.write("series.xdmf", sio.write_time_series, mesh, frames, run_id=rid))
         summary["series_parameter"] = "time [s]" if solvers.dynamic(kind) else "load factor"
     return files
 

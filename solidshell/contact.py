@@ -129,7 +129,8 @@ class RigidBody:
     friction: float = 0.0  # Coulomb coefficient mu (0: frictionless, the default)
     lipschitz: float | None = None
 
-    code: int = -1  # contact_kernels.SPHERE, PLANE, CYLINDER, BOX or CUSICK; -1: a user's body
+    code: int = -1  # contact_kernels.SPHERE, PLANE, CYLINDER, BOX, CUSICK or MESH; -1: a user's body
+    grid: np.ndarray | None = None  # a MESH body's distance samples (contact_mesh.py); None: the others
 
     @property
     def curvature_radius(self) -> float | None:
@@ -148,7 +149,7 @@ class RigidBody:
         outward unit normal (contact_kernels.signed_distance; a subclass of code < 0 overrides this)."""
         if self.code < 0:  # pragma: no cover - interface
             raise NotImplementedError
-        return ck.distances(self.code, self.params, np.ascontiguousarray(x, dtype=float).reshape(-1, 3))
+        return ck.distances(self.code, self.params, np.ascontiguousarray(x, dtype=float).reshape(-1, 3), self.grid)
 
     def given_distances(self, x):
         """(g_in, n_in) for contact_kernels.body_forces: empty for the bodies the kernels know, the
@@ -174,7 +175,7 @@ class RigidBody:
         f = np.zeros_like(x)
         kk = np.ascontiguousarray(np.broadcast_to(np.asarray(k, dtype=float), (len(x),)))
         e, _, _, _, _ = ck.body_forces(
-            self.code, self.params, self.offset, 0.0, x, kk, kk, f, f, f, f, *self.given_distances(x)
+            self.code, self.params, self.offset, 0.0, x, kk, kk, f, f, f, f, *self.given_distances(x), self.grid
         )
         return f, e
 
@@ -408,6 +409,7 @@ def frictional_contact(body: ContactBody, x, k, k_t, anchor):
         ft,
         new,
         *body.given_distances(x),
+        getattr(body, "grid", None),
     )
     idx = np.flatnonzero(~np.isnan(new[:, 0]))
     return f, e_n, idx, ft[idx], e_t, new, int(n_slip)

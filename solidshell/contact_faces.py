@@ -57,7 +57,7 @@ import numpy as np
 from numba import njit
 
 from .contact import PENETRATION_TOL
-from .contact_kernels import signed_distance
+from .contact_kernels import MESH, MESH_LIPSCHITZ, signed_distance
 from .errors import InputError
 
 DEFAULT_FACE_POINTS = 3
@@ -180,18 +180,20 @@ class FacePoints:
 
 # ---------------------------------------------------------------------- compiled pass (explicit solver)
 @njit(cache=True)
-def face_pass(codes, params, offsets, mus, X0, D, els, estart, pn, pw, kq, nodes, fx, Ff, shift, reach):
+def face_pass(codes, params, offsets, mus, X0, D, els, estart, pn, pw, kq, nodes, fx, Ff, shift, reach, grid=None):
     """The face points of the elements ``els`` (ascending; their points estart[e]..estart[e+1]) on
     every body (code >= 0): their forces N_a k p n added into Ff (N, 3) and, per frictional body,
     their normal loads N_a k p into fx (n_fric, N), both zeroed first at ``nodes`` (the nodes of the
     elements are among them).  ``shift`` (n_bodies, P): the points' augmented-Lagrangian shifts
     (contact_augment.py; p counts from offset + shift), (0, 0): none; ``reach`` (n_bodies,): the
-    offset plus the body's largest shift (:func:`reach`).  Returns (penalty energy, points in
+    offset plus the body's largest shift (:func:`reach`); ``grid``: the MESH bodies' samples
+    (contact_kernels.grid_distance; None without one).  Returns (penalty energy, points in
     contact, deepest penetration).
 
     An element whose points are all farther than ``reach`` from a body is skipped for it: its points
     are convex combinations of its nodes, so they lie within r = max_a |x_a - c| of the mean c of its
-    nodes, and a 1-Lipschitz distance (every compiled body's) is at least g(c) - r there.  Skipped
+    nodes, and an L-Lipschitz distance is at least g(c) - L r there (L = 1 for the analytic bodies'
+    exact distances, sqrt(3) for a MESH body's trilinear one: contact_kernels.MESH_LIPSCHITZ).  Skipped
     points would add nothing, so the sums are those over every point, term for term.  Bodies
     outermost: each body's parameter row is taken once (a row view per point costs more than the
     distance itself)."""
@@ -208,6 +210,7 @@ def face_pass(codes, params, offsets, mus, X0, D, els, estart, pn, pw, kq, nodes
     jf = 0
     for b in range(codes.size):
         code, p, off, fric, rb = codes[b], params[b], offsets[b], mus[b] > 0.0, reach[b]
+        lip = MESH_LIPSCHITZ if code == MESH else 1.0  # x 1.0: the analytic bodies' bound as before, bit for bit
         for je in range(els.size):
             e = els[je]
             q0 = estart[e]
@@ -223,7 +226,7 @@ def face_pass(codes, params, offsets, mus, X0, D, els, estart, pn, pw, kq, nodes
             r2 = 0.0
             for a in range(4):
                 r2 = max(r2, (xa[a, 0] - c0) ** 2 + (xa[a, 1] - c1) ** 2 + (xa[a, 2] - c2) ** 2)
-            if signed_distance(code, p, c0, c1, c2)[0] - math.sqrt(r2) > rb:
+            if signed_distance(code, p, c0, c1, c2, grid)[0] - lip * math.sqrt(r2) > rb:
                 continue
             for q in range(q0, estart[e + 1]):
                 # the sum of N_a x_a in node order, as FacePoints.positions takes it
@@ -233,7 +236,7 @@ def face_pass(codes, params, offsets, mus, X0, D, els, estart, pn, pw, kq, nodes
                     x0 += wa * xa[a, 0]
                     x1 += wa * xa[a, 1]
                     x2 += wa * xa[a, 2]
-                g, n0, n1, n2 = signed_distance(code, p, x0, x1, x2)
+                g, n0, n1, n2 = signed_distance(code, p, x0, x1, x2, grid)
                 sq = shift[b, q] if shifted else 0.0
                 pq = off - g + sq
                 if pq > 0.0:

@@ -10,6 +10,13 @@ A body is a code (SPHERE, PLANE, CYLINDER, BOX, CUSICK) and a parameter row of P
 * BOX      : top centre (3), height, edge radius, half widths a, b
 * CUSICK   : top centre (3), height, edge radius, disc radius, disc thickness, stem radius  (a
   Cusick-type support: a disc on a narrower coaxial stem that reaches down to the base)
+* MESH     : grid origin (3), spacing, blocks along x, y, z, start  (a body from a triangle mesh:
+  its signed distance sampled on a narrow-band grid, ``contact_mesh.py``; the samples live in the
+  shared float array ``grid`` from ``start`` on, see :func:`grid_distance`)
+
+The kernels take that shared array as their last argument ``grid`` (None, the default, when no body
+is a MESH: then numba compiles the functions without the MESH branch, and the analytic bodies run
+the very code they ran before the MESH code existed).
 
 Every function returns the same numbers the former numpy code did, to round-off: the sums of
 three squares are taken left to right, the box distance follows ``_box`` below term by term.
@@ -23,8 +30,15 @@ import math
 import numpy as np
 from numba import njit
 
-SPHERE, PLANE, CYLINDER, BOX, CUSICK = 0, 1, 2, 3, 4
+SPHERE, PLANE, CYLINDER, BOX, CUSICK, MESH = 0, 1, 2, 3, 4, 5
 PARAMS = 8
+BLOCK = 8
+"""Cells per block edge of a MESH body's grid: a block stores its (BLOCK + 1)^3 corner samples."""
+FAR_OUT, FAR_IN = -1.0, -2.0  # a block's entry in the table when all its samples are +band / -band
+MESH_LIPSCHITZ = math.sqrt(3.0)
+"""Lipschitz bound of a MESH body's trilinear distance: each partial derivative is a convex
+combination of the grid's finite differences along its axis, each at most 1 in size for samples of a
+1-Lipschitz distance, so |grad g| <= sqrt(3) (contact_mesh.py)."""
 _G0, _N0 = np.zeros(0), np.zeros((0, 3))  # "no given distances" (body_forces' g_in, n_in)
 
 
@@ -53,9 +67,60 @@ def _box(a0, a1, a2, h0, h1, h2, k):
 
 
 @njit(cache=True)
-def signed_distance(code, p, x0, x1, x2):
+def grid_distance(p, grid, x0, x1, x2):
+    """(g, grad g) of a MESH body at x: the trilinear interpolant of its narrow-band signed-distance
+    samples (contact_mesh.py builds them).  ``grid[start]`` is the band b; the table of blocks
+    (nbx, nby, nbz, C order) follows, each entry a block number k >= 0, FAR_OUT (every sample of the
+    block is +b) or FAR_IN (-b); then block k's (BLOCK + 1)^3 samples (C order) at start + 1 +
+    nbx nby nbz + k (BLOCK + 1)^3.  Samples are the exact distance clamped to [-b, b] (clamping keeps
+    it 1-Lipschitz), so the interpolant is continuous everywhere; outside the grid's box it is b.
+    The gradient is returned as it is, not normalised: the penalty force k p grad g is then exactly
+    minus the gradient of the energy 1/2 k p^2 of this g (|grad g| = 1 up to the interpolation
+    error, O(spacing / curvature radius), near the surface)."""
+    h = p[3]
+    nbx, nby, nbz, s = int(p[4]), int(p[5]), int(p[6]), int(p[7])
+    band = grid[s]
+    u = (x0 - p[0]) / h
+    v = (x1 - p[1]) / h
+    w = (x2 - p[2]) / h
+    nx, ny, nz = nbx * BLOCK, nby * BLOCK, nbz * BLOCK
+    if not (0.0 <= u < nx and 0.0 <= v < ny and 0.0 <= w < nz):  # (NaN lands here too)
+        return band, 0.0, 0.0, 0.0
+    i, j, k = int(u), int(v), int(w)
+    fu, fv, fw = u - i, v - j, w - k
+    bi, bj, bk = i // BLOCK, j // BLOCK, k // BLOCK
+    kb = grid[s + 1 + (bi * nby + bj) * nbz + bk]
+    if kb < 0.0:
+        return (band if kb == FAR_OUT else -band), 0.0, 0.0, 0.0
+    m = BLOCK + 1
+    o = s + 1 + nbx * nby * nbz + int(kb) * m * m * m + ((i - bi * BLOCK) * m + (j - bj * BLOCK)) * m + (k - bk * BLOCK)
+    c000, c001 = grid[o], grid[o + 1]
+    c010, c011 = grid[o + m], grid[o + m + 1]
+    c100, c101 = grid[o + m * m], grid[o + m * m + 1]
+    c110, c111 = grid[o + m * m + m], grid[o + m * m + m + 1]
+    # along w, then v, then u
+    c00 = c000 + fw * (c001 - c000)
+    c01 = c010 + fw * (c011 - c010)
+    c10 = c100 + fw * (c101 - c100)
+    c11 = c110 + fw * (c111 - c110)
+    c0 = c00 + fv * (c01 - c00)
+    c1 = c10 + fv * (c11 - c10)
+    g = c0 + fu * (c1 - c0)
+    gu = c1 - c0
+    gv = (1.0 - fu) * (c01 - c00) + fu * (c11 - c10)
+    d00, d01 = c001 - c000, c011 - c010
+    d10, d11 = c101 - c100, c111 - c110
+    gw = (1.0 - fu) * ((1.0 - fv) * d00 + fv * d01) + fu * ((1.0 - fv) * d10 + fv * d11)
+    return g, gu / h, gv / h, gw / h
+
+
+@njit(cache=True)
+def signed_distance(code, p, x0, x1, x2, grid=None):
     """(g, n0, n1, n2): the signed distance of the point x to the body (positive outside) and its
-    outward unit normal grad g."""
+    outward unit normal grad g (a MESH body's: see :func:`grid_distance`; ``grid`` its samples)."""
+    if grid is not None:
+        if code == MESH:
+            return grid_distance(p, grid, x0, x1, x2)
     if code == SPHERE:
         d0, d1, d2 = x0 - p[0], x1 - p[1], x2 - p[2]
         r = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
@@ -97,13 +162,13 @@ def signed_distance(code, p, x0, x1, x2):
 
 
 @njit(cache=True)
-def distances(code, p, x):
+def distances(code, p, x, grid=None):
     """(g (N,), n (N,3)) of the points x (N,3)."""
     N = x.shape[0]
     g = np.empty(N)
     n = np.empty((N, 3))
     for i in range(N):
-        g[i], n[i, 0], n[i, 1], n[i, 2] = signed_distance(code, p, x[i, 0], x[i, 1], x[i, 2])
+        g[i], n[i, 0], n[i, 1], n[i, 2] = signed_distance(code, p, x[i, 0], x[i, 1], x[i, 2], grid)
     return g, n
 
 
@@ -125,18 +190,18 @@ def _stick(mu, kp, kt, x0, x1, x2, n0, n1, n2, a0, a1, a2):
 
 
 @njit(cache=True)
-def body_forces(code, p, offset, mu, x, k, kt, anchor, f, ft, new, g_in, n_in):
+def body_forces(code, p, offset, mu, x, k, kt, anchor, f, ft, new, g_in, n_in, grid=None):
     """One body on the points x (N,3), node stiffnesses k, kt (N,): the penalty force k p n plus,
     when mu > 0, the friction force into f (N,3) (added); friction forces ft (N,3) and the new
     anchors ``new`` (N,3; NaN off contact) written when mu > 0 (``anchor``: the previous ones, NaN
     where a node was not in contact).  A body of code < 0 (a user's own RigidBody) gives its signed
     distances and normals in g_in (N,), n_in (N,3).  Returns (penalty energy 1/2 sum k p^2, stick
     energy 1/2 sum |f_t|^2 / k_t, nodes in contact, slipping nodes, deepest |f_n| / k)."""
-    return node_forces(code, p, offset, mu, x, k, kt, anchor, f, ft, new, g_in, n_in, _G0, _G0)
+    return node_forces(code, p, offset, mu, x, k, kt, anchor, f, ft, new, g_in, n_in, _G0, _G0, grid)
 
 
 @njit(cache=True)
-def node_forces(code, p, offset, mu, x, k, kt, anchor, f, ft, new, g_in, n_in, fx, shift):
+def node_forces(code, p, offset, mu, x, k, kt, anchor, f, ft, new, g_in, n_in, fx, shift, grid=None):
     """:func:`body_forces` with ``fx`` (N,) the normal load the face points of the node's elements
     carry on it (contact_faces.face_pass; empty: none): it adds to the node's Coulomb limit, and a
     node with fx > 0 sticks or slips even when the node itself is just off the body (its face is on it);
@@ -153,7 +218,7 @@ def node_forces(code, p, offset, mu, x, k, kt, anchor, f, ft, new, g_in, n_in, f
         if code < 0:
             g, n0, n1, n2 = g_in[i], n_in[i, 0], n_in[i, 1], n_in[i, 2]
         else:
-            g, n0, n1, n2 = signed_distance(code, p, x[i, 0], x[i, 1], x[i, 2])
+            g, n0, n1, n2 = signed_distance(code, p, x[i, 0], x[i, 1], x[i, 2], grid)
         si = shift[i] if shifted else 0.0
         pi = max(-(g - offset) + si, 0.0)
         kp = k[i] * pi
@@ -182,13 +247,14 @@ def node_forces(code, p, offset, mu, x, k, kt, anchor, f, ft, new, g_in, n_in, f
 
 
 @njit(cache=True)
-def contact_pass(codes, params, offsets, mus, X0, D, nodes, k, kt, anchors, new, C, FT, fx, Ff, shift):
+def contact_pass(codes, params, offsets, mus, X0, D, nodes, k, kt, anchors, new, C, FT, fx, Ff, shift, grid=None):
     """Every body (each of code >= 0) on the mid-surface nodes ``nodes`` (ascending) of the sheet at D (6N,): their
     contact forces plus the face points' Ff (N,3) (contact_faces.face_pass; empty: none) into C (6N,)
     (the nodes' translation dofs overwritten), the frictional bodies' forces into FT (n_fric,
     len(nodes), 3) and their new anchors into new (n_fric, N, 3) at the nodes (anchors: (n_fric, N,
     3), NaN off contact; fx (n_fric, N): the face points' normal load on the nodes, node_forces;
-    shift (n_bodies, N): the augmented-Lagrangian shifts, node_forces; (0, 0): none).  Returns (contact energy, stick energy, nodes in contact counted per body, slipping nodes,
+    shift (n_bodies, N): the augmented-Lagrangian shifts, node_forces; (0, 0): none; grid: the MESH
+    bodies' samples, None without one).  Returns (contact energy, stick energy, nodes in contact counted per body, slipping nodes,
     deepest depth |f_n| / k - shift) -- node_forces summed in body order."""
     m = nodes.size
     x = np.empty((m, 3))
@@ -221,14 +287,14 @@ def contact_pass(codes, params, offsets, mus, X0, D, nodes, k, kt, anchors, new,
                 for j in range(m):
                     fxj[j] = fx[jf, nodes[j]]
             e1, e2, n1, n2, pb = node_forces(
-                codes[b], params[b], offsets[b], mu, x, kk, kkt, a, f, FT[jf], na, _G0, _N0, fxj, sj
+                codes[b], params[b], offsets[b], mu, x, kk, kkt, a, f, FT[jf], na, _G0, _N0, fxj, sj, grid
             )
             for j in range(m):
                 new[jf, nodes[j], 0], new[jf, nodes[j], 1], new[jf, nodes[j], 2] = na[j, 0], na[j, 1], na[j, 2]
             jf += 1
         else:
             e1, e2, n1, n2, pb = node_forces(
-                codes[b], params[b], offsets[b], 0.0, x, kk, kkt, a, f, a, a, _G0, _N0, _G0, sj
+                codes[b], params[b], offsets[b], 0.0, x, kk, kkt, a, f, a, a, _G0, _N0, _G0, sj, grid
             )
         ec += e1
         et += e2

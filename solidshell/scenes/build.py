@@ -174,14 +174,21 @@ def scene_loads(scene: Scene, model) -> np.ndarray:
 def contact_bodies(scene: Scene) -> list:
     """solidshell.contact bodies of the scene, one per dict of ``scene.bodies()`` and in its order
     (the pictures draw the same dicts; empty: no contact search)."""
-    return [contact_body(b) for b in scene.bodies()]
+    return [contact_body(b, scene.base_dir) for b in scene.bodies()]
 
 
-def contact_body(b: dict):
-    """The solidshell.contact body of one resolved body dict (Scene.bodies)."""
+def contact_body(b: dict, base_dir=None):
+    """The solidshell.contact body of one resolved body dict (Scene.bodies); a mesh body's file is
+    relative to ``base_dir`` (the scene file's folder)."""
     from .. import contact as C
 
     off, mu = b["offset"], b["friction"]
+    if b["type"] == "mesh":
+        from ..contact_mesh import mesh_body
+        from .schema import MESH_DEFAULTS
+
+        kw = {k: b[k] for k in MESH_DEFAULTS}
+        return mesh_body(**kw, offset=off, friction=mu, where=b["origin"], base_dir=base_dir)
     if b["type"] == "sphere":
         return C.Sphere(b["centre"], b["radius"], offset=off, friction=mu)
     if b["type"] == "plane":
@@ -196,6 +203,9 @@ def contact_body(b: dict):
 
 def _body_label(scene: Scene, i: int) -> str:
     b = scene.bodies()[i]
+    if b["type"] == "mesh":
+        src = f"file {b['file']!r}" if b["file"] is not None else f"{len(b['primitives'])} primitive(s)"
+        return f"{b['origin']} (mesh from {src})"
     at = list(b["point" if b["type"] == "plane" else "centre"])
     what = f"{b['type']} at {at}"
     if b["origin"] == "geometry.recipe":

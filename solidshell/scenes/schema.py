@@ -583,14 +583,56 @@ class Pedestal(Body):
         return self
 
 
-BODIES = {"sphere": Sphere, "plane": Plane, "pedestal": Pedestal}
+def _primitives(v) -> list:
+    from ..contact_shapes import check_primitives
+
+    try:
+        check_primitives(v, "")
+        return v
+    except InputError as e:  # "[i].box: ..." -> this key's error
+        key, _, msg = str(e).partition(": ")
+        raise Bad(key.lstrip("."), msg) from None
+
+
+class Mesh(Body):
+    """A rigid body bounded by a closed triangle surface (solidshell.contact_mesh): read from
+    ``file`` (STL/OBJ/PLY/..., relative to the scene file) or built from ``primitives`` with gmsh
+    (solidshell.contact_shapes), in ``units`` x ``scale``, turned by ``rotate`` [degrees about x, y,
+    z], moved by ``translate`` [cm]; ``spacing``/``band``: its distance grid [cm]."""
+
+    file: Optional[Str] = None
+    primitives: Optional[Annotated[list, PlainValidator(_primitives)]] = None
+    mesh_size: Optional[Pos] = None  # primitives: the triangles' size [cm]
+    units: Optional[Str] = None  # the file's length unit: contact_mesh.UNITS
+    scale: Optional[Pos] = None
+    rotate: Optional[Vec3] = None
+    translate: Optional[Vec3] = None
+    spacing: Optional[Pos] = None
+    band: Optional[Pos] = None
+
+    @model_validator(mode="after")
+    def _source(self):
+        from ..contact_mesh import UNITS
+
+        if (self.file is None) == (self.primitives is None):
+            raise Bad(
+                "file",
+                "give a mesh body either file (a surface mesh) or primitives; "
+                + ("missing" if self.file is None else "not both"),
+            )
+        if self.units is not None and self.units not in UNITS:
+            raise Bad("units", f"unknown unit {self.units!r} (known: {', '.join(UNITS)})")
+        return self
+
+
+BODIES = {"sphere": Sphere, "plane": Plane, "pedestal": Pedestal, "mesh": Mesh}
 Contact = _tagged(
     BODIES,
     lambda d: d.get("type"),
     key="type",
     what="contact body",
     known=", ".join(BODIES),
-    missing="sphere, plane or pedestal",
+    missing="sphere, plane, pedestal or mesh",
 )
 
 SolverTable = create_model(
@@ -732,6 +774,20 @@ def _pedestal_bodies(c: dict, implied: dict | None, where: str) -> list[dict]:
     return [body, clamp]
 
 
+MESH_DEFAULTS = {
+    "file": None,
+    "primitives": None,
+    "mesh_size": None,
+    "units": "cm",
+    "scale": 1.0,
+    "rotate": (0.0, 0.0, 0.0),
+    "translate": (0.0, 0.0, 0.0),
+    "spacing": None,
+    "band": None,
+}
+"""A mesh body's keys left out (None: the body's own default, solidshell.contact_mesh)."""
+
+
 def resolve_bodies(geometry: dict, material: dict, contact, pedestal_contact: bool = True) -> list[dict]:
     """The contact bodies a scene feels and its pictures show, one dict per body with every key
     filled (Scene.bodies): its [[contact]] tables in order (a Cusick support's clamp right after it),
@@ -749,6 +805,8 @@ def resolve_bodies(geometry: dict, material: dict, contact, pedestal_contact: bo
             out.append({"type": "sphere", "centre": tuple(c["centre"]), "radius": float(c["radius"]), **base})
         elif c["type"] == "plane":
             out.append({"type": "plane", "point": tuple(c["point"]), "normal": tuple(c["normal"]), **base})
+        elif c["type"] == "mesh":
+            out.append({**MESH_DEFAULTS, **{k: v for k, v in c.items() if k not in ("offset", "friction")}, **base})
         else:
             out += _pedestal_bodies(c, implied, where)
     tables = [i for i, c in enumerate(contact) if c["type"] == "pedestal"]

@@ -12,6 +12,7 @@ from ... import contact_augment as augment
 from ... import contact_kernels as ck
 from ...contact import contact_forces, frictional_contact
 from ...contact_faces import face_pass, reach
+from ...contact_mesh import pack_grid
 from ...interfaces import QuasiStrainModel, SolverProblem
 from ...model import Model
 
@@ -45,6 +46,7 @@ class Forces:
             self.X0 = np.ascontiguousarray(self.X0, dtype=float)
             self.codes = np.array([b.code for b in self.bodies], dtype=np.int64)
             self.params = np.array([b.params for b in self.bodies], dtype=float)
+            self.grid = pack_grid(self.bodies, self.params)  # the mesh bodies' distance grids; None: no mesh body
             self.offsets = np.array([b.offset for b in self.bodies], dtype=float)
             self.mus = np.array(self.fric_of, dtype=float)
             self.k_pen = np.ascontiguousarray(k_pen, dtype=float)
@@ -198,6 +200,7 @@ class Forces:
                 self._Ff,
                 self._shift_q,
                 self._reach,
+                self.grid,
             )
         if C is None:
             C = np.zeros(6 * self.N)
@@ -230,6 +233,7 @@ class Forces:
             self._fx,
             self._Ff,
             self.shift_n,
+            self.grid,
         )
         ec, nact, pen = ec + ef, nact + nf, max(pen, pf)
         if friction:

@@ -1,7 +1,8 @@
 """Scenes: a drape problem described as data, in a TOML file a user can write.
 
-The paper's scenes ship as package data (``solidshell/scenes/paper/*.toml``) and load by name
-(:func:`load`, :func:`available`); a user's own scene loads by path.  Every unknown key, every
+The paper's scenes ship as package data (``solidshell/scenes/paper/*.toml``), with scenes beyond the
+paper (``solidshell/scenes/examples/*.toml``: the drape tester), and load by name (:func:`load`,
+:func:`available`); a user's own scene loads by path.  Every unknown key, every
 value of the wrong type and every missing required key is an :class:`~solidshell.errors.InputError`
 that names the key and the file (:mod:`solidshell.scenes.schema`: one pydantic model per table;
 :mod:`solidshell.scenes.overrides`: the dotted ``--set`` keys).  All quantities are in the paper's
@@ -35,6 +36,11 @@ Scene file format
                                           #   bending_weft, torsion, weight, thickness, warp_angle,
                                           #   poisson, transverse_shear, thickness_modulus
     # isotropic = { E = 1e5, nu = 0.3, h = 0.1, density = 0.0 }   # OR an isotropic shell
+    # kes = { B_warp = 0.083, B_weft = 0.063, G = 0.73, W = 19.0,   # OR a fabric's KES-FB data
+    #         T = 0.593, tensile_warp = 1118.2, tensile_weft = 759.5 }  (solidshell.fabrics: units,
+    #                                       factors; Fabric fields may follow; fabric names the
+    #                                       library's (solidshell fabrics), --set material.kes.*
+    #                                       replaces it)
 
     [model]                               # optional
     thickness_strain = "green"            # "green" | "quasi" (Eq. 24)

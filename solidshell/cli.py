@@ -33,20 +33,48 @@ sheet's corners.
 Exit status: 0 done (``run``: converged), 1 the solver did not converge or stopped (the last state
 is written), 2 bad input (one line on stderr, no traceback, nothing written), 3 an I/O failure
 (the path named), 130 interrupted (Ctrl-C: the last state is written with a summary marked
-``"interrupted": true`` when the solver returned one).
+``"interrupted": true`` when the solver returned one), 143 terminated (SIGTERM, what SLURM,
+Kubernetes and ``timeout`` send: handled as Ctrl-C, the state written the same way).
 """
 
 from __future__ import annotations
 
 import argparse
 import logging
+import signal
 import sys
+import threading
 import tomllib
 
 from .errors import InputError, IOFailure, SolverError
 from .solvers import KINDS
 
 EXIT_OK, EXIT_NOT_CONVERGED, EXIT_INPUT, EXIT_IO, EXIT_INTERRUPTED = 0, 1, 2, 3, 130
+EXIT_TERMINATED = 128 + signal.SIGTERM  # 143, the status a shell gives a process SIGTERM ended
+
+
+class _Terminate:
+    """The CLI's SIGTERM handler: SIGTERM is handled as Ctrl-C (KeyboardInterrupt; an explicit or
+    relaxation loop defers it to the end of its step and returns its state, observers.
+    deferred_interrupt), and remembered, for exit status 143 instead of 130."""
+
+    def __init__(self):
+        self.received = False
+
+    def note(self, signum) -> None:
+        """A loop that deferred the signal tells us it came."""
+        self.received = True
+
+    def __call__(self, signum, frame):
+        self.received = True
+        raise KeyboardInterrupt
+
+
+_TERM = _Terminate()
+
+
+def _interrupted_status() -> int:
+    return EXIT_TERMINATED if _TERM.received else EXIT_INTERRUPTED
 
 
 class _StderrLines(logging.Handler):
@@ -451,7 +479,7 @@ def _corners_line(res) -> tuple[str, str] | None:
 
 def _run_status(s: dict) -> int:
     if s.get("interrupted"):
-        return EXIT_INTERRUPTED
+        return _interrupted_status()
     return EXIT_OK if s.get("converged") else EXIT_NOT_CONVERGED
 
 
@@ -539,7 +567,7 @@ def _cmd_sweep(args) -> int:
     )
     print(f"  wrote {out}/: ledger/ (Parquet), " + ", ".join(Path(f).name for f in rep["files"]))
     if res.interrupted:
-        return EXIT_INTERRUPTED
+        return _interrupted_status()
     # 1: a run failed (now or before: its error row stays in the ledger), or runs are missing (--limit)
     incomplete = res.recorded + len(res.failed) + res.skipped < res.total
     return EXIT_NOT_CONVERGED if res.failed or res.failed_before or incomplete else EXIT_OK
@@ -567,6 +595,17 @@ def main(argv=None) -> int:
         if argv[i] == "--mesh" and argv[i + 1].startswith("-") and argv[i + 1][1:2].isdigit():
             argv[i : i + 2] = [f"--mesh={argv[i + 1]}"]
     _install_log_handler()
+    main_thread = threading.current_thread() is threading.main_thread()
+    old_term = signal.signal(signal.SIGTERM, _TERM) if main_thread else None
+    _TERM.received = False
+    try:
+        return _main(argv)
+    finally:
+        if main_thread:
+            signal.signal(signal.SIGTERM, old_term)
+
+
+def _main(argv) -> int:
     try:
         args = _parser().parse_args(argv)
         _install_log_handler(-1 if getattr(args, "quiet", False) else getattr(args, "verbose", 0) or 0)
@@ -609,8 +648,9 @@ def main(argv=None) -> int:
         _say(f"solidshell: solver stopped: {e}")
         return EXIT_NOT_CONVERGED
     except KeyboardInterrupt:
-        _say("solidshell: interrupted; this run's summary.json was not written")
-        return EXIT_INTERRUPTED
+        what = "terminated (SIGTERM)" if _TERM.received else "interrupted"
+        _say(f"solidshell: {what}; this run's summary.json was not written")
+        return _interrupted_status()
 
 
 def _unprefixed(e: Exception) -> str:

@@ -132,8 +132,8 @@ def transform(V, scale: float = 1.0, rotate=(0.0, 0.0, 0.0), translate=(0.0, 0.0
 def curvature_radius(V, F, sharp_deg: float = 30.0) -> float | None:
     """An estimate of the radius of the surface's most curved smooth part [length]: over the edges
     whose triangles turn by less than ``sharp_deg`` (sharper edges are edges, not curvature), the
-    distance between the two triangles' centroids over the turn angle; the 1st percentile (a few
-    badly shaped triangles do not set it).  None when the surface is flat between its sharp edges."""
+    distance between the two triangles' centroids over the turn angle; the 10th percentile (the
+    estimate scatters by ~10 % on a gmsh sphere, and a few badly shaped triangles must not set it).  None when the surface is flat between its sharp edges."""
     F = np.asarray(F, np.int64)
     a, b, c = (np.asarray(V, float)[F[:, i]] for i in range(3))
     nrm = np.cross(b - a, c - a)
@@ -150,7 +150,7 @@ def curvature_radius(V, F, sharp_deg: float = 30.0) -> float | None:
     if not np.any(smooth):
         return None
     rho = np.linalg.norm(cen[t0] - cen[t1], axis=1)[smooth] / ang[smooth]
-    return float(np.percentile(rho, 1.0))
+    return float(np.percentile(rho, 10.0))
 
 
 def exact_signed_distance(V, F, x):

@@ -29,6 +29,9 @@ import numpy as np
 SEARCH = 2.0
 """Layers are looked for within SEARCH x h: min_layer_gap is None beyond."""
 
+SELF_CONTACT_DEFAULT = False
+"""A scene's ``[self_contact] enabled`` when it does not say (solidshell.scenes.schema)."""
+
 LAYER_TOL = 0.1
 """Two layers closer than (1 - LAYER_TOL) h are reported (layer_pairs_close) and warned about:
 10 % of the thickness, the order of a fabric's compression under its own weight."""

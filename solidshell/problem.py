@@ -21,6 +21,8 @@ class Problem:
     loads      : (N,6) dead external nodal forces P [force] (gravity, point, line, surface loads)
     prescribed : (N,6) prescribed values of the fixed dofs [length] (default zero: clamped)
     contact    : rigid contact bodies (solidshell.contact); empty means no contact search at all
+    self_contact : whether the sheet's layers push each other apart (contact_self_penalty.py in
+                 explicit dynamics and relaxation, contact_self.py in the static solver)
     name       : label used in messages
     """
 
@@ -30,6 +32,7 @@ class Problem:
     prescribed: np.ndarray | None = None
     contact: list = field(default_factory=list)
     name: str = "problem"
+    self_contact: bool = False
 
     def __post_init__(self):
         n = self.model.n_nodes

@@ -177,6 +177,7 @@ class Scene:
     solver: dict  # {"kind": str, "static": {...}, "explicit": {...}, "relax": {...}}
     output: dict  # {"snapshots": [...], "pictures": [...]}
     adapt: dict = field(default_factory=dict)  # the [adapt] table (solidshell.adapt.settings.AdaptSettings)
+    self_contact: dict = field(default_factory=dict)  # [self_contact]: {"enabled": bool}
     perturbation: dict = field(default_factory=dict)  # [perturbation] (solidshell.perturbation), {} = none
     pedestal_contact: bool = True  # [geometry] pedestal_contact of a pedestal recipe (False: no pedestal body)
     source: str = "<dict>"

@@ -330,4 +330,11 @@ def build_problem(scene: Scene, mesh, fixed=None, membrane=None, constants=None,
         membrane=membrane,
         constants=constants,
     )
-    return Problem(model, fixed, scene_loads(sc, model), contact=contact_bodies(sc), name=sc.name)
+    return Problem(
+        model,
+        fixed,
+        scene_loads(sc, model),
+        contact=contact_bodies(sc),
+        name=sc.name,
+        self_contact=bool(sc.self_contact.get("enabled", False)),
+    )

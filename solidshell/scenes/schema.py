@@ -34,6 +34,7 @@ from .. import fabrics, meshing
 from ..elements import THICKNESS_STRAINS
 from ..elements.quad4 import MEMBRANES
 from ..errors import InputError
+from ..layers import SELF_CONTACT_DEFAULT
 from ..material import FABRIC_FIELDS, ISOTROPIC_FIELDS, ISOTROPIC_REQUIRED, Fabric, IsotropicShell
 from ..plotting import VIEWS
 from ..settings import SettingsModel
@@ -643,6 +644,14 @@ SolverTable = create_model(
 )
 
 
+class SelfContactTable(Table):
+    """``[self_contact]``: whether the sheet's layers push each other apart (solidshell.contact_self_penalty
+    in explicit dynamics and relaxation, solidshell.contact_self in the static solver).  A table of its
+    own: TOML cannot hold a ``[contact]`` table beside the ``[[contact]]`` array of bodies."""
+
+    enabled: Bool = SELF_CONTACT_DEFAULT
+
+
 class OutputTable(Table):
     snapshots: Annotated[
         array(NonNeg, "an array of times [s]"), _rule(lambda v: v == sorted(v), "times must be increasing")
@@ -878,6 +887,7 @@ class SceneDoc(Table):
     supports: SupportsTable = {}
     loads: LoadsTable = {}
     contact: array(Contact, "an array of tables ([[contact]])", tables=True) = []
+    self_contact: SelfContactTable = {}
     solver: SolverTable = {}
     output: OutputTable = {}
     adapt: _own_model("adapt", _adapt_settings, filled=False) = Field(default_factory=dict)  # §5
@@ -933,6 +943,7 @@ class SceneDoc(Table):
             "supports": self.supports.given(),
             "loads": self.loads.given(),
             "contact": tuple(c.given() for c in self.contact),
+            "self_contact": {"enabled": bool(self.self_contact.enabled)},
             "solver": {"kind": self.solver.kind, **{k: dict(getattr(self.solver, k)) for k in KINDS}},
             "output": {"snapshots": list(self.output.snapshots), "pictures": list(self.output.pictures)},
             "adapt": dict(self.adapt),

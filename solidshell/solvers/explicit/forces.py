@@ -25,9 +25,10 @@ class Forces:
     interpenetration counts; any other model (interfaces.ExplicitModel) its force and energy, its
     nodes at the origin, and Eq. (24)'s books when it is an interfaces.QuasiStrainModel.
     ``faces``: the mesh's contact_faces.FacePoints (None or empty: contact on the nodes only); they
-    take part when every body is one of the compiled kinds (a user's own RigidBody: nodes only)."""
+    take part when every body is one of the compiled kinds (a user's own RigidBody: nodes only).
+    ``selfc``: the sheet's self-contact (contact_self_penalty.SelfPenalty), None without."""
 
-    def __init__(self, problem: SolverProblem, k_pen, k_t, fric_of, fused=None, faces=None):
+    def __init__(self, problem: SolverProblem, k_pen, k_t, fric_of, fused=None, faces=None, selfc=None):
         self.model = model = problem.model
         self.N = model.n_nodes
         self.shape = (self.N, 6)
@@ -39,6 +40,8 @@ class Forces:
         self.quasi = isinstance(model, QuasiStrainModel) and bool(model.quasi)
         self.q_mu = float(model.mu) if self.quasi else None  # Eq. (24)'s threshold
         self.fused = fused
+        self.selfc = selfc
+        self._Cs = np.zeros(6 * self.N) if selfc is not None else np.zeros(0)
         self._all = np.arange(self.N)
         # every body one of the kernels' (contact_kernels): one compiled pass over the nodes
         self.compiled = bool(self.bodies) and all(b.code >= 0 for b in self.bodies)
@@ -252,15 +255,31 @@ class Forces:
         xq = self.faces.positions(x) if self.faces is not None else np.zeros((0, 3))
         return augment.update(self.bodies, x, xq, self.shift_n, self.shift_q)
 
+    def with_self(self, D, C):
+        """(C + the self-contact forces at D (6N,, the step's buffer, valid until the next call),
+        self-contact energy, pairs in contact); C None: no body forces.  (C, 0, 0) without
+        self-contact."""
+        if self.selfc is None:
+            return C, 0.0, 0
+        Cs = self._Cs
+        Cs.fill(0.0)
+        es, ns = self.selfc.add_forces(D, Cs)
+        if C is not None:
+            Cs += C
+        return Cs, es, ns
+
     def contact_energy(self, D, anchors):
-        """(C flat, contact energy incl. friction stick energy, the stick energy) at D (no books)."""
+        """(C flat, contact energy incl. friction stick energy and self-contact, the stick energy)
+        at D (no books; C a new array)."""
+        et = 0.0
         if self.n_fric:
             C, ec, _, _, _, et, _, _ = self.contact_friction(D, anchors)
-            return C, ec, et
-        if self.bodies:
+        elif self.bodies:
             C, ec, _, _ = self.contact(D)
-            return C, ec, 0.0
-        return np.zeros(6 * self.N), 0.0, 0.0
+        else:
+            C, ec = np.zeros(6 * self.N), 0.0
+        C, es, _ = self.with_self(D, C)
+        return C.copy(), ec + es, et
 
     def contact_stiffness(self, D, anchors, eps: float = 1e-7):
         """(rows, cols, vals) of the contact stiffness -dC/dx on the translation dofs at D, anchors

@@ -22,6 +22,7 @@ import numpy as np
 from ... import contact_augment as augment
 from ...contact_faces import FacePoints, spacing
 from ...contact_kernels import friction_work
+from ...contact_self_penalty import SelfPenalty
 from ...errors import InputError, SolverError
 from ...interfaces import ExplicitModel, SolverProblem
 from ...model import Model
@@ -107,6 +108,9 @@ class Integrator:
         self.bodies = list(problem.contact or [])
         self.fric_of = [float(b.friction) for b in self.bodies]
         self.n_fric = sum(1 for mu in self.fric_of if mu > 0.0)  # 0: the frictionless path
+        # the sheet against itself (contact_self_penalty.py): a library Model's mesh only
+        self.self_contact = bool(getattr(problem, "self_contact", False)) and mesh is not None
+        self.contacting = bool(self.bodies) or self.self_contact  # any contact forces at all
         # the step's contact only at the nodes near a body (candidates.py), into buffers of its own
         self.faces = (
             FacePoints(
@@ -148,7 +152,7 @@ class Integrator:
         self.fused = FusedForces(self.model) if mesh is not None else None
         self.force_fn = self._fused_force if self.fused is not None else self.model.internal_force
         self.dynamics = stepcontrol.Dynamics(
-            self.model, M, self.free_mask, self.bodies, self.n_fric, self.force_fn, self.faces
+            self.model, M, self.free_mask, self.bodies, self.n_fric, self.force_fn, self.faces, self.self_contact
         )
         shaping = {k: v for k, v in s.as_dict().items() if k not in RESTART_NEUTRAL}
         self.fingerprint = checkpoint.fingerprint(problem, shaping, M)
@@ -160,7 +164,8 @@ class Integrator:
     def _bind(self, lim) -> None:
         """Attach a critical-step estimate: penalty stiffness, forces, the energy floor."""
         self.lim = lim
-        self.forces = Forces(self.problem, lim.k_pen, lim.k_t, self.fric_of, self.fused, self.faces)
+        selfc = SelfPenalty(self.model.mesh, self.model.material.thickness, lim.k_self) if self.self_contact else None
+        self.forces = Forces(self.problem, lim.k_pen, lim.k_t, self.fric_of, self.fused, self.faces, selfc)
         self.quasi = self.forces.quasi
         self.E_floor = ledger.energy_floor(self.P, self.Mf, self.free_idx, self.forces.X0, lim.omega_el)
 
@@ -250,6 +255,7 @@ class Integrator:
             max_interp=mi0,
             t_max_interp=0.0,
             max_contact=0,
+            max_self=0,
             max_pen=0.0,
             ek_prev_half=0.0,
             resets=0,
@@ -284,6 +290,7 @@ class Integrator:
             s.checkpoint_every,
             s.checkpoint_wall,
             lambda: self.checkpoint_extra() if self.checkpoint_extra else {},
+            self.warnings,
         )
         self.recheck_margin = 0.5 * (1.0 + s.safety)
         self._set_step(st.dt)
@@ -444,7 +451,7 @@ class Integrator:
         not: the same forces, anchors and books as evaluating every node."""
         st, cand = self.state, self.cand
         if not self.bodies:
-            return None
+            return self._self_contact(D, f, None) if self.self_contact else None
         nodes, C, new, elements = None, None, None, None
         if cand is not None and cand.enabled:
             if cand.update(D):
@@ -461,6 +468,15 @@ class Integrator:
         f["cnodes"] = self._all_nodes if nodes is None else nodes
         if pen > st.max_pen:
             st.max_pen = pen
+        return self._self_contact(D, f, C) if self.self_contact else C
+
+    def _self_contact(self, D, f, C):
+        """C (None: no body forces) plus the sheet's self-contact forces at D_n, their energy into
+        f["Ec"] and the pairs in contact into f["nself"]."""
+        C, es, f["nself"] = self.forces.with_self(D, C)
+        f["Ec"] = f.get("Ec", 0.0) + es
+        f.setdefault("nact", 0)
+        f["C"], f["cnodes"] = C, self._all_nodes
         return C
 
     def _nonfinite(self, n) -> str:
@@ -479,7 +495,7 @@ class Integrator:
         if n == 0 and self.fresh:
             dd *= 0.5  # trapezoidal rule: the first and last samples weigh half
         st.damp_sum += dd
-        if self.bodies:
+        if self.contacting:
             st.contact_work += 0.5 * contact_power(f["C"], Dn1, Dp, f["cnodes"])
 
     def _sample(self, n, D, vMv, f) -> bool:
@@ -490,7 +506,7 @@ class Integrator:
         Wext = ledger.external_work(st, self.P, D)
         # the trapezoidal sum up to t_n: the n-th term weighs half (at n = 0 too: E_damp(0) = 0)
         Edamp = st.damp_sum - 0.5 * self.alpha * st.dt * vMv
-        Ecn = f["Ec"] if self.bodies else 0.0
+        Ecn = f["Ec"] if self.contacting else 0.0
         if self.quasi:
             n_int, qf = self.forces.interp_and_branches(D)
             ledger.book_jumps(st, Es, qf)
@@ -511,6 +527,8 @@ class Integrator:
             st.max_interp, st.t_max_interp = ni, t
         if self.bodies:
             st.max_contact = max(st.max_contact, f["nact"])
+        if self.self_contact:
+            st.max_self = max(st.max_self, f["nself"])
         if self.n_fric:
             st.max_slip = max(st.max_slip, f["nslip"])
         st.last_ekin = Ek

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import time
 
+import numpy as np
+
 from ..timestep import critical_time_step
 
 
@@ -61,6 +63,17 @@ def info(integ, ok: bool) -> dict:
                 "friction_stick_energy": float(last.get("Et", 0.0)),  # of it, still in the stick springs
                 "friction_dissipation": float(-st.fric_work - last.get("Et", 0.0)),
                 "max_slipping_nodes": int(st.max_slip),
+            }
+        )
+    if integ.self_contact:
+        sc = integ.forces.selfc
+        info.update(
+            {
+                "self_contact": "penalty",  # contact_self_penalty.py
+                "self_contact_max_pairs": int(st.max_self),  # most vertex-triangle pairs in contact at a sample
+                "self_contact_searches": int(sc.searches),  # candidate searches since the last step estimate
+                # the closest two layers came in those passes [length] (None: never within h)
+                "self_contact_min_distance": float(sc.min_gap) if np.isfinite(sc.min_gap) else None,
             }
         )
     if integ.quasi:

@@ -76,6 +76,7 @@ FIELDS = {
     "t_max_interp": "f",
     "max_contact": "i",
     "max_pen": "f",
+    "max_self": "i",  # most self-contact pairs in contact at a sample
     "ek_prev_half": "f",
     "resets": "i",
     "last_ekin": "f",

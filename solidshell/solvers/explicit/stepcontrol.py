@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from ...contact import combined_critical_time_step, penalty_stiffness
+from ...contact_self_penalty import BUDGET_PAIRS, SELF_SHARE
 from ...errors import InputError
 from ...interfaces import ContactBody, ExplicitModel
 from ...model import Model
@@ -34,6 +35,7 @@ class Dynamics:
     n_fric: int  # how many of them have friction (their stick springs)
     force: Callable | None = None  # U (N,6) -> internal force to differentiate (None: model.internal_force)
     faces: Any = None  # contact_faces.FacePoints of the mesh (None: contact on the nodes only)
+    self_contact: bool = False  # the sheet against itself (contact_self_penalty.py)
 
 
 @dataclass
@@ -47,6 +49,7 @@ class StepLimit:
     k_pen: np.ndarray | None  # (N,) normal penalty stiffness, None without contact
     k_max: np.ndarray | None  # (N,) largest contact Hessian eigenvalue per node
     k_t: np.ndarray | None  # (N,) tangential stick stiffness, None without friction
+    k_self: np.ndarray | None = None  # (N,) a self-contact pair's penalty per node, None without
     n_evals: int = 0  # force evaluations spent on the estimate
     seconds: float = 0.0  # wall time of the estimate
     mode: np.ndarray | None = None  # the top mode (warm start of the re-checks)
@@ -85,9 +88,10 @@ def omega_sheet(model, M, free_mask, D, s, force=None, v0=None, difference="cent
 
 
 def limit(omega_el, method, dyn: Dynamics, s, alpha, n_evals=0, seconds=0.0, mode=None) -> StepLimit:
-    """Combine the sheet's omega_el with the penalty springs of ``dyn.bodies`` into a StepLimit."""
+    """Combine the sheet's omega_el with the penalty springs of ``dyn.bodies`` and of the sheet's
+    self-contact into a StepLimit."""
     M, bodies, n_fric = dyn.M, dyn.bodies, dyn.n_fric
-    k_pen = k_max = k_t = None
+    k_pen = k_max = k_t = k_self = None
     omega = omega_el
     if bodies:
         k_pen = penalty_stiffness(M[:, 0], omega_el, s.contact_penalty_factor)
@@ -101,8 +105,15 @@ def limit(omega_el, method, dyn: Dynamics, s, alpha, n_evals=0, seconds=0.0, mod
         omega = 2.0 / combined_critical_time_step(omega_el, k_max, M[:, 0])
         if n_fric:
             k_t = s.friction_stiffness * k_n
+    if dyn.self_contact:
+        # a pair's spring is SELF_SHARE of a body's; a node budgets BUDGET_PAIRS of them, one body's
+        # worth (contact_self_penalty.py)
+        k_body = penalty_stiffness(M[:, 0], omega_el, s.contact_penalty_factor)
+        k_self = SELF_SHARE * k_body
+        k_max = BUDGET_PAIRS * k_self + (k_max if k_max is not None else 0.0)
+        omega = 2.0 / combined_critical_time_step(omega_el, k_max, M[:, 0])
     return StepLimit(
-        omega_el, omega, critical_time_step(omega, alpha), method, k_pen, k_max, k_t, n_evals, seconds, mode
+        omega_el, omega, critical_time_step(omega, alpha), method, k_pen, k_max, k_t, k_self, n_evals, seconds, mode
     )
 
 

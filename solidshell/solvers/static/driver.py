@@ -476,7 +476,14 @@ def run(problem, settings: dict | None = None, progress=None) -> SolveResult:
         other = _other_solver_keys()
         settings = {k: v for k, v in settings.items() if k in StaticSettings.model_fields or k not in other}
     s = parse(StaticSettings, settings, "solver.static")
-    return solve_static(
+    note = None
+    if getattr(problem, "self_contact", False) and not s.self_contact:
+        # the scene's [self_contact]: the barrier where the method can keep its steps apart
+        if s.method == "newton":
+            s = parse(StaticSettings, {**s.as_dict(), "self_contact": True}, "solver.static")
+        else:
+            note = f"self-contact is left out: the static method {s.method!r} takes none (method 'newton' does)"
+    res = solve_static(
         problem.model,
         problem.fixed,
         problem.loads,
@@ -485,3 +492,6 @@ def run(problem, settings: dict | None = None, progress=None) -> SolveResult:
         progress=progress,
         settings=s,
     )
+    if note:
+        res.info.setdefault("warnings", []).append(note)
+    return res

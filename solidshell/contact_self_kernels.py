@@ -1,0 +1,239 @@
+"""Compiled kernels of the sheet's penalty self-contact (contact_self_penalty.py): the closest point
+of a triangle to a vertex, the candidate search, and the force pass.
+
+Plain functions on plain arrays (positions (N,3) or the flat dof vector (6N,) of Eq. (1), index
+arrays of triangles (T,3) and candidate pairs); lengths in the mesh's unit, forces in
+the model's force unit.  Closest points after Ericson, "Real-Time Collision Detection" (2005),
+Sec. 5.1.5 (point-triangle, by Voronoi regions: the barycentric weights of the closest point are
+exact zeros off the triangle's interior).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True, inline="always")
+def _d3(a, b):
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+@njit(cache=True, inline="always")
+def _sub(a, b):
+    return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
+
+
+@njit(cache=True, inline="always")
+def _comb3(wa, a, wb, b, wc, c):
+    return (wa * a[0] + wb * b[0] + wc * c[0], wa * a[1] + wb * b[1] + wc * c[1], wa * a[2] + wb * b[2] + wc * c[2])
+
+
+@njit(cache=True, inline="always")
+def _pt(x, i):
+    return (x[i, 0], x[i, 1], x[i, 2])
+
+
+@njit(cache=True, inline="always")
+def _ptd(X0, D, i):
+    """The mid-surface position X0[i] + D[6i:6i+3] as a tuple."""
+    return (X0[i, 0] + D[6 * i], X0[i, 1] + D[6 * i + 1], X0[i, 2] + D[6 * i + 2])
+
+
+@njit(cache=True)
+def point_triangle(p, a, b, c):
+    """Barycentric weights (wa, wb, wc) of the point of triangle abc closest to p (3-tuples;
+    Ericson 5.1.5)."""
+    ab, ac, ap = _sub(b, a), _sub(c, a), _sub(p, a)
+    d1, d2 = _d3(ab, ap), _d3(ac, ap)
+    if d1 <= 0.0 and d2 <= 0.0:
+        return 1.0, 0.0, 0.0
+    bp = _sub(p, b)
+    d3, d4 = _d3(ab, bp), _d3(ac, bp)
+    if d3 >= 0.0 and d4 <= d3:
+        return 0.0, 1.0, 0.0
+    vc = d1 * d4 - d3 * d2
+    if vc <= 0.0 and d1 >= 0.0 and d3 <= 0.0:
+        v = d1 / (d1 - d3)
+        return 1.0 - v, v, 0.0
+    cp = _sub(p, c)
+    d5, d6 = _d3(ab, cp), _d3(ac, cp)
+    if d6 >= 0.0 and d5 <= d6:
+        return 0.0, 0.0, 1.0
+    vb = d5 * d2 - d1 * d6
+    if vb <= 0.0 and d2 >= 0.0 and d6 <= 0.0:
+        w = d2 / (d2 - d6)
+        return 1.0 - w, 0.0, w
+    va = d3 * d6 - d5 * d4
+    if va <= 0.0 and (d4 - d3) >= 0.0 and (d5 - d6) >= 0.0:
+        w = (d4 - d3) / ((d4 - d3) + (d5 - d6))
+        return 0.0, 1.0 - w, w
+    den = 1.0 / (va + vb + vc)
+    v, w = vb * den, vc * den
+    return 1.0 - v - w, v, w
+
+
+@njit(cache=True)
+def _vf_owned(own, wa, wb, wc):
+    """Whether this triangle counts the vertex-triangle pair whose closest point has weights
+    (wa, wb, wc): always in the interior; on an edge or a corner only if the triangle owns that
+    feature (bits 0-2: edges ab, bc, ca; bits 3-5: corners a, b, c), so that a vertex near an
+    edge or a corner shared by several triangles meets it once (IPC's vertex-edge and
+    vertex-vertex pairs)."""
+    za, zb, zc = wa == 0.0, wb == 0.0, wc == 0.0
+    nz = int(za) + int(zb) + int(zc)
+    if nz == 0:
+        return True
+    if nz == 1:
+        bit = 0 if zc else (1 if za else 2)
+    else:
+        bit = 3 if not za else (4 if not zb else 5)
+    return (own >> bit) & 1 == 1
+
+
+@njit(cache=True, inline="always")
+def _push(C, node, w, f, n):
+    C[6 * node] += w * f * n[0]
+    C[6 * node + 1] += w * f * n[1]
+    C[6 * node + 2] += w * f * n[2]
+
+
+@njit(cache=True)
+def self_pass(X0, D, tri, own, vf, k, h, C):
+    """Add the penalty forces of the candidate vertex-triangle pairs vf (P,2) to C (6N,) at the
+    state D (6N,): a pair at distance d < h with unit direction n (from the triangle's closest point
+    to the vertex) carries the energy k/2 (h - d)^2 and pushes its two closest points
+    apart with k (h - d), spread on their nodes by the closest points' weights (the exact gradient:
+    the weights are those of the closest point, Sec. 5.1 of Ericson).  k (N,) per node; a pair takes
+    the smallest k of its four nodes; a triangle counts only the pairs it owns (_vf_owned).  Returns (energy, pairs in contact, the smallest distance of those (inf: none))."""
+    E, n_act, dmin = 0.0, 0, np.inf
+    for i in range(len(vf)):
+        v, t = vf[i, 0], vf[i, 1]
+        a, b, c = tri[t, 0], tri[t, 1], tri[t, 2]
+        p, xa, xb, xc = _ptd(X0, D, v), _ptd(X0, D, a), _ptd(X0, D, b), _ptd(X0, D, c)
+        wa, wb, wc = point_triangle(p, xa, xb, xc)
+        if not _vf_owned(own[t], wa, wb, wc):
+            continue
+        r = _sub(p, _comb3(wa, xa, wb, xb, wc, xc))
+        d = math.sqrt(_d3(r, r))
+        if d >= h or d == 0.0:
+            continue
+        dmin = min(dmin, d)
+        kk = min(min(k[v], k[a]), min(k[b], k[c]))
+        f = kk * (h - d)
+        E += 0.5 * f * (h - d)
+        n_act += 1
+        n = (r[0] / d, r[1] / d, r[2] / d)
+        _push(C, v, 1.0, f, n)
+        _push(C, a, -wa, f, n)
+        _push(C, b, -wb, f, n)
+        _push(C, c, -wc, f, n)
+    return E, n_act, dmin
+
+
+@njit(cache=True)
+def max_move(X0, D, Xb):
+    """Largest distance of a node's mid-surface position X0 + D[:3] from Xb (N,3) (its position at
+    the last candidate search)."""
+    m = 0.0
+    for i in range(len(X0)):
+        s = 0.0
+        for j in range(3):
+            r = X0[i, j] + D[6 * i + j] - Xb[i, j]
+            s += r * r
+        m = max(m, s)
+    return math.sqrt(m)
+
+
+# ---------------------------------------------------------------------- the candidate search
+@njit(cache=True)
+def _cell(p, lo, c, n):
+    """Integer cell (ix, iy, iz) of the point p in a grid of cell size c from lo, n cells per axis."""
+    ix = min(max(int((p[0] - lo[0]) / c), 0), n[0] - 1)
+    iy = min(max(int((p[1] - lo[1]) / c), 0), n[1] - 1)
+    iz = min(max(int((p[2] - lo[2]) / c), 0), n[2] - 1)
+    return ix, iy, iz
+
+
+@njit(cache=True)
+def _grid(p, c):
+    """A uniform grid of cell size c over the points p (M,3): (lo, cells per axis, the points' keys
+    sorted, the points in that order)."""
+    lo = np.empty(3)
+    hi = np.empty(3)
+    n = np.empty(3, dtype=np.int64)
+    for j in range(3):
+        lo[j] = p[:, j].min() - c
+        hi[j] = p[:, j].max() + c
+        n[j] = max(1, int((hi[j] - lo[j]) / c) + 1)
+    keys = np.empty(len(p), dtype=np.int64)
+    for i in range(len(p)):
+        ix, iy, iz = _cell(p[i], lo, c, n)
+        keys[i] = (ix * n[1] + iy) * n[2] + iz
+    order = np.argsort(keys, kind="mergesort")
+    return lo, n, keys[order], order
+
+
+@njit(cache=True)
+def _pt_dist(x, v, a, b, c):
+    """Distance of the point x[v] from the triangle x[a] x[b] x[c]."""
+    p, xa, xb, xc = _pt(x, v), _pt(x, a), _pt(x, b), _pt(x, c)
+    wa, wb, wc = point_triangle(p, xa, xb, xc)
+    r = _sub(p, _comb3(wa, xa, wb, xb, wc, xc))
+    return math.sqrt(_d3(r, r))
+
+
+@njit(cache=True)
+def vf_candidates(x, X0, tri, r, rest_min):
+    """(P,2) the pairs (vertex, triangle) sharing no node whose distance at x (N,3) is below r and
+    whose distance in the flat reference X0 is at least rest_min: a uniform grid over the vertices
+    (cell: the largest triangle's box + 2r), each triangle's box grown by r looked up in it; two
+    passes (count, fill)."""
+    T = len(tri)
+    ext = 0.0
+    for t in range(T):
+        for j in range(3):
+            a, b, c = x[tri[t, 0], j], x[tri[t, 1], j], x[tri[t, 2], j]
+            ext = max(ext, max(a, max(b, c)) - min(a, min(b, c)))
+    cs = ext + 2.0 * r
+    lo, n, skeys, order = _grid(x, cs)
+    out = np.empty((0, 2), dtype=np.int64)
+    bmin, bmax = np.empty(3), np.empty(3)
+    for fill in range(2):
+        m = 0
+        for t in range(T):
+            ia, ib, ic = tri[t, 0], tri[t, 1], tri[t, 2]
+            for j in range(3):
+                bmin[j] = min(x[ia, j], min(x[ib, j], x[ic, j])) - r
+                bmax[j] = max(x[ia, j], max(x[ib, j], x[ic, j])) + r
+            i0, j0, k0 = _cell(bmin, lo, cs, n)
+            i1, j1, k1 = _cell(bmax, lo, cs, n)
+            for ix in range(i0, i1 + 1):
+                for iy in range(j0, j1 + 1):
+                    for iz in range(k0, k1 + 1):
+                        key = (ix * n[1] + iy) * n[2] + iz
+                        s0 = np.searchsorted(skeys, key)
+                        s1 = np.searchsorted(skeys, key, side="right")
+                        for s in range(s0, s1):
+                            v = order[s]
+                            if v == ia or v == ib or v == ic:
+                                continue
+                            if not (
+                                bmin[0] <= x[v, 0] <= bmax[0]
+                                and bmin[1] <= x[v, 1] <= bmax[1]
+                                and bmin[2] <= x[v, 2] <= bmax[2]
+                            ):
+                                continue
+                            if _pt_dist(x, v, ia, ib, ic) >= r:
+                                continue
+                            if _pt_dist(X0, v, ia, ib, ic) < rest_min:
+                                continue
+                            if fill:
+                                out[m, 0] = v
+                                out[m, 1] = t
+                            m += 1
+        if not fill:
+            out = np.empty((m, 2), dtype=np.int64)
+    return out

@@ -1,0 +1,134 @@
+"""Self-contact of the sheet in explicit dynamics and relaxation: a penalty between its layers,
+evaluated on candidate pairs found by a compiled grid and kept while no node has moved far.
+
+The law (issue 37: two layers keep their mid-surfaces about a thickness h apart)
+--------------------------------------------------------------------------------
+The mid-surface as triangles (layers.triangles).  Every pair of a vertex and a triangle sharing no
+node whose distance d lies below h carries the energy
+
+    E = k/2 (h - d)^2                                                       [force x length]
+
+and pushes the vertex and the triangle's closest point apart along the line joining them with
+k (h - d), spread on the triangle's nodes by the closest point's barycentric weights (the exact
+gradient of E).  A vertex meets a triangle where its closest point lies inside the triangle, and
+an edge or a corner shared by several triangles once, by the triangle that owns it (IPC's
+vertex-edge and vertex-vertex pairs, Li et al., SIGGRAPH 2020).  Both faces of the sheet alike:
+the distance is unsigned.  Frictionless.
+
+Pairs closer than REST_MIN h = 2h in the flat reference state are neighbours in the sheet, not
+layers, and never take part: two such points face each other across a fold only if its radius is
+below 2h / pi < h, tighter than two layers of thickness h can fold (on the meshes this code makes
+they are the pairs sharing a node, hanging nodes on their coarse neighbours' edges, and in refined
+regions the next ring).
+
+No edge-edge pairs: in two resting layers they outnumber the vertex-triangle pairs three to one
+and made the candidate search ten times dearer (two 70 x 70 sheets 0.055 cm apart: 1.9 x 10^5
+edge pairs against 6.8 x 10^4, 350-450 ms against 30-65 ms a search).  Without them two creases
+crossing each other edge on edge, with every vertex more than h from the other layer, can pass
+through; the scenes' independent check (verification/self_check.py) counts any such crossing.
+
+k: the penalty of the rigid bodies scaled down, k_pair = SELF_SHARE x k_pen per node
+(contact.penalty_stiffness: contact_penalty_factor x m omega_max^2), a pair taking the smallest of
+its nodes'.  A node of one of two resting layers sits in about BUDGET_PAIRS pair springs' worth of
+row sum (its own pairs, two or three near the other layer's edges, each with row sum 2 k_pair, and
+its triangles' share of the other layer's vertices' pairs), so the critical step budgets
+BUDGET_PAIRS x SELF_SHARE x k_pen = k_pen per node for it (solvers/explicit/stepcontrol.limit):
+the price of one more rigid body.
+
+A penalty, not a barrier: nothing forbids a layer from passing through another, it is only pushed
+back, with k (h - d).  Two layers meeting at speed v come within about v / omega_c of each other,
+omega_c = sqrt(2 k_pair / m) = 0.16 omega_max; at the speeds of a drape (a fall of a few cm, ~1
+m/s) that is a small fraction of h.  tests/test_self_penalty.py measures how often random drops
+end with layers through each other.
+
+Candidates (a Verlet list): at a search, every pair within h + margin by its true distance (and
+not neighbours); the search is repeated once some node has moved more than margin / 2 since the
+last one (the vertex and every point of the triangle then moved at most margin / 2, so a pair that
+was beyond h + margin is still beyond h: the pass over the candidates gives the forces of all
+pairs exactly).  The search is a compiled uniform grid (contact_self_kernels.vf_candidates):
+measured against the IPC Toolkit's LBVH on the two sheets above, the library's broad phase takes
+35-50 ms and handing its candidate objects to numpy another 300 ms.  In a flat region no pair
+survives (every pair within h + margin is a neighbour): a sheet without folds carries no
+candidates and pays only the searches.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import contact_self_kernels as sk
+from .layers import triangles
+
+SELF_SHARE = 1.0 / 8.0
+"""A pair's penalty as a share of the rigid bodies' per-node penalty k_pen."""
+
+BUDGET_PAIRS = 8
+"""Pair springs per node the critical step allows for (module docstring): SELF_SHARE x BUDGET_PAIRS = 1."""
+
+MARGIN = 2.0
+"""The candidates' margin as a multiple of h: a search when a node has moved MARGIN h / 2."""
+
+REST_MIN = 2.0
+"""Pairs closer than REST_MIN x h in the flat reference state are neighbours, never layers
+(module docstring)."""
+
+
+def ownership(tri: np.ndarray, n_nodes: int) -> np.ndarray:
+    """(T,) bit masks: a triangle owns an edge (bits 0-2: ab, bc, ca) and a corner (bits 3-5: a, b,
+    c) when it holds the feature's first occurrence in the stacked order: each feature has exactly
+    one owner."""
+    T = len(tri)
+    own = np.zeros(T, dtype=np.int64)
+    e = np.sort(np.vstack([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]), axis=1)
+    key = e[:, 0].astype(np.int64) * n_nodes + e[:, 1]
+    _, first = np.unique(key, return_index=True)
+    for bit in range(3):
+        sel = first[(first >= bit * T) & (first < (bit + 1) * T)] - bit * T
+        own[sel] |= 1 << bit
+    flat = tri.T.ravel()  # corner a of every triangle, then b, then c
+    _, first = np.unique(flat, return_index=True)
+    for bit in range(3):
+        sel = first[(first >= bit * T) & (first < (bit + 1) * T)] - bit * T
+        own[sel] |= 1 << (3 + bit)
+    return own
+
+
+class SelfPenalty:
+    """The penalty self-contact of ``mesh`` (a ShellMesh) of thickness h [length] with per-node
+    stiffness k (N,) [force/length] (already scaled by SELF_SHARE); works on flat dof vectors D (6N,)."""
+
+    def __init__(self, mesh, h: float, k):
+        self.X0 = np.ascontiguousarray(mesh.nodes, dtype=float)
+        self.N = len(self.X0)
+        self.tri = np.ascontiguousarray(triangles(mesh), dtype=np.int64)
+        self.own = ownership(self.tri, self.N)
+        self.h = float(h)
+        self.k = np.ascontiguousarray(np.broadcast_to(np.asarray(k, dtype=float), (self.N,)))
+        self.margin = MARGIN * self.h
+        self.rest_min = REST_MIN * self.h
+        self.vf = np.zeros((0, 2), dtype=np.int64)
+        self.Xb = np.full_like(self.X0, np.inf)  # positions at the last search (inf: none yet)
+        self.searches = 0
+        self.min_gap = np.inf  # smallest distance of a pair in contact seen by the passes [length]
+
+    # ------------------------------------------------------------------ candidates
+    def search(self, x: np.ndarray) -> None:
+        """Candidate pairs within h + margin at positions x (N, 3)."""
+        r = self.h + self.margin
+        x = np.ascontiguousarray(x, dtype=float)
+        vf = sk.vf_candidates(x, self.X0, self.tri, r, self.rest_min)
+        # in (triangle, vertex) order: the pairs in contact are then summed in the same order
+        # whatever state the search saw, so a restart gives the forces bit for bit
+        self.vf = np.ascontiguousarray(vf[np.argsort(vf[:, 1] * self.N + vf[:, 0], kind="stable")])
+        self.Xb = x.copy()
+        self.searches += 1
+
+    # ------------------------------------------------------------------ forces
+    def add_forces(self, D, C):
+        """Add the penalty forces at D (6N,) into C (6N,); (energy, pairs in contact)."""
+        if not sk.max_move(self.X0, D, self.Xb) <= 0.5 * self.margin:  # NaN too
+            self.search(self.X0 + D.reshape(self.N, 6)[:, :3])
+        E, n, dmin = sk.self_pass(self.X0, D, self.tri, self.own, self.vf, self.k, self.h, C)
+        if dmin < self.min_gap:
+            self.min_gap = dmin
+        return E, n

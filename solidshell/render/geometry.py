@@ -196,12 +196,20 @@ def covered_top(body: dict, z: float) -> Surface:
 
 
 def bodies_of(scene) -> list:
-    """The rigid bodies a scene's pictures show: its spheres and pedestals (a Cusick support and
-    its clamp included) out of ``scene.bodies()``, the same dicts the solvers build their contact
-    bodies from (planes are not drawn)."""
+    """The rigid bodies a scene's pictures show: its spheres, pedestals (a Cusick support and
+    its clamp included) and mesh bodies (with their ``triangles`` (V, F) added) out of
+    ``scene.bodies()``, the same dicts the solvers build their contact bodies from (planes are not
+    drawn)."""
     if scene is None:
         return []
-    return [b for b in scene.bodies() if b["type"] in ("sphere", "pedestal")]
+    out = [b for b in scene.bodies() if b["type"] in ("sphere", "pedestal", "mesh")]
+    for b in out:
+        if b["type"] == "mesh":  # its triangles, as the solver's body holds them (contact_mesh)
+            from ..scenes.build import contact_body
+
+            body = contact_body(b, scene.base_dir)
+            b["triangles"], b["curvature_radius"] = (body.V, body.F), body.curvature_radius
+    return out
 
 
 def scene_surfaces(mesh, X, bodies, mesh_lines: bool = True, cover_pedestal: bool = True) -> list:
@@ -212,6 +220,12 @@ def scene_surfaces(mesh, X, bodies, mesh_lines: bool = True, cover_pedestal: boo
     for b in bodies:
         if b["type"] == "sphere":
             out.append(sphere_surface(b["centre"], b["radius"] - chord_sag(mesh, X, b["radius"])))
+        elif b["type"] == "mesh":
+            V, F = (np.asarray(a) for a in b["triangles"])
+            rho = b.get("curvature_radius")
+            if rho:  # drawn smaller by the chord sag, as the sphere is (chord_sag)
+                V = V - chord_sag(mesh, X, rho) * _vertex_normals(V, F)
+            out.append(Surface(V.astype(float), np.zeros((0, 4), int), F.astype(int), solid=True))
         elif b["type"] == "pedestal":
             # a pedestal scene meshes only the hanging part; the sheet lies flat on the top (its
             # mid-surface ``offset`` above it), which hides the pedestal's own top.  A clamp sits on
@@ -223,6 +237,15 @@ def scene_surfaces(mesh, X, bodies, mesh_lines: bool = True, cover_pedestal: boo
             else:
                 out += pedestal_surfaces(b)
     return out
+
+
+def _vertex_normals(V, F) -> np.ndarray:
+    """(P,3) unit area-weighted vertex normals of a closed outward triangle surface."""
+    n = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+    out = np.zeros_like(V, dtype=float)
+    for k in range(3):
+        np.add.at(out, F[:, k], n)
+    return out / np.maximum(np.linalg.norm(out, axis=1), 1e-300)[:, None]
 
 
 def chord_sag(mesh, X, radius: float) -> float:

@@ -335,13 +335,14 @@ def test_unwritable_output_exit_3_with_path(tmp_path, capsys):
     one_error_line(capsys.readouterr().err, 3, rc, "I/O error", str(out))
 
 
-def test_full_disk_exit_3_names_file_and_leaves_no_summary(tmp_path, capsys, monkeypatch):
+def test_full_disk_exit_3_names_file_and_keeps_the_earlier_run(tmp_path, capsys, monkeypatch):
     from solidshell import io as sio_mod
     from solidshell.cli import main
 
     out = tmp_path / "o"
     assert main(["mesh", "strip-warp", "--mesh", "2x1", "--out", str(out), "--set", "output.pictures=[]"]) == 0
     capsys.readouterr()
+    before = {n: (out / n).read_bytes() for n in names(out)}
     real = sio_mod.write_mesh_file
 
     def full(path, *a, **k):
@@ -352,9 +353,10 @@ def test_full_disk_exit_3_names_file_and_leaves_no_summary(tmp_path, capsys, mon
     monkeypatch.setattr(sio_mod, "write_mesh_file", full)
     rc = main(["mesh", "strip-warp", "--mesh", "4x1", "--out", str(out), "--set", "output.pictures=[]"])
     one_error_line(capsys.readouterr().err, 3, rc, str(out / "mesh.vtu"), "No space left on device")
-    # the old run's summary is gone (it would describe files that are no longer its own); the
-    # RUNNING marker says a run started here and did not finish
-    assert "summary.json" not in names(out) and "RUNNING" in names(out)
+    # the new run's files were written beside the old ones (rundir): the earlier run is left whole,
+    # no marker, no staging folder
+    assert {n: (out / n).read_bytes() for n in names(out)} == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["o"]
     with pytest.raises(IOFailure, match="mesh.vtu: No space left on device") as e:
         from solidshell.run import run_scene
 

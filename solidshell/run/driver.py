@@ -12,9 +12,12 @@ are imported only when a solver runs, so building and writing a mesh (``solver="
 
 from __future__ import annotations
 
+import json
 import logging
+import tempfile
 import time
 import uuid
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -23,7 +26,8 @@ import numpy as np
 
 from .. import io as sio
 from .. import solvers
-from ..errors import SolverError
+from ..errors import IOFailure, SolverError
+from ..rundir import check_checkpoint
 from ..scenes import Scene, load
 from ..scenes.build import build_problem, build_scene_mesh, run_settings, setup_scene, support_mask
 from .adaptive import adapt_settings, level0_mesh
@@ -185,6 +189,8 @@ def _run(plan: RunPlan, cb, t_start: float) -> RunOutput:
 
     # check: every input, before anything is written
     settings = run_settings(sc, kind, plan.settings)
+    if settings and settings.get("checkpoint"):
+        check_checkpoint(settings["checkpoint"], plan.out_dir)
     folder = prepare_folder(plan.out_dir, run_id, plan.force, settings, sc.output)
     adapt = adapt_settings(sc, kind)
 
@@ -213,16 +219,26 @@ def _run(plan: RunPlan, cb, t_start: float) -> RunOutput:
             raise
         warnings += record_state(summary, sc, solved)
 
-    # write: the earlier run's files go first (its summary before the rest), then this run's
+    # write: this run's files beside the earlier run's, swapped in at the end (solidshell.rundir)
     t = time.perf_counter()
-    files, snap_warnings = write_run(folder, sc, kind, mesh_name, solved, summary, cb)
-    if folder is not None:
-        timings["write_results"] = time.perf_counter() - t
-    timings["total"] = time.perf_counter() - t_start
-    boundary = close_summary(summary, timings, warnings + snap_warnings)
-    if folder is not None:
-        summary["files"] = sorted({Path(f).name for f in files} | {"summary.json"})
-        files.append(folder.finish(summary))
+    try:
+        with _undisturbed(kind):
+            files, snap_warnings = write_run(folder, sc, kind, mesh_name, solved, summary, cb)
+            if folder is not None:
+                timings["write_results"] = time.perf_counter() - t
+            timings["total"] = time.perf_counter() - t_start
+            boundary = close_summary(summary, timings, warnings + snap_warnings)
+            if folder is not None:
+                summary["files"] = sorted({Path(f).name for f in files} | {"summary.json"})
+                folder.finish(summary)
+                files = [folder.path / n for n in summary["files"] if n != "summary.json"]
+                files.append(folder.path / "summary.json")
+    except BaseException as e:
+        if folder is not None:
+            folder.abandon()  # the earlier run stays as it was
+            if isinstance(e, OSError) and kind != "none":
+                raise _results_lost(e, folder, solved, summary) from None
+        raise
     cb(1.0, "interrupted" if summary["interrupted"] else "done")
     return RunOutput(
         summary=sio.to_jsonable(summary),
@@ -287,3 +303,47 @@ def _solve(plan: RunPlan, setup, arun, cb, timings: dict) -> Solved:
 
 def _state(result, mesh) -> np.ndarray:
     return np.asarray(result.U, float).reshape(mesh.n_nodes, 6)
+
+
+@contextmanager
+def _undisturbed(kind: str):
+    """The write phase runs to its end: a Ctrl-C or SIGTERM meanwhile waits for it, as during a
+    solver's step (solvers.explicit.observers.deferred_interrupt), so it cannot leave the results
+    half written; the run then ends as it would have.  A mesh-only run writes in a moment (and
+    need not import the solvers)."""
+    if kind == "none":
+        yield
+        return
+    from ..solvers.explicit.observers import deferred_interrupt
+
+    with deferred_interrupt():
+        yield
+
+
+def _results_lost(e: OSError, folder, solved: Solved, summary: dict) -> IOFailure:
+    """The IOFailure of a results write that failed (full disk, ...): the folder holds the earlier
+    run unchanged (the staging folder is gone), and the solved state (U, the mesh, the summary) is
+    saved to a file in the system's temporary folder, named in the one-line message with the run's
+    checkpoint when it has one."""
+    where = getattr(e, "path", None) or getattr(e, "filename", None) or folder.path
+    reason = getattr(e, "reason", None) or e.strerror or str(e)
+    keep = Path(tempfile.gettempdir()) / f"solidshell-{folder.run_id[:12]}-state.npz"
+    mesh = solved.mesh
+    try:
+        with sio.atomic_path(keep) as tmp, open(tmp, "wb") as fh:
+            np.savez(
+                fh,
+                U=np.asarray(solved.U, float),
+                nodes=np.asarray(mesh.nodes, float),
+                quads=np.asarray(mesh.quads),
+                tris=np.asarray(mesh.tris),
+                summary=np.asarray(json.dumps(sio.to_jsonable(summary))),
+            )
+        saved = f"the solved state (U, mesh, summary) was saved to {keep}"
+    except OSError as e2:
+        saved = f"the solved state could not be saved to {keep} either ({e2.strerror or e2})"
+    ck = summary.get("checkpoint")
+    ck_note = f"; the run's last checkpoint is {ck}" if isinstance(ck, str) and Path(ck).is_file() else ""
+    return IOFailure(
+        where, f"{reason}; results not written ({folder.path} holds the earlier run unchanged); {saved}{ck_note}"
+    )

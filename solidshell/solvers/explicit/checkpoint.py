@@ -3,7 +3,8 @@
 ``save(path, state, extra)`` writes every :data:`state.FIELDS` entry, the kept frames, the state's
 ``fingerprint`` (per-item digests of everything that shapes the run, :func:`fingerprint`) and any
 ``extra`` arrays (e.g. an adaptive driver's mesh state) to a temporary file, fsyncs it and renames it
-over ``path``: a reader sees the old or the new checkpoint, never half of one.  ``load(path)``
+over ``path``: a reader sees the old or the new checkpoint, never half of one; a failure is an
+IOFailure naming ``path``.  ``load(path)``
 returns ``(state, extra)`` or raises one InputError line (missing, truncated, foreign, old version).
 """
 
@@ -15,7 +16,7 @@ import zipfile
 
 import numpy as np
 
-from ...errors import InputError
+from ...errors import InputError, IOFailure
 from ...interfaces import QuasiStrainModel, SolverProblem
 from ...io import atomic_path
 from ...model import Model
@@ -38,9 +39,12 @@ def save(path, state: State, extra: dict | None = None) -> None:
     for k, v in (extra or {}).items():
         arrays[_EXTRA + k] = np.asarray(v)
     arrays["version"] = np.asarray(VERSION)
-    with atomic_path(path) as tmp:  # a run killed mid-write leaves a temporary the run
-        with open(tmp, "wb") as fh:  # folder knows as this file's (rundir), not a stray file
-            np.savez(fh, **arrays)
+    try:
+        with atomic_path(path) as tmp:  # a run killed mid-write leaves a temporary the run
+            with open(tmp, "wb") as fh:  # folder knows as this file's (rundir), not a stray file
+                np.savez(fh, **arrays)
+    except OSError as e:  # named by the checkpoint's path, not the temporary's
+        raise IOFailure(path, e.strerror or str(e) or type(e).__name__) from None
 
 
 def load(path) -> tuple[State, dict]:

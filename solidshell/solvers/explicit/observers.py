@@ -44,12 +44,17 @@ def next_frame_time(st: FrameStore) -> float:
 # ----------------------------------------------------------------------------- checkpoints
 class Checkpointer:
     """Writes the state every ``every`` steps, or (every None) every ``wall`` seconds of wall time,
-    looked at every 100 steps (a checkpoint holds the kept frames: tens of MB on a big mesh)."""
+    looked at every 100 steps (a checkpoint holds the kept frames: tens of MB on a big mesh).  A
+    checkpoint that cannot be written (full disk, a folder gone) does not stop the run: the failure
+    goes into ``warnings`` (the run's list) once per reason, naming the path, and the next one is
+    tried when due."""
 
-    def __init__(self, path, every, wall, extra=None):
+    def __init__(self, path, every, wall, extra=None, warnings=None):
         self.path, self.every, self.wall = path, every, wall
         self.extra = extra  # callable -> dict of extra arrays (an adaptive driver's state)
         self.t_last = time.perf_counter()
+        self.warnings = warnings if warnings is not None else []
+        self.failures = 0
 
     def due(self, step: int) -> bool:
         if not self.path:
@@ -59,9 +64,20 @@ class Checkpointer:
         return step % 100 == 0 and time.perf_counter() - self.t_last >= self.wall
 
     def write(self, st: State) -> None:
-        if self.path:
+        if not self.path:
+            return
+        try:
             checkpoint.save(self.path, st, self.extra() if self.extra else None)
-            self.t_last = time.perf_counter()
+        except OSError as e:
+            self.failures += 1
+            reason = getattr(e, "reason", None) or e.strerror or str(e)
+            text = f"checkpoint {self.path} not written at step {st.step}: {reason}; the run goes on"
+            if not any(
+                w.startswith(f"checkpoint {self.path} not written") and w.endswith(f": {reason}; the run goes on")
+                for w in self.warnings
+            ):
+                self.warnings.append(text)
+        self.t_last = time.perf_counter()
 
 
 # ----------------------------------------------------------------------------- progress

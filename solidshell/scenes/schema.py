@@ -389,9 +389,28 @@ def make_material(material: dict):
     return FABRICS[material["fabric"]](**rest)
 
 
+MATERIAL_MAX = 1e12
+"""The largest rigidity or weight a [material] value may have, in its units (gf/cm, gf cm^2/cm,
+gf/cm^2): a 1 mm steel plate is ~2e8 gf/cm in tension and ~2e5 gf cm in bending, so 1e12 leaves
+decades for any sheet, while values near 1e150 overflow the tangent's products (a numpy
+RuntimeWarning and a solver that stops, as tensile_warp = 1e300 did)."""
+WARP_ANGLE_MAX = 360.0  # [deg]: an angle past a full turn is a typing slip (or radians x 57)
+
+
+def _bounds(m: dict) -> None:
+    """Bad when a fabric value is past MATERIAL_MAX or the warp angle past a full turn."""
+    wa = m.get("warp_angle")
+    if isinstance(wa, (int, float)) and not abs(wa) <= WARP_ANGLE_MAX:
+        raise Bad("warp_angle", f"must lie in [-{WARP_ANGLE_MAX:g}, {WARP_ANGLE_MAX:g}] degrees, got {wa!r}")
+    for k, v in m.items():
+        if k not in ("warp_angle", "poisson", "thickness") and isinstance(v, (int, float)) and abs(v) > MATERIAL_MAX:
+            raise Bad(k, f"{v!r} is past the guard of {MATERIAL_MAX:g} (its units: see solidshell.material)")
+
+
 class _Section(Table):
     @model_validator(mode="after")
     def _build(self):
+        _bounds({k: v for k, v in self.given().items() if not isinstance(v, dict)})
         try:  # built once so that zero/negative rigidities are reported now, with the file
             make_material(self.given())
         except InputError as e:

@@ -68,6 +68,50 @@ def _dashboard(client) -> str | None:
     return client.dashboard_link if "dashboard" in services else None
 
 
+WORKER_MB = 300
+"""Memory [MB] a local worker process takes before its run (Python, numpy, numba, distributed; ~250
+MB measured on this machine): with the run's own, what bounds --workers by the available memory."""
+
+_SCHEMES = ("tcp", "tls", "inproc", "ucx", "ws", "wss")
+
+
+def check_workers(workers: int, threads: int = 1) -> None:
+    """The local cluster's guard (InputError, one line, before anything is written): at most four
+    worker processes per CPU (more only queue for the cores) and no more than the available memory
+    holds at WORKER_MB each (--workers 1000 grew to 4 GB and swapped)."""
+    cpus = os.cpu_count() or 1
+    if workers > 4 * cpus:
+        raise InputError(
+            f"--workers {workers} exceeds the guard of 4 worker processes per CPU ({4 * cpus} on this machine's "
+            f"{cpus}); more only queue for the cores"
+        )
+    from ..sizing import available_memory
+
+    avail = available_memory()
+    need = workers * WORKER_MB * 2**20
+    if avail is not None and need > avail:
+        raise InputError(
+            f"--workers {workers}: {workers} worker processes need about {need / 2**30:.1f} GiB before their runs, "
+            f"more than the {avail / 2**30:.1f} GiB available; use fewer workers"
+        )
+
+
+def check_scheduler(address: str) -> str:
+    """``address`` when it reads as a Dask scheduler address (SCHEME://HOST:PORT, the scheme one of
+    Dask's); else InputError, one line.  Whether it answers is found by connecting."""
+    from urllib.parse import urlsplit
+
+    bad = InputError(f"--scheduler {address!r} is not a scheduler address: give tcp://HOST:PORT")
+    try:
+        u = urlsplit(address)
+        port = u.port
+    except ValueError:
+        raise bad from None
+    if u.scheme not in _SCHEMES or (u.scheme != "inproc" and (not u.hostname or port is None)):
+        raise bad
+    return address
+
+
 def _client(scheduler, workers, threads):
     """(client, cluster or None): a LocalCluster on the loopback interface, or a scheduler."""
     from distributed import Client, LocalCluster
@@ -75,8 +119,8 @@ def _client(scheduler, workers, threads):
     if scheduler:
         try:
             return Client(scheduler, timeout="20s"), None
-        except (OSError, TimeoutError) as e:
-            raise InputError(f"--scheduler {scheduler}: cannot connect ({e})") from None
+        except (OSError, TimeoutError, ValueError) as e:
+            raise InputError(f"--scheduler {scheduler}: cannot connect ({' '.join(str(e).split())})") from None
     n = workers or max(1, (os.cpu_count() or 1) // max(1, threads))
     cluster = LocalCluster(
         n_workers=n,
@@ -178,9 +222,19 @@ def run_sweep(
         raise InputError(f"--workers must be >= 1, got {workers}")
     if scheduler and workers is not None:
         raise InputError("--workers starts a local cluster; a --scheduler has its own workers")
+    if workers is not None:
+        check_workers(workers, threads)
     ledger = Ledger(out, spec)
     ledger.check()
-    ledger.open()
+    # a scheduler is reached before anything is written: a wrong or unreachable address leaves
+    # --out as it was
+    early = _client(check_scheduler(scheduler), None, threads) if scheduler else None
+    try:
+        ledger.open()
+    except BaseException:
+        if early is not None:
+            early[0].close()
+        raise
     done = ledger.done_keys()
     todo = [r for r in spec.runs if r.key not in done]
     if limit is not None:
@@ -194,9 +248,11 @@ def run_sweep(
         failed_before=[(k, why) for k, why in ledger.errors() if k in keys],
     )
     if not todo:
+        if early is not None:
+            early[0].close()
         return res
     t0 = time.perf_counter()
-    client, cluster = _client(scheduler, workers, threads)
+    client, cluster = early if early is not None else _client(scheduler, workers, threads)
     bar = None
     futures = []
     try:

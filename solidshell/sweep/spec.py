@@ -74,6 +74,11 @@ from ..settings import Finite, SettingsModel, parse
 __all__ = ["SweepSpec", "Run", "load_spec", "STUDY_DIR", "studies", "ClassifySettings", "PlotSettings"]
 
 STUDY_DIR = Path(__file__).with_name("studies")
+MAX_RUNS = 10_000
+"""The most runs one sweep may expand to, checked before a point is drawn or a grid expanded: a run
+is seconds to minutes of a core, so 10^4 are days of a workstation, and the spec, the task list and
+the ledger hold a row each (``sample.n = 1e9`` grew to 4 GB before any run).  Split a larger study
+into sweeps with their own ``--out``."""
 SPECIAL = ("mesh", "solver")  # run keys that are not scene keys
 TOP_KEYS = {
     "name",
@@ -171,6 +176,14 @@ def run_key(scene: str, mesh, solver, overrides: dict) -> str:
         separators=(",", ":"),
     )
     return hashlib.sha1(blob.encode()).hexdigest()[:16]
+
+
+def _guard(source, key, n: int) -> None:
+    """InputError when the sweep would expand to more than MAX_RUNS runs."""
+    if n > MAX_RUNS:
+        raise _err(
+            source, key, f"{n:,} runs exceed the sweep guard of {MAX_RUNS:,}; split the study into smaller sweeps"
+        )
 
 
 def _err(source, key, msg) -> InputError:
@@ -283,6 +296,7 @@ def from_dict(data: dict, source: str = "<sweep>", base_dir: Path | None = None)
         n = sample.get("n")
         if isinstance(n, bool) or not isinstance(n, int) or n < 1:
             raise _err(source, "sample.n", f"must be a positive integer, got {n!r}")
+        _guard(source, "sample.n", n * len(cases))
         seed = sample.get("seed", 0)
         if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
             raise _err(source, "sample.seed", f"must be an integer >= 0, got {seed!r}")
@@ -300,6 +314,7 @@ def from_dict(data: dict, source: str = "<sweep>", base_dir: Path | None = None)
         if zp:
             m = zlen.pop()
             gaxes.append([tuple((k, zp[k][i]) for k in zp) for i in range(m)])
+        _guard(source, "grid", math.prod(len(a) for a in gaxes) * len(cases))
         points = []
         for combo in itertools.product(*gaxes):
             pt = {}

@@ -35,9 +35,11 @@ def series_fields(sc, kind: str, solved):
     element blocks to read strains from)."""
     if solved.problem is None or not hasattr(solved.problem.model, "blocks"):
         return None
+    from ..model import ElementConstants
     from ..scenes.build import build_problem, support_mask
 
     cache: dict[int, tuple] = {id(solved.mesh): (solved.problem, solved.fixed)}
+    constants = ElementConstants()  # an adaptive run's frames share most elements: fold each once
 
     def fields_of(t, mesh, U):
         if id(mesh) not in cache:
@@ -48,7 +50,7 @@ def series_fields(sc, kind: str, solved):
                 base = sc.model.get("membrane", "full")
                 membrane = np.where(np.asarray(ans)[: len(mesh.quads)] > 0, "ans", base).tolist()
             fixed = support_mask(sc, mesh, kind)
-            cache[id(mesh)] = (build_problem(sc, mesh, fixed, membrane=membrane, kind=kind), fixed)
+            cache[id(mesh)] = (build_problem(sc, mesh, fixed, membrane=membrane, constants=constants, kind=kind), fixed)
         problem, fixed = cache[id(mesh)]
         return of_problem(problem, U, fixed, load_factor(kind, t))
 

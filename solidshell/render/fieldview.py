@@ -28,9 +28,9 @@ def _unit(field: str) -> str:
     return "-"
 
 
-def field_picture(run_dir, fields, out, view: str = "iso", file: str = "deformed.vtu", size=(900, 650)) -> Path:
+def field_picture(run_dir, fields, out, view: str = "iso", file: str = "deformed.vtu", size=(720, 720)) -> Path:
     """Render ``fields`` (names of point or cell data of ``run_dir/file``) side by side into the
-    PNG ``out``; returns its path.  ``view``: "iso" or "top"."""
+    PNG ``out``; returns its path.  ``view``: "iso", "top" or "side" (from -y)."""
     from .vtk_backend import _windows
 
     win = _windows()[0]
@@ -92,11 +92,10 @@ def field_picture(run_dir, fields, out, view: str = "iso", file: str = "deformed
             ),
         )
         p.add_text(f"{path.parent.name}: {f}", font_size=10, color="black")
-        if view == "top":
-            p.view_xy()
-        else:
-            p.view_isometric()
-        p.camera.zoom(1.15)
+        p.enable_parallel_projection()  # orthographic, as the run's own pictures: fits predictably
+        {"top": p.view_xy, "side": p.view_xz}.get(view, p.view_isometric)()
+        p.reset_camera(bounds=grid.bounds)
+        p.camera.zoom(0.85)  # room for the colour bar below
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
     p.screenshot(str(out))
@@ -109,7 +108,7 @@ def main(argv=None) -> int:
     ap.add_argument("run_dir")
     ap.add_argument("--field", action="append", required=True, help="a point or cell field (repeatable)")
     ap.add_argument("--out", required=True, help="the PNG to write")
-    ap.add_argument("--view", choices=("iso", "top"), default="iso")
+    ap.add_argument("--view", choices=("iso", "top", "side"), default="iso")
     ap.add_argument("--file", default="deformed.vtu", help="the run's VTU to read (default deformed.vtu)")
     a = ap.parse_args(argv)
     try:

@@ -270,7 +270,22 @@ class MeshBody(RigidBody):
         return len(self.F)
 
     def signed_distance(self, x: np.ndarray):
-        return ck.distances(self.code, self._params, np.ascontiguousarray(x, dtype=float).reshape(-1, 3), self.grid)
+        """(g, n) as the kernels see them (contact_kernels.grid_distance) wherever they see the
+        body (|g| < band); beyond the band, where the grid holds +band, the lower bound
+        max(band, g_exact - sqrt(3) spacing) from libigl instead (and its normal).  The kernels'
+        g at any y is at least min(band, g_exact(y)) - sqrt(3) spacing (a cell's trilinear value is at
+        least its smallest corner sample, each within sqrt(3) spacing of y), so this bound keeps the
+        explicit solver's candidate selection (a node is left out while its gap exceeds the margin
+        and it has moved less than margin / lipschitz) exact, and lets it leave out the nodes far
+        from the body instead of seeing them all at the band."""
+        x = np.ascontiguousarray(x, dtype=float).reshape(-1, 3)
+        g, n = ck.distances(self.code, self._params, x, self.grid)
+        far = g >= self.band
+        if np.any(far):
+            ge, _, ne = exact_signed_distance(self.V, self.F, x[far])
+            g[far] = np.maximum(self.band, ge - ck.MESH_LIPSCHITZ * self.spacing)
+            n[far] = ne
+        return g, n
 
     def exact_distance(self, x):
         """(g (N,), outward unit normals (N,3)) of the points x (N,3) from libigl, not the grid."""

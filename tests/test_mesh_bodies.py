@@ -63,9 +63,14 @@ def test_box_grid_matches_the_analytic_box():
     ga, _ = _box_analytic().signed_distance(anywhere)
     inband = np.abs(ga) < 0.6  # (beyond the band the grid holds +-band)
     assert np.max(np.abs(g - ga)[inband]) < 0.5 * b.spacing
+    # beyond the band: the kernels hold +-band; signed_distance gives, outside, the lower bound
+    # max(band, g - sqrt(3) spacing) of the exact g (what the candidate selection needs), inside -band
+    gk, _ = ck.distances(b.code, b.params, anywhere, b.grid)
     far = np.abs(ga) > b.band + math.sqrt(3) * b.spacing
-    np.testing.assert_array_equal(np.abs(g[far]), b.band)
-    np.testing.assert_array_equal(np.sign(g[far]), np.sign(ga[far]))
+    np.testing.assert_array_equal(gk[far], b.band * np.sign(ga[far]))
+    out, inn = far & (ga > 0), far & (ga < 0)
+    np.testing.assert_allclose(g[out], np.maximum(b.band, ga[out] - math.sqrt(3) * b.spacing), atol=1e-12)
+    np.testing.assert_array_equal(g[inn], -b.band)
 
 
 def test_sphere_grid_error_and_lipschitz_bound():

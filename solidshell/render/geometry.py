@@ -223,8 +223,9 @@ def scene_surfaces(mesh, X, bodies, mesh_lines: bool = True, cover_pedestal: boo
         elif b["type"] == "mesh":
             V, F = (np.asarray(a) for a in b["triangles"])
             rho = b.get("curvature_radius")
-            if rho:  # drawn smaller by the chord sag, as the sphere is (chord_sag)
-                V = V - chord_sag(mesh, X, rho) * _vertex_normals(V, F)
+            if rho:  # drawn smaller by the chord sag, as the sphere is (chord_sag), but by no more
+                # than the contact offset: a thin part (a table top) would turn inside out
+                V = V - min(chord_sag(mesh, X, rho), float(b.get("offset", 0.0))) * _vertex_normals(V, F)
             out.append(Surface(V.astype(float), np.zeros((0, 4), int), F.astype(int), solid=True))
         elif b["type"] == "pedestal":
             # a pedestal scene meshes only the hanging part; the sheet lies flat on the top (its

@@ -134,16 +134,28 @@ def self_pass(X0, D, tri, own, vf, k, h, C):
 
 
 @njit(cache=True)
-def max_move(X0, D, Xb):
-    """Largest distance of a node's mid-surface position X0 + D[:3] from Xb (N,3) (its position at
-    the last candidate search)."""
-    m = 0.0
-    for i in range(len(X0)):
-        s = 0.0
+def relative_move(X0, D, Xb):
+    """max_i |dx_i - c|, dx_i = X0[i] + D[6i:6i+3] - Xb[i] a node's move since the last candidate
+    search (Xb its position then) and c the midpoint of the moves' bounding box: a pair's distance
+    changes by at most twice this (its two closest points are convex combinations of nodes), so a
+    sheet falling or sliding as a whole needs no new search.  NaN if a position is not finite."""
+    N = len(X0)
+    lo = np.full(3, np.inf)
+    hi = np.full(3, -np.inf)
+    for i in range(N):
         for j in range(3):
-            r = X0[i, j] + D[6 * i + j] - Xb[i, j]
-            s += r * r
-        m = max(m, s)
+            d = X0[i, j] + D[6 * i + j] - Xb[i, j]
+            if not math.isfinite(d):
+                return np.nan
+            lo[j] = min(lo[j], d)
+            hi[j] = max(hi[j], d)
+    c0, c1, c2 = 0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), 0.5 * (lo[2] + hi[2])
+    m = 0.0
+    for i in range(N):
+        r0 = X0[i, 0] + D[6 * i] - Xb[i, 0] - c0
+        r1 = X0[i, 1] + D[6 * i + 1] - Xb[i, 1] - c1
+        r2 = X0[i, 2] + D[6 * i + 2] - Xb[i, 2] - c2
+        m = max(m, r0 * r0 + r1 * r1 + r2 * r2)
     return math.sqrt(m)
 
 
@@ -189,8 +201,7 @@ def _pt_dist(x, v, a, b, c):
 def vf_candidates(x, X0, tri, r, rest_min):
     """(P,2) the pairs (vertex, triangle) sharing no node whose distance at x (N,3) is below r and
     whose distance in the flat reference X0 is at least rest_min: a uniform grid over the vertices
-    (cell: the largest triangle's box + 2r), each triangle's box grown by r looked up in it; two
-    passes (count, fill)."""
+    (cell: the largest triangle's box + 2r), each triangle's box grown by r looked up in it."""
     T = len(tri)
     ext = 0.0
     for t in range(T):
@@ -199,41 +210,52 @@ def vf_candidates(x, X0, tri, r, rest_min):
             ext = max(ext, max(a, max(b, c)) - min(a, min(b, c)))
     cs = ext + 2.0 * r
     lo, n, skeys, order = _grid(x, cs)
-    out = np.empty((0, 2), dtype=np.int64)
+    out = np.empty((max(1024, len(x)), 2), dtype=np.int64)
+    m = 0
     bmin, bmax = np.empty(3), np.empty(3)
-    for fill in range(2):
-        m = 0
-        for t in range(T):
-            ia, ib, ic = tri[t, 0], tri[t, 1], tri[t, 2]
-            for j in range(3):
-                bmin[j] = min(x[ia, j], min(x[ib, j], x[ic, j])) - r
-                bmax[j] = max(x[ia, j], max(x[ib, j], x[ic, j])) + r
-            i0, j0, k0 = _cell(bmin, lo, cs, n)
-            i1, j1, k1 = _cell(bmax, lo, cs, n)
-            for ix in range(i0, i1 + 1):
-                for iy in range(j0, j1 + 1):
-                    for iz in range(k0, k1 + 1):
-                        key = (ix * n[1] + iy) * n[2] + iz
-                        s0 = np.searchsorted(skeys, key)
-                        s1 = np.searchsorted(skeys, key, side="right")
-                        for s in range(s0, s1):
-                            v = order[s]
-                            if v == ia or v == ib or v == ic:
-                                continue
-                            if not (
-                                bmin[0] <= x[v, 0] <= bmax[0]
-                                and bmin[1] <= x[v, 1] <= bmax[1]
-                                and bmin[2] <= x[v, 2] <= bmax[2]
-                            ):
-                                continue
-                            if _pt_dist(x, v, ia, ib, ic) >= r:
-                                continue
-                            if _pt_dist(X0, v, ia, ib, ic) < rest_min:
-                                continue
-                            if fill:
-                                out[m, 0] = v
-                                out[m, 1] = t
-                            m += 1
-        if not fill:
-            out = np.empty((m, 2), dtype=np.int64)
-    return out
+    for t in range(T):
+        ia, ib, ic = tri[t, 0], tri[t, 1], tri[t, 2]
+        for j in range(3):
+            bmin[j] = min(x[ia, j], min(x[ib, j], x[ic, j])) - r
+            bmax[j] = max(x[ia, j], max(x[ib, j], x[ic, j])) + r
+        i0, j0, k0 = _cell(bmin, lo, cs, n)
+        i1, j1, k1 = _cell(bmax, lo, cs, n)
+        for ix in range(i0, i1 + 1):
+            for iy in range(j0, j1 + 1):
+                for iz in range(k0, k1 + 1):
+                    key = (ix * n[1] + iy) * n[2] + iz
+                    s0 = np.searchsorted(skeys, key)
+                    s1 = np.searchsorted(skeys, key, side="right")
+                    for s in range(s0, s1):
+                        v = order[s]
+                        if v == ia or v == ib or v == ic:
+                            continue
+                        if not (
+                            bmin[0] <= x[v, 0] <= bmax[0]
+                            and bmin[1] <= x[v, 1] <= bmax[1]
+                            and bmin[2] <= x[v, 2] <= bmax[2]
+                        ):
+                            continue
+                        if _pt_dist(x, v, ia, ib, ic) >= r or _pt_dist(X0, v, ia, ib, ic) < rest_min:
+                            continue
+                        if m == len(out):  # full: twice the room
+                            grown = np.empty((2 * m, 2), dtype=np.int64)
+                            grown[:m] = out
+                            out = grown
+                        out[m, 0] = v
+                        out[m, 1] = t
+                        m += 1
+    return out[:m].copy()
+
+
+@njit(cache=True)
+def nearest_rest_pair(X0, tri, r, rest_min):
+    """The smallest flat-reference distance >= rest_min of a vertex-triangle pair sharing no node
+    (inf: none within r): how far the candidates' reach may go before a flat sheet's neighbours
+    become candidates (contact_self_penalty.SelfPenalty)."""
+    pairs = vf_candidates(X0, X0, tri, r, rest_min)
+    best = np.inf
+    for i in range(len(pairs)):
+        t = pairs[i, 1]
+        best = min(best, _pt_dist(X0, pairs[i, 0], tri[t, 0], tri[t, 1], tri[t, 2]))
+    return best

@@ -69,9 +69,14 @@ def face_points(mesh, U=None, grid: int = DEFAULT_GRID) -> np.ndarray:
 
 
 def _depths(body, x: np.ndarray) -> np.ndarray:
-    """p = offset - g(x) of the points x (chunked)."""
+    """p = offset - g(x) of the points x (chunked); a mesh body's g is its exact distance to its
+    triangles (contact_mesh.MeshBody.exact_distance), not the grid the solvers interpolate: the
+    contract is about the body itself, so the grid's error counts."""
     if len(x) == 0:
         return np.zeros(0)
+    exact = getattr(body, "exact_distance", None)
+    if exact is not None:
+        return np.concatenate([body.offset - exact(x[i : i + _CHUNK])[0] for i in range(0, len(x), _CHUNK)])
     return np.concatenate([-body.penetration(x[i : i + _CHUNK])[0] for i in range(0, len(x), _CHUNK)])
 
 

@@ -17,6 +17,11 @@ own numpy geometry below (it imports nothing of solidshell: not ``contact`` nor
 
 * sphere   : |x - c| - R
 * plane    : (x - p) . n / |n|   (the side opposite to n is solid)
+* mesh     : the body's triangles, rebuilt from its table -- ``file`` read by meshio (relative to
+  the summary's ``scene_file``), or ``primitives`` fused and meshed by gmsh's OpenCASCADE kernel
+  with ``mesh_size`` as the run did --, scaled (``units``, ``scale``), turned (``rotate``, degrees
+  about the fixed x, y, z axes) and moved (``translate``) by scipy, oriented outward, and libigl's
+  exact signed distance to them (not the grid the solver interpolates);
 * pedestal : its top face centred at ``centre``, axis +Z, extending ``height`` down;
   ``shape = "disc"``: a cylinder of ``diameter``; ``shape = "square"``: a box of side ``size``;
   ``edge_radius`` e rounds its edges: the exact distance of the shape shrunk by e, minus e (for
@@ -51,6 +56,9 @@ _KEYS = {
         "shape", "centre", "size", "diameter", "height", "edge_radius", "support",
         "stem_diameter", "disc_thickness", "clamp_diameter", "clamp_thickness",
     },
+    "mesh": {
+        "file", "primitives", "mesh_size", "units", "scale", "rotate", "translate", "spacing", "band", "_base",
+    },
 }  # fmt: skip
 _COMMON = {"type", "offset", "friction", "origin", "role"}  # origin, role: where a body comes from
 # (a Cusick support's clamp_* keys describe its clamp, which the tables list as a body of its own)
@@ -76,6 +84,85 @@ def _cylinder(x: np.ndarray, top: np.ndarray, radius: float, height: float, edge
     return _rounded_box(q, np.array([radius - edge, 0.5 * height - edge])) - edge
 
 
+_UNITS = {"mm": 0.1, "cm": 1.0, "m": 100.0, "in": 2.54}
+_SURFACES: dict = {}
+
+
+def _gmsh_union(primitives: list, size) -> tuple[np.ndarray, np.ndarray]:
+    """Triangles of the union of a mesh body's primitives, meshed by gmsh as the run did."""
+    import gmsh
+
+    gmsh.initialize(readConfigFiles=False, interruptible=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.model.add("check")
+        occ, tags = gmsh.model.occ, []
+        for p in primitives:
+            ((k, v),) = p.items()
+            v = [float(a) for a in v]
+            if k == "ellipsoid":
+                t = occ.addSphere(v[0], v[1], v[2], 1.0)
+                occ.dilate([(3, t)], *v)
+            else:
+                t = {"sphere": occ.addSphere, "box": occ.addBox, "cylinder": occ.addCylinder}[k](*v)
+            tags.append(t)
+        if len(tags) > 1:
+            occ.fuse([(3, tags[0])], [(3, t) for t in tags[1:]])
+        occ.synchronize()
+        bb = np.array(gmsh.model.getBoundingBox(-1, -1))
+        size = float(size) if size is not None else float(np.linalg.norm(bb[3:] - bb[:3])) / 60.0
+        gmsh.option.setNumber("Mesh.MeshSizeMax", size)
+        gmsh.option.setNumber("Mesh.MeshSizeMin", 0.2 * size)
+        gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 12)
+        gmsh.model.mesh.generate(2)
+        tag, xyz, _ = gmsh.model.mesh.getNodes()
+        idx = np.zeros(int(tag.max()) + 1, np.int64)
+        idx[np.asarray(tag, np.int64)] = np.arange(len(tag))
+        F = idx[np.asarray(gmsh.model.mesh.getElementsByType(2)[1], np.int64).reshape(-1, 3)]
+        return np.asarray(xyz, float).reshape(-1, 3), F
+    finally:
+        gmsh.finalize()
+
+
+def _mesh_surface(table: dict) -> tuple[np.ndarray, np.ndarray]:
+    """(V, F) of a mesh body's table: its triangles where the run had them, oriented outward."""
+    import igl
+    from scipy.spatial.transform import Rotation
+
+    key = json.dumps(table, sort_keys=True, default=str)
+    if key in _SURFACES:
+        return _SURFACES[key]
+    if table.get("file"):
+        import meshio
+
+        p = Path(table["file"])
+        p = p if p.is_absolute() else Path(table.get("_base") or ".") / p
+        try:
+            m = meshio.read(p)
+        except Exception as e:
+            raise BadInput(f"mesh body file {p}: cannot read ({type(e).__name__}: {e})") from None
+        F = np.concatenate(
+            [np.asarray(c.data, np.int64) for c in m.cells if c.type == "triangle"]
+            + [np.asarray(c.data, np.int64)[:, q] for c in m.cells if c.type == "quad" for q in ([0, 1, 2], [0, 2, 3])]
+        )
+        V = np.asarray(m.points, float)[:, :3]
+    else:
+        V, F = _gmsh_union(table["primitives"], table.get("mesh_size"))
+    s = _UNITS[table.get("units") or "cm"] * float(table.get("scale") or 1.0)
+    R = Rotation.from_euler("xyz", table.get("rotate") or (0, 0, 0), degrees=True).as_matrix()
+    V = (s * V) @ R.T + np.asarray(table.get("translate") or (0, 0, 0), float)
+    V, _, _, F = igl.remove_duplicate_vertices(V, F, 1e-9 * float(np.ptp(V, axis=0).max()))
+    F, comp = igl.bfs_orient(np.asarray(F, np.int64))
+    F = np.asarray(F, np.int64).copy()
+    a, b, c = (V[F[:, i]] for i in range(3))
+    vol = np.einsum("ij,ij->i", a, np.cross(b, c))
+    for k in np.unique(comp):  # each connected patch outward (positive enclosed volume)
+        if vol[comp == k].sum() < 0.0:
+            F[comp == k] = F[comp == k][:, ::-1]
+    _SURFACES[key] = (np.ascontiguousarray(V), np.ascontiguousarray(F))
+    return _SURFACES[key]
+
+
 def signed_distance(table: dict, x: np.ndarray) -> np.ndarray:
     """g(x) (M,) of the body a contact table describes, for the points x (M,3)."""
     kind = table.get("type")
@@ -90,6 +177,12 @@ def signed_distance(table: dict, x: np.ndarray) -> np.ndarray:
         if kind == "plane":
             n = np.asarray(table["normal"], float)
             return (x - np.asarray(table["point"], float)) @ (n / np.linalg.norm(n))
+        if kind == "mesh":
+            import igl
+
+            V, F = _mesh_surface(table)
+            x = np.ascontiguousarray(x, float).reshape(-1, 3)
+            return np.asarray(igl.signed_distance(x, V, F, igl.SIGNED_DISTANCE_TYPE_PSEUDONORMAL)[0], float)
         top = np.asarray(table.get("centre", (0.0, 0.0, 0.0)), float)
         e = float(table.get("edge_radius") or 0.0)
         shape = table.get("shape", "square")
@@ -212,6 +305,10 @@ def check_run(run_dir: Path, grid: int) -> tuple[list[str], bool]:
         return [f"{run_dir}: no contact body"], True
     x = X + D[:, :3]
     xf = element_points(x, quads, tris, grid)
+    base = Path(str(summary.get("scene_file", ""))).parent  # a mesh body's file is relative to its scene
+    for t in tables:
+        if t.get("type") == "mesh":
+            t["_base"] = str(base)
     lines, clean = [], True
     if entry is not None and not np.isclose(entry.get("tolerance_cm", tol), tol, rtol=1e-12, atol=0.0):
         lines.append(f"{run_dir}: the summary's tolerance {entry['tolerance_cm']!r} cm is not 2 % of h = {tol!r} cm")

@@ -8,7 +8,7 @@ Two factorisations, for two jobs:
     The tangents of one solve share a sparsity pattern, so the symbolic analysis (fill-reducing
     ordering, supernodes) is done once and reused; only the lower triangle is handed over.
     Several times faster than SuperLU (below) on the drapes (timings: docs/solvers.md, section 5).
-    ``pardiso.Pardiso`` is the same interface on Intel MKL PARDISO (MKL: a dependency on Linux
+    ``pardiso.Pardiso`` is the same interface on Intel MKL PARDISO (MKL: the optional extra [mkl] on Linux
     x86-64): about twice as fast again; ``factorization="auto"`` (the default) takes it when MKL
     is installed and the system is not tiny (``resolve_factorization``).
 
@@ -21,6 +21,8 @@ Two factorisations, for two jobs:
 """
 
 from __future__ import annotations
+
+import platform
 
 import cvxopt
 import cvxopt.cholmod as _cholmod
@@ -81,10 +83,32 @@ def resolve_factorization(kind: str, n_free: int | None = None) -> str:
         raise InputError(f"factorization must be one of {FACTORIZATIONS}, got {kind!r}")
     if kind == "auto":
         small = n_free is not None and n_free < PARDISO_MIN_DOFS
-        return "pardiso" if not small and pardiso.available() else "cholmod"
+        if small:
+            return "cholmod"
+        if pardiso.available():
+            return "pardiso"
+        _hint_mkl()
+        return "cholmod"
     if kind == "pardiso" and not pardiso.available():
         raise InputError(f"factorization 'pardiso': {pardiso.unavailable_reason()}")
     return kind
+
+
+_HINTED: list = []
+
+
+def _hint_mkl() -> None:
+    """One log line per process when "auto" falls back to CHOLMOD for want of MKL (an optional
+    extra since issue 40: the main job is 1.1-1.4x faster with it, README "Install")."""
+    if _HINTED or platform.machine().lower() not in ("x86_64", "amd64"):
+        return
+    _HINTED.append(True)
+    import logging
+
+    logging.getLogger(__name__).warning(
+        "static solves use CHOLMOD: MKL PARDISO is not installed "
+        "(pip install 'solidshell[mkl]' makes the main job ~1.2x faster)"
+    )
 
 
 def positive_definite_factor(kind: str):

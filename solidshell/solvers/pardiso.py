@@ -128,7 +128,7 @@ def _load():
         _LIB = lib
         return lib
     _REASON = (
-        "Intel MKL (libmkl_rt) not found: `pip install mkl` (Linux/Windows x86-64), or set "
+        "Intel MKL (libmkl_rt) not found: `pip install 'solidshell[mkl]'` (Linux x86-64), or set "
         "SOLIDSHELL_MKL_RT to the library's path"
     )
     return None

@@ -172,13 +172,17 @@ def exact_signed_distance(V, F, x):
 
 def build_grid(V, F, spacing: float, band: float, where: str = "mesh body"):
     """The narrow-band grid of the body (V, F) as one float array in contact_kernels.grid_distance's
-    layout (start 0), and its parameter row (contact_kernels.PARAMS).  The box is the body's bounding
-    box grown by band plus one block on every side, so that the grid's outer samples are all +band."""
+    layout (start 0), its parameter row (contact_kernels.PARAMS) and the number of blocks kept.  The box
+    is the body's bounding box grown by band plus one block on every side (so that the grid's outer
+    samples are all +band), rounded up to whole blocks about the same centre."""
     B = ck.BLOCK
     h = float(spacing)
     lo = V.min(axis=0) - band - B * h
     hi = V.max(axis=0) + band + B * h
     nb = np.ceil((hi - lo) / (B * h)).astype(np.int64)
+    # centred on the body's box: a body symmetric about its centre (a mirror, a quarter turn when
+    # the extents are equal) gets samples and an interpolant with the same symmetry
+    lo = 0.5 * (lo + hi) - 0.5 * nb * B * h
     # the blocks' centres: a block is kept when its centre's |g| minus its half diagonal is below band
     ib = np.stack(np.meshgrid(*(np.arange(n) for n in nb), indexing="ij"), axis=-1).reshape(-1, 3)
     centres = lo + (ib + 0.5) * B * h

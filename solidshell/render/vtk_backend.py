@@ -149,7 +149,11 @@ def render_image(
         p.set_background("white")
         for s in surfaces:
             poly = _polydata(s)
-            kw = dict(show_edges=False, smooth_shading=False, ambient=0.18, diffuse=0.85)
+            # per-node normals (Gouraud): flat shading lit each warped quad's two render triangles
+            # differently, a zig-zag on every element of a coarse mesh; bodies keep their edges sharp
+            kw = dict(show_edges=False, smooth_shading=True, ambient=0.18, diffuse=0.85)
+            if s.scalars is None:
+                kw["split_sharp_edges"] = True
             if s.scalars is not None:
                 poly.point_data["z"] = np.asarray(s.scalars, float)
                 p.add_mesh(

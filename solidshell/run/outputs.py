@@ -102,10 +102,13 @@ def _write_outputs(folder, sc: Scene, kind: str, mesh_name: str, solved, summary
     state = U if finite else None
     sub = _subtitle(sc, mesh_name, mesh, kind, summary)
     views = sc.output["pictures"]
+    ref = _strip_curve(summary) if state is not None else None
     for i, view in enumerate(views):
         cb(0.92 + 0.08 * i / max(1, len(views)), f"{view} picture")
         files.append(
-            folder.write(f"{view}.png", picture, mesh, state, view=view, title=sc.title, scene=sc, subtitle=sub)
+            folder.write(
+                f"{view}.png", picture, mesh, state, view=view, title=sc.title, scene=sc, subtitle=sub, reference=ref
+            )
         )
     for ts, j, _ in snaps:
         if j is not None:
@@ -154,6 +157,17 @@ def _state_files(folder, sc, kind: str, solved, summary: dict, finite: bool) -> 
         files += sio.series_frame_paths(folder.path / "series.pvd", len(series))
         summary["series_parameter"] = "time [s]" if solvers.dynamic(kind) else "load factor"
     return files
+
+
+def _strip_curve(summary: dict) -> dict | None:
+    """The heavy elastica's centre line for the side picture of a strip that is a stored one."""
+    from ..references import strip_elastica
+
+    ref = strip_elastica(summary)
+    if ref is None:
+        return None
+    r = ref[1]
+    return {"x": r["curve"]["x"], "z": r["curve"]["z"], "label": "heavy elastica"}
 
 
 def _subtitle(sc, mesh_name, mesh, kind, summary) -> str:

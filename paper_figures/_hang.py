@@ -53,7 +53,8 @@ def make_hang(name, scene, caption, out_dir: Path, quick: bool, title: str) -> d
                 norm=norm,
                 extent=ext[v],
                 labels=(k == 0),
-                title=f"({'abcd'[k]}) t = {tk:.2f} s" if i == 0 else None,
+                # both rows captioned: the same instant seen isometrically and from the side
+                title=f"({'abcd'[k]}) t = {tk:.2f} s, " + ("isometric" if i == 0 else "side, looking along -x"),
             )
             axes.append(ax)
     common.shared_colorbar(fig, axes, sm)

@@ -50,6 +50,11 @@ def make(out_dir: Path, quick: bool = False) -> dict:
     axes = [fig.add_subplot(gs[0, i]) for i in range(3)]
     sm = common.panel(axes[0], out, X, "top", norm=norm, title="(a) top view")
     common.panel(axes[1], out, X, "side", norm=norm, title="(b) side view")
+    # whole-cm ticks every 5 cm and a padded label: "z [cm]" sat on the -12.5-wide tick labels
+    from matplotlib.ticker import MultipleLocator
+
+    axes[1].yaxis.set_major_locator(MultipleLocator(5.0))
+    axes[1].yaxis.labelpad = 8.0
     common.panel(axes[2], out, X, "top", norm=norm, zoom=zoom, title="(c) top view, zoomed")
     axes[0].add_patch(plt.Rectangle(zoom[::2], zoom[1] - zoom[0], zoom[3] - zoom[2], fill=False, ec="r", lw=0.8))
     if flagged.any():  # marked over the picture: a node on a fold's underside is hidden in the view

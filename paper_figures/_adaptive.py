@@ -36,6 +36,17 @@ def make_adaptive(
     picks = [0.0, 0.15 * tf, 0.4 * tf, tf]
     frames = [common.frame_at(out, t) for t in picks]
     norm = common.height_norm(*[X for _, _, X in frames])
+    # one frame for every panel of a row (the union of the snapshots' screen extents): each top
+    # view fitted to its own sheet made the lower panels of different sizes, out of line
+    from solidshell.render.geometry import CAMERAS, bodies_of, scene_surfaces, screen_extent
+
+    bodies = bodies_of(out.scene)
+
+    def extent(v):
+        boxes = [screen_extent(scene_surfaces(mm, X, bodies), CAMERAS[v]) for _, mm, X in frames]
+        return (min(b[0] for b in boxes), max(b[1] for b in boxes), min(b[2] for b in boxes), max(b[3] for b in boxes))
+
+    ext = {v: extent(v) for v in ("iso", "top")}
     fig = plt.figure(figsize=(3.3 * 4 + 0.8, 6.8))
     gs = fig.add_gridspec(2, 4, wspace=0.08, hspace=0.14)
     axes, sm = [], None
@@ -43,7 +54,9 @@ def make_adaptive(
         for i, v in enumerate(("iso", "top")):
             ax = fig.add_subplot(gs[i, k])
             head = f"({'abcd'[k]}) t = {tk:.2f} s, {mk.n_nodes} nodes, {mk.n_elements} elements" if i == 0 else None
-            sm = common.panel(ax, mk, Xk, v, scene=out.scene, norm=norm, title=head, labels=(k == 0 or v == "iso"))
+            sm = common.panel(
+                ax, mk, Xk, v, scene=out.scene, norm=norm, title=head, labels=(k == 0 or v == "iso"), extent=ext[v]
+            )
             if head:
                 ax.title.set_fontsize(7.5)
             if k and v == "top":

@@ -44,3 +44,22 @@ def test_strip_run_side_picture_draws_the_heavy_elastica(tmp_path, monkeypatch):
     ref = seen["side"]
     assert ref is not None and ref["label"] == "heavy elastica"
     assert ref["z"][-1] < -4.3 and abs(ref["x"][0]) < 1e-12  # the warp strip's droop, from the clamp
+
+
+def test_fieldview_draws_a_field_from_the_files_and_refuses_an_unknown_one(tmp_path, capsys):
+    # python -m solidshell.render.fieldview on a run folder: a PNG of the requested cell field,
+    # exit 2 with the known fields named for a missing one
+    import pytest
+
+    from solidshell.render import fieldview, vtk_backend
+    from solidshell.run import run_scene
+
+    if not vtk_backend.available()[0]:
+        pytest.skip("VTK cannot render here")
+    run_scene("strip-warp", mesh="10x1", out_dir=tmp_path / "run", progress=False)
+    png = tmp_path / "m.png"
+    assert fieldview.main([str(tmp_path / "run"), "--field", "M_xx", "--out", str(png)]) == 0
+    assert png.read_bytes().startswith(b"\x89PNG") and png.stat().st_size > 5000
+    assert fieldview.main([str(tmp_path / "run"), "--field", "nope", "--out", str(tmp_path / "x.png")]) == 2
+    err = capsys.readouterr().err
+    assert "no field 'nope'" in err and "M_xx" in err and not (tmp_path / "x.png").exists()

@@ -111,11 +111,18 @@ def main(argv=None) -> int:
     ap.add_argument("--view", choices=("iso", "top", "side"), default="iso")
     ap.add_argument("--file", default="deformed.vtu", help="the run's VTU to read (default deformed.vtu)")
     a = ap.parse_args(argv)
+    path = Path(a.run_dir) / a.file
+    if not path.is_file():
+        print(f"fieldview: error: {path} is not a file (a run folder holds {a.file})", file=sys.stderr)
+        return 2
     try:
         print(field_picture(a.run_dir, a.field, a.out, a.view, a.file))
-    except (OSError, KeyError) as e:
-        print(f"fieldview: error: {e}", file=sys.stderr)
+    except KeyError as e:
+        print(f"fieldview: error: {e.args[0]}", file=sys.stderr)
         return 2
+    except OSError as e:
+        print(f"fieldview: error: {e.filename or a.out}: {e.strerror or e}", file=sys.stderr)
+        return 3
     return 0
 
 

@@ -29,7 +29,8 @@ state, batched over each element block in numpy:
   carries the node's inertia and damping;
 * flags: ``interpenetrated`` (n_p . d_p < 0 at a corner, Section 4.3: Model.interpenetration),
   ``self_intersecting`` (an element whose mid-surface triangles cross another's that shares no node:
-  solidshell/layers.py), ``clamped`` (a node with all six dofs fixed);
+  solidshell/layers.py), ``layers_close`` (a node of two layers of the sheet closer than the
+  thickness less 10 %: self-contact, layers.py), ``clamped`` (a node with all six dofs fixed);
 * adaptive meshes: the tags the adaptive driver puts on each active mesh (``mesh.cell_tags``):
   ``refinement_level`` (a transition element between levels i and i+1: i + 1/2),
   ``transition_pattern`` (0: a plain leaf) and ``assumed_membrane``; every mesh gets
@@ -212,6 +213,16 @@ def flag_fields(model, U, self_intersection: bool = True) -> tuple[dict, dict]:
         for c, off in ((mesh.quads, 0), (mesh.tris, nq)):
             pf[np.asarray(c)[cf[off : off + len(c)] > 0].ravel()] = 1
         cell["self_intersecting"], point["self_intersecting"] = cf, pf
+        # self-contact: nodes of two layers closer than the thickness less LAYER_TOL (layers.py)
+        from .layers import LAYER_TOL, layer_pairs
+
+        h = float(model.material.thickness)
+        d, nodes = layer_pairs(mesh, U, h)
+        close = np.zeros(mesh.n_nodes, dtype=np.int8)
+        hit = [n for dk, n in zip(d, nodes) if dk < (1.0 - LAYER_TOL) * h]
+        if hit:
+            close[np.unique(np.concatenate([np.asarray(n, dtype=np.int64) for n in hit]))] = 1
+        point["layers_close"] = close
     return point, cell
 
 

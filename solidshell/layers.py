@@ -95,11 +95,17 @@ def layer_gaps(mesh, U, h: float) -> np.ndarray:
     """The distances [length] of the pairs of layers within SEARCH x h at the state U (module
     docstring): one per vertex-triangle, vertex-edge, vertex-vertex or edge-edge pair of ipctk's
     collision set whose distance is less than half its flat reference distance."""
+    return layer_pairs(mesh, U, h)[0]
+
+
+def layer_pairs(mesh, U, h: float) -> tuple[np.ndarray, list]:
+    """(distances, node tuples): :func:`layer_gaps`' pairs with the nodes of each pair's two point
+    sets (the output fields flag them: solidshell/fields.py)."""
     import ipctk
 
     F = triangles(mesh)
     if not len(F) or not h > 0.0:
-        return np.zeros(0)
+        return np.zeros(0), []
     X, x = _positions(mesh, None), _positions(mesh, U)
     E = ipctk.edges(F)
     cm = ipctk.CollisionMesh(X, E, F)
@@ -111,14 +117,15 @@ def layer_gaps(mesh, U, h: float) -> np.ndarray:
         ([((c.vertex_id,), tuple(F[c.face_id])) for c in col.fv_collisions], ipctk.point_triangle_distance),
         ([(tuple(E[c.edge0_id]), tuple(E[c.edge1_id])) for c in col.ee_collisions], ipctk.edge_edge_distance),
     )
-    out = []
+    out, nodes = [], []
     for pairs, dist in kinds:
         for a, b in pairs:
             now = dist(*(x[i] for i in a), *(x[i] for i in b))
             rest = dist(*(X[i] for i in a), *(X[i] for i in b))
             if now < 0.25 * rest:  # squared: closer than half the reference distance
                 out.append(np.sqrt(now))
-    return np.array(out)
+                nodes.append(tuple(int(i) for i in a + b))
+    return np.array(out), nodes
 
 
 def report(mesh, U, h: float) -> dict:

@@ -98,6 +98,21 @@ def test_self_intersecting_flag_marks_two_crossing_quads():
     assert cell["self_intersecting"].tolist() == [1, 1] and point["self_intersecting"].sum() == 8
 
 
+def test_layers_close_flags_two_sheets_brought_within_half_a_thickness():
+    # two 2x2 sheets 10 cm apart, the upper one moved down to 0.5 h above the lower: every node is
+    # a node of a layer closer than 0.9 h (layers.py); no triangle crosses another
+    a, b = _grid(2, 2, 2.0, 2.0), _grid(2, 2, 2.0, 2.0)
+    mat = Fabric.wool()
+    X = np.vstack([a.nodes, b.nodes + [0.0, 0.0, 10.0]])
+    mesh = ShellMesh(X, quads=np.vstack([a.quads, b.quads + a.n_nodes]))
+    U = np.zeros((mesh.n_nodes, 6))
+    U[a.n_nodes :, 2] = -10.0 + 0.5 * mat.thickness
+    point, cell = fields.flag_fields(Model(mesh, mat), U)
+    assert point["layers_close"].tolist() == [1] * mesh.n_nodes and not cell["self_intersecting"].any()
+    point, _ = fields.flag_fields(Model(mesh, mat), np.zeros((mesh.n_nodes, 6)))
+    assert not point["layers_close"].any()
+
+
 def test_strip_root_moment_from_the_file_against_the_heavy_elastica(tmp_path):
     # strip-warp 20x1 static: M_xx read from result.vtu, the first two elements' means extrapolated
     # linearly to the clamp, against the clamp moment of reference/elastica_strip.json (0.1171 gf

@@ -171,16 +171,18 @@ def picture(result: dict, path: Path) -> None:
     keys = result["error_keys"]
     fig, axes = plt.subplots(1, len(keys), figsize=(6.2 * len(keys), 4.6), squeeze=False)
     fams = list(dict.fromkeys(r["family"] for r in result["rows"]))
+    # fold counts on the labels only where they differ between runs (then they are different states)
+    vary = len({r.get("folds") for r in result["rows"] if r.get("folds") is not None}) > 1
     for ax, (k, desc) in zip(axes[0], keys):
         for i, fam in enumerate(fams):
             # in the study's order (coarse to fine), not by time: sorted by wall time, a family whose
-            # finer mesh ran faster drew a zig-zag; each point names its mesh and, for drapes, its folds
-            # (different fold counts are different equilibria, not a discretisation error)
+            # finer mesh ran faster drew a zig-zag; each point names its mesh and, where they differ, its
+            # folds (different fold counts are different equilibria, not a discretisation error)
             pts = [
                 (
                     r["wall_s"],
                     r["errors"][k],
-                    r["label"] + (f", {r['folds']} folds" if r.get("folds") is not None else ""),
+                    r["label"] + (f", {r['folds']} folds" if vary and r.get("folds") is not None else ""),
                 )
                 for r in result["rows"]
                 if r["family"] == fam and r["errors"].get(k) is not None and r["errors"][k] > 0
@@ -192,7 +194,7 @@ def picture(result: dict, path: Path) -> None:
                 ax.annotate(lab, (x, y), textcoords="offset points", xytext=(4, 4), fontsize=7, color=f"C{i}")
         ref = next((r for r in result["rows"] if r["reference"]), None)
         if ref is not None:  # its error is 0: not on a log axis; its cost is
-            folds = f", {ref['folds']} folds" if ref.get("folds") is not None else ""
+            folds = f", {ref['folds']} folds" if vary and ref.get("folds") is not None else ""
             ax.axvline(
                 ref["wall_s"], color="k", lw=0.8, ls=":", label=f"reference: {ref['family']}, {ref['label']}{folds}"
             )

@@ -238,7 +238,7 @@ SPHERE_STUDY = Study(
     [
         "The quick meshes (16x16 to 30x30 against 40x40) all reach 4 folds but DCs from 0.16 to 0.24: the "
         "folds are a few elements wide there and the DC does not converge monotonically, so the quick points "
-        "are no convergence curve (each is labelled with its folds; with friction the steady state also "
+        "are no convergence curve (points are labelled with their folds where runs differ; with friction the steady state also "
         "depends on the path, so a different fold pattern would be a different state, not an error)."
     ],
 )

@@ -52,6 +52,15 @@ def series_fields(sc, kind: str, solved):
             fixed = support_mask(sc, mesh, kind)
             cache[id(mesh)] = (build_problem(sc, mesh, fixed, membrane=membrane, constants=constants, kind=kind), fixed)
         problem, fixed = cache[id(mesh)]
-        return of_problem(problem, U, fixed, load_factor(kind, t))
+        lam = load_factor(kind, t)
+        # the final state is written as result.vtu and again as the series' last frame: once
+        hit = last.get(id(mesh))
+        if hit is not None and hit[0] == lam and np.array_equal(hit[1], U):
+            return hit[2]
+        out = of_problem(problem, U, fixed, lam)
+        last.clear()
+        last[id(mesh)] = (lam, np.array(U, copy=True), out)
+        return out
 
+    last: dict[int, tuple] = {}
     return fields_of

@@ -201,7 +201,7 @@ def _run(plan: RunPlan, cb, t_start: float) -> RunOutput:
     setup = setup_scene(sc, kind, mesh_arg, settings, plan.allow_large)
     arun, mesh_name = (None, setup.mesh_name) if adapt is None else prepare_adaptive(sc, setup, adapt, kind, cb)
     timings["mesh"] = time.perf_counter() - t
-    warnings = folder_warnings(folder)
+    warnings = folder_warnings(folder) + _doubtful_inputs(sc, kind, plan.overrides, setup, adapt is not None)
     summary = describe_run(run_id, sc, kind, settings, setup, mesh_name, plan.overrides)
     if folder is not None:
         folder.open()  # the folder and its RUNNING marker
@@ -347,3 +347,49 @@ def _results_lost(e: OSError, folder, solved: Solved, summary: dict) -> IOFailur
     return IOFailure(
         where, f"{reason}; results not written ({folder.path} holds the earlier run unchanged); {saved}{ck_note}"
     )
+
+
+def _doubtful_inputs(sc: Scene, kind: str, overrides, setup, adaptive: bool) -> list[str]:
+    """Warnings for inputs that are legal but likely not what was meant (issue 39): solver keys
+    given (--set) for another solver than the one that runs, adapt keys on a run that is not
+    adaptive, a scene without a [material] table (the sheet is then the library's wool), and
+    clamped nodes that start inside a contact body (they cannot be pushed out, so the body's
+    check of the free nodes does not refuse them: a pedestal whose top stands above the clamped
+    rim)."""
+    out = []
+    given = list(overrides or {})
+    if kind != "none":
+        other = sorted({k.split(".")[1] for k in given if k.count(".") >= 2 and k.startswith("solver.")} - {kind})
+        other = [o for o in other if o in solvers.KINDS]
+        if other:
+            keys = ", ".join(k for k in given if any(k.startswith(f"solver.{o}.") for o in other))
+            out.append(f"{keys} set, but this run uses the {kind} solver: ignored")
+        if not adaptive:
+            keys = ", ".join(k for k in given if k.startswith("adapt.") and k != "adapt.enabled")
+            if keys:
+                out.append(f"{keys} set, but this run is not adaptive (--adaptive or adapt.enabled = true): ignored")
+    if "material" not in (sc.raw or {"material": None}):
+        out.append(f"{sc.source}: no [material] table: the sheet is the library's wool (material.fabric = 'wool')")
+    out += _embedded_clamps(sc, setup)
+    return out
+
+
+def _embedded_clamps(sc: Scene, setup) -> list[str]:
+    """A warning when nodes whose translations are all fixed start inside a contact body deeper
+    than round-off (scenes.build.check_initial_contact checks the free nodes only)."""
+    from ..contact import initial_penetration
+    from ..scenes.build import contact_bodies
+
+    try:
+        bodies = contact_bodies(sc)
+    except Exception:  # noqa: BLE001 - a body the build step accepted; a warning must not fail the run
+        return []
+    fixed = np.asarray(setup.fixed, bool).reshape(setup.mesh.n_nodes, -1)[:, :3].all(axis=1)
+    if not bodies or not fixed.any():
+        return []
+    hits = initial_penetration(bodies, np.asarray(setup.mesh.nodes, float), free=fixed)
+    return [
+        f"{n} clamped node(s) start inside contact body {i} ({body.__class__.__name__}), deepest {depth:.4g} cm "
+        f"(its offset included): they stay there; is the body's top above the clamped edge?"
+        for i, body, n, depth in hits
+    ]

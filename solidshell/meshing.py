@@ -84,10 +84,11 @@ def _gmsh_model(name: str, options: dict[str, float] | None = None):
     import gmsh
 
     options = {"General.Terminal": 0, **(options or {})}
-    with _GMSH_LOCK:
+    with _GMSH_LOCK, _signals_kept() as restore:
         owner = not gmsh.isInitialized()
         if owner:
             gmsh.initialize(readConfigFiles=False, interruptible=False)
+            restore()
         saved = {k: gmsh.option.getNumber(k) for k in options}
         try:
             for k, v in options.items():
@@ -101,6 +102,29 @@ def _gmsh_model(name: str, options: dict[str, float] | None = None):
                 gmsh.model.remove()
                 for k, v in saved.items():
                     gmsh.option.setNumber(k, v)
+
+
+@contextlib.contextmanager
+def _signals_kept():
+    """gmsh's C++ side sets SIGTERM back to the system default when it initialises, under Python's
+    feet: the CLI's SIGTERM handler (state written, exit 143) then never runs and the process just
+    dies.  Yields ``restore()``, which puts the Python handlers back in place (main thread only);
+    it runs again on leaving."""
+    import signal
+
+    handlers = {}
+    if threading.current_thread() is threading.main_thread():
+        handlers = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+        handlers = {s: h for s, h in handlers.items() if callable(h)}
+
+    def restore():
+        for s, h in handlers.items():
+            signal.signal(s, h)
+
+    try:
+        yield restore
+    finally:
+        restore()
 
 
 def _extract(gmsh) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, np.ndarray]]:

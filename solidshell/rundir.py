@@ -20,16 +20,17 @@ Life of a run's folder (:class:`RunFolder`):
 4. :meth:`~RunFolder.finish` writes ``summary.json`` there, links what stays (a checkpoint, files
    kept with ``--force``) into it and swaps it with the folder in one step (``renameat2`` with
    ``RENAME_EXCHANGE``; where the system has none, two renames a moment apart), then deletes the
-   old contents.
+   old contents.  A folder that is a symbolic link, or that holds folders kept with ``--force``, is
+   written in place instead (below).
 
 :meth:`~RunFolder.abandon` undoes 2 when a run stops before it has complete results (bad input
 found by a solver, Ctrl-C with no state, a failed results write): the staging folder and the
 marker go, and the folder too if this run created it and it is empty.  A run killed before the swap
 leaves the old run as it was (plus a stale marker and staging folder, which the next run clears).
 Any OSError while preparing or writing becomes :class:`~solidshell.errors.IOFailure` naming the
-path (CLI exit status 3).  A folder whose parent cannot take the staging folder is written in place
-as before the swap existed (the earlier run's files removed, its summary first, once the solver
-has returned).
+path (CLI exit status 3).  A folder written in place (its parent cannot take the staging folder, or
+see 4) is written as before the swap existed: the earlier run's files removed, its summary first,
+once the solver has returned.
 """
 
 from __future__ import annotations
@@ -196,8 +197,8 @@ class RunFolder:
         try:
             if not _lock(fd):
                 owner = _owner(fd)
-                if owner is not None:
-                    raise InputError(_busy(self.path, owner))
+                if owner is not None or not _lock(fd):  # (a run that ended in between: once more)
+                    raise InputError(_busy(self.path, owner or {}))
             # written in place, not by an atomic rename: the lock is on this inode
             info = {
                 "run_id": self.run_id,
@@ -214,6 +215,10 @@ class RunFolder:
             raise _io(e, m) from None
         self._lock = fd
         self._clear_leftovers()
+        if self.path.is_symlink() or any((self.path / n).is_dir() for n in self.foreign):
+            # a linked folder (the exchange would replace the link), or folders kept with --force
+            # (they would have to move through the staging folder): written in place
+            return
         stage = self.path.parent / f".{self.path.name}.new-{self.run_id[:12]}"
         try:
             stage.mkdir()
@@ -300,10 +305,7 @@ class RunFolder:
             if n in gone or os.path.lexists(dst):
                 continue  # the old run's, the marker, or a name the new run wrote itself
             try:
-                if src.is_dir() and not src.is_symlink():
-                    os.rename(src, dst)  # a kept folder (--force) moves across
-                else:
-                    _link_or_copy(src, dst)
+                _link_or_copy(src, dst)  # (no folders here: open() writes in place then)
             except OSError as e:
                 raise _io(e, src) from None
         old = path.parent / f".{path.name}.old-{self.run_id[:12]}"

@@ -35,7 +35,7 @@ def test_scenes_lists_the_paper_scenes_and_the_examples():
     names = [ln.split()[0] for ln in lines]
     assert names == sorted(names) and set(PAPER_SCENES) | {"drape-tester"} <= set(names)
     dt = next(ln for ln in lines if ln.startswith("drape-tester "))
-    assert dt.split()[1:3] == ["-", "12x96"]  # no paper section
+    assert dt.split()[1:3] == ["-", "24x192"]  # no paper section
     sp = next(ln for ln in lines if ln.startswith("square-pedestal "))
     assert sp.split()[1:3] == ["§3.2", "48x16x4"] and "10x10 cm square pedestal" in sp
 

@@ -255,11 +255,28 @@ def _entry(name: str, e: Any, where: str) -> LibraryFabric:
     except InputError as exc:
         raise InputError(f"{where}: {name}: {exc}") from None
     drape = dict(e.get("drape", {}))
-    if set(drape) - _DRAPE_KEYS:
-        raise InputError(f"{where}: {name}.drape: unknown key (allowed: {', '.join(sorted(_DRAPE_KEYS))})")
+    if drape:
+        _check_drape(drape, f"{where}: {name}.drape")
     return LibraryFabric(
         name, e["title"], e["source"], e["table"], kind, published, dict(fields), e.get("note", ""), drape
     )
+
+
+def _check_drape(d: dict, where: str) -> None:
+    """A measured drape: its DC in (0, 1], specimen and disc diameters [cm] with disc < specimen, a source."""
+    odd = sorted(set(d) ^ _DRAPE_KEYS)  # keys given but unknown, or known but missing
+    if odd:
+        raise InputError(f"{where}.{odd[0]}: " + ("unknown key" if odd[0] in d else "required; missing"))
+    for key in ("dc", "specimen_diameter", "disc_diameter"):
+        v = d[key]
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0.0:
+            raise InputError(f"{where}.{key}: must be a positive number, got {v!r}")
+    if d["dc"] > 1.0:
+        raise InputError(f"{where}.dc: a drape coefficient is at most 1, got {d['dc']!r}")
+    if d["disc_diameter"] >= d["specimen_diameter"]:
+        raise InputError(f"{where}.disc_diameter: must be smaller than specimen_diameter, got {d['disc_diameter']!r}")
+    if not isinstance(d["source"], str) or not d["source"].strip():
+        raise InputError(f"{where}.source: required text; missing")
 
 
 def load_library(text: str, where: str = "fabrics.toml") -> dict[str, LibraryFabric]:

@@ -102,6 +102,14 @@ def test_library_file_errors_name_the_entry():
         fabrics.load_library(ok.split("[a.kes]")[0])
     with pytest.raises(InputError, match=r"a.other: unknown key"):
         fabrics.load_library(ok.replace("[a.kes]", "[a.other]"))
+    drape = '[a.drape]\ndc = 0.45\nspecimen_diameter = 30.0\ndisc_diameter = 18.0\nsource = "s, Table 2"\n'
+    assert fabrics.load_library(ok + drape)["a"].drape["dc"] == 0.45
+    with pytest.raises(InputError, match=r"a.drape.dc: a drape coefficient is at most 1"):
+        fabrics.load_library(ok + drape.replace("0.45", "45"))
+    with pytest.raises(InputError, match=r"a.drape.disc_diameter: must be smaller"):
+        fabrics.load_library(ok + drape.replace("18.0", "30.0"))
+    with pytest.raises(InputError, match=r"a.drape.source: required; missing"):
+        fabrics.load_library(ok + drape.replace('source = "s, Table 2"\n', ""))
 
 
 GOOD_KES = dict(B_warp=0.083, B_weft=0.063, G=0.73, W=19.0, T=0.593, tensile_warp=1118.2, tensile_weft=759.5)

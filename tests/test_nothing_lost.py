@@ -23,7 +23,8 @@ SCENE = "square-pedestal"
 ADAPT = {"adapt.levels": 2, "output.pictures": [], "output.snapshots": []}
 STEPS = 3000
 # summary keys that measure the computer, not the run (wall times, memory, throughput), count this
-# process's work (a restart does not repeat the start's critical-step estimate) or name this run
+# process's work (a restart does not repeat the start's critical-step estimate, nor the self-contact
+# candidate searches before it) or name this run
 # (id, its checkpoint and restart paths): everything else must be equal, floats bit for bit
 VARYING = {
     "adaptive_wall_time_s",
@@ -39,6 +40,7 @@ VARYING = {
     "settings",
     "time_step_estimate_s",
     "time_step_force_evals",
+    "self_contact_searches",
     "timings",
     "wall_time_s",
 }

@@ -62,7 +62,9 @@ def raw_penetration(bodies, x) -> np.ndarray:
     """(n_bodies, M) raw penetrations p = offset - g(x) of the points x (M, 3) (negative: a gap)."""
     if not len(bodies):
         return np.zeros((0, len(x)))
-    return np.stack([-np.asarray(b.penetration(x)[0], dtype=float) for b in bodies])
+    # a mesh body measures against its triangles, not the grid the kernels interpolate: the updates
+    # then also take up the grid's interpolation error (contact_mesh.MeshBody.exact_penetration)
+    return np.stack([-np.asarray(getattr(b, "exact_penetration", b.penetration)(x)[0], dtype=float) for b in bodies])
 
 
 def update(bodies, x, xq, shift_n, shift_q):

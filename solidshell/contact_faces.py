@@ -57,7 +57,7 @@ import numpy as np
 from numba import njit
 
 from .contact import PENETRATION_TOL
-from .contact_kernels import MESH, MESH_LIPSCHITZ, signed_distance
+from .contact_kernels import MESH, MESH_LIPSCHITZ, far_bound, signed_distance
 from .errors import InputError
 
 DEFAULT_FACE_POINTS = 3
@@ -226,8 +226,16 @@ def face_pass(codes, params, offsets, mus, X0, D, els, estart, pn, pw, kq, nodes
             r2 = 0.0
             for a in range(4):
                 r2 = max(r2, (xa[a, 0] - c0) ** 2 + (xa[a, 1] - c1) ** 2 + (xa[a, 2] - c2) ** 2)
-            if signed_distance(code, p, c0, c1, c2, grid)[0] - lip * math.sqrt(r2) > rb:
+            gc = signed_distance(code, p, c0, c1, c2, grid)[0]
+            if gc - lip * math.sqrt(r2) > rb:
                 continue
+            if grid is not None:
+                # beyond a mesh body's band its grid holds the band, which bounds nothing: there the
+                # kernels' g is at least min(band, g_exact - sqrt(3) spacing), and g_exact at least
+                # far_bound(c) - r (contact_mesh.MeshBody.signed_distance)
+                if code == MESH and gc >= grid[int(p[7])] > rb:
+                    if far_bound(p, grid, c0, c1, c2) - MESH_LIPSCHITZ * p[3] - math.sqrt(r2) > rb:
+                        continue
             for q in range(q0, estart[e + 1]):
                 # the sum of N_a x_a in node order, as FacePoints.positions takes it
                 x0 = x1 = x2 = 0.0

@@ -66,13 +66,14 @@ def _box(a0, a1, a2, h0, h1, h2, k):
     return g, 0.0, 0.0, s2
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def grid_distance(p, grid, x0, x1, x2):
     """(g, grad g) of a MESH body at x: the trilinear interpolant of its narrow-band signed-distance
     samples (contact_mesh.py builds them).  ``grid[start]`` is the band b; the table of blocks
     (nbx, nby, nbz, C order) follows, each entry a block number k >= 0, FAR_OUT (every sample of the
-    block is +b) or FAR_IN (-b); then block k's (BLOCK + 1)^3 samples (C order) at start + 1 +
-    nbx nby nbz + k (BLOCK + 1)^3.  Samples are the exact distance clamped to [-b, b] (clamping keeps
+    block is +b) or FAR_IN (-b); then the exact distances at the blocks' centres (same order,
+    :func:`far_bound`); then block k's (BLOCK + 1)^3 samples (C order) at start + 1 + 2 nbx nby nbz
+    + k (BLOCK + 1)^3.  Samples are the exact distance clamped to [-b, b] (clamping keeps
     it 1-Lipschitz), so the interpolant is continuous everywhere; outside the grid's box it is b.
     The gradient is returned as it is, not normalised: the penalty force k p grad g is then exactly
     minus the gradient of the energy 1/2 k p^2 of this g (|grad g| = 1 up to the interpolation
@@ -88,12 +89,13 @@ def grid_distance(p, grid, x0, x1, x2):
         return band, 0.0, 0.0, 0.0
     i, j, k = int(u), int(v), int(w)
     fu, fv, fw = u - i, v - j, w - k
-    bi, bj, bk = i // BLOCK, j // BLOCK, k // BLOCK
+    bi, bj, bk = i >> 3, j >> 3, k >> 3  # // BLOCK (8; i, j, k >= 0)
     kb = grid[s + 1 + (bi * nby + bj) * nbz + bk]
     if kb < 0.0:
         return (band if kb == FAR_OUT else -band), 0.0, 0.0, 0.0
     m = BLOCK + 1
-    o = s + 1 + nbx * nby * nbz + int(kb) * m * m * m + ((i - bi * BLOCK) * m + (j - bj * BLOCK)) * m + (k - bk * BLOCK)
+    o = s + 1 + 2 * nbx * nby * nbz + int(kb) * m * m * m + ((i - bi * BLOCK) * m + (j - bj * BLOCK)) * m
+    o += k - bk * BLOCK
     c000, c001 = grid[o], grid[o + 1]
     c010, c011 = grid[o + m], grid[o + m + 1]
     c100, c101 = grid[o + m * m], grid[o + m * m + 1]
@@ -112,6 +114,26 @@ def grid_distance(p, grid, x0, x1, x2):
     d10, d11 = c101 - c100, c111 - c110
     gw = (1.0 - fu) * ((1.0 - fv) * d00 + fv * d01) + fu * ((1.0 - fv) * d10 + fv * d11)
     return g, gu / h, gv / h, gw / h
+
+
+@njit(cache=True)
+def far_bound(p, grid, x0, x1, x2):
+    """A lower bound of a MESH body's exact distance at x (for skipping what is far from it): the
+    exact distance at the centre c of x's block less |x - c| (the distance is 1-Lipschitz), or,
+    outside the grid's box, the band plus the distance to the box (its outer samples are all beyond
+    the band)."""
+    h = p[3]
+    nbx, nby, nbz, s = int(p[4]), int(p[5]), int(p[6]), int(p[7])
+    bh = BLOCK * h
+    u, v, w = (x0 - p[0]) / bh, (x1 - p[1]) / bh, (x2 - p[2]) / bh
+    if not (0.0 <= u < nbx and 0.0 <= v < nby and 0.0 <= w < nbz):
+        d0 = max(-u, u - nbx, 0.0) * bh
+        d1 = max(-v, v - nby, 0.0) * bh
+        d2 = max(-w, w - nbz, 0.0) * bh
+        return grid[s] + math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+    bi, bj, bk = int(u), int(v), int(w)
+    c0, c1, c2 = (bi + 0.5 - u) * bh, (bj + 0.5 - v) * bh, (bk + 0.5 - w) * bh
+    return grid[s + 1 + nbx * nby * nbz + (bi * nby + bj) * nbz + bk] - math.sqrt(c0 * c0 + c1 * c1 + c2 * c2)
 
 
 @njit(cache=True)

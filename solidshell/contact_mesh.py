@@ -172,7 +172,8 @@ def exact_signed_distance(V, F, x):
 
 def build_grid(V, F, spacing: float, band: float, where: str = "mesh body"):
     """The narrow-band grid of the body (V, F) as one float array in contact_kernels.grid_distance's
-    layout (start 0), its parameter row (contact_kernels.PARAMS) and the number of blocks kept.  The box
+    layout (start 0), its parameter row (contact_kernels.PARAMS), the number of blocks kept and the
+    exact distances at the blocks' centres (nbx, nby, nbz; MeshBody.signed_distance's far bound).  The box
     is the body's bounding box grown by band plus one block on every side (so that the grid's outer
     samples are all +band), rounded up to whole blocks about the same centre."""
     B = ck.BLOCK
@@ -202,10 +203,10 @@ def build_grid(V, F, spacing: float, band: float, where: str = "mesh body"):
     loc = np.stack(np.meshgrid(*(np.arange(m),) * 3, indexing="ij"), axis=-1).reshape(-1, 3)
     pts = (lo + (ib[kept][:, None, :] * B + loc[None]) * h).reshape(-1, 3)
     samples = np.clip(exact_signed_distance(V, F, pts)[0], -band, band) if len(pts) else np.zeros(0)
-    grid = np.concatenate([[band], table.astype(float), samples])
+    grid = np.concatenate([[band], table.astype(float), gc, samples])
     params = np.zeros(ck.PARAMS)
     params[:8] = (*lo, h, *nb, 0.0)
-    return grid, params, len(kept)
+    return grid, params, len(kept), gc.reshape(*nb)
 
 
 def _geometry(V, F, spacing, band, where: str) -> dict:
@@ -227,10 +228,11 @@ def _geometry(V, F, spacing, band, where: str) -> dict:
         spacing = float(np.clip(np.median(e), diag / 400.0, diag / 50.0))
     spacing = _pos(spacing, f"{where}: spacing")
     band = _pos(band, f"{where}: band") if band is not None else 8.0 * spacing
-    grid, params, n_blocks = build_grid(V, F, spacing, band, where)
+    grid, params, n_blocks, coarse = build_grid(V, F, spacing, band, where)
     V, F = np.ascontiguousarray(V), np.ascontiguousarray(F)
+    rho = curvature_radius(V, F)
     return dict(
-        V=V, F=F, spacing=spacing, band=band, grid=grid, params=params, n_blocks=n_blocks, rho=curvature_radius(V, F)
+        V=V, F=F, spacing=spacing, band=band, grid=grid, params=params, n_blocks=n_blocks, rho=rho, coarse=coarse
     )
 
 
@@ -241,7 +243,7 @@ class MeshBody(RigidBody):
     spacing : the distance grid's spacing [length] (default: the surface's median edge length, at
         least 1/400 and at most 1/50 of its bounding box's diagonal);
     band : how far from the surface the grid holds the distance [length] (default 8 spacings);
-        contact reaches no farther than band (offset + band < ... is checked);
+        it must exceed the contact offset (contact reaches no farther than the band);
     where : how errors name the body ("contact[0]: file 'x.stl'").
     """
 
@@ -260,6 +262,7 @@ class MeshBody(RigidBody):
         self.V, self.F = geo["V"], geo["F"]
         self.spacing, self.band = geo["spacing"], geo["band"]
         self.grid, self._params, self.n_blocks, self._rho = geo["grid"], geo["params"], geo["n_blocks"], geo["rho"]
+        self._coarse, self._lo, self._hi = geo["coarse"], self.V.min(axis=0), self.V.max(axis=0)
 
     @property
     def params(self) -> np.ndarray:
@@ -275,21 +278,47 @@ class MeshBody(RigidBody):
 
     def signed_distance(self, x: np.ndarray):
         """(g, n) as the kernels see them (contact_kernels.grid_distance) wherever they see the
-        body (|g| < band); beyond the band, where the grid holds +band, the lower bound
-        max(band, g_exact - sqrt(3) spacing) from libigl instead (and its normal).  The kernels'
-        g at any y is at least min(band, g_exact(y)) - sqrt(3) spacing (a cell's trilinear value is at
-        least its smallest corner sample, each within sqrt(3) spacing of y), so this bound keeps the
-        explicit solver's candidate selection (a node is left out while its gap exceeds the margin
-        and it has moved less than margin / lipschitz) exact, and lets it leave out the nodes far
-        from the body instead of seeing them all at the band."""
+        body (|g| < band); beyond the band, where the grid holds +band, max(band, LB - sqrt(3)
+        spacing) instead, LB a lower bound of the exact distance: g(c) - |x - c| with c the centre of
+        x's block (its exact distance is stored), or outside the grid the distance to the body's
+        bounding box.  The kernels' g at any y is at least min(band, g_exact(y) - sqrt(3) spacing) (a
+        cell's trilinear value is at least its smallest corner sample, each within sqrt(3) spacing
+        of y), and g is sqrt(3)-Lipschitz, so this keeps the explicit solver's candidate selection (a
+        node is left out while its gap exceeds the margin and it has moved less than margin /
+        lipschitz) exact and lets it leave out the nodes far from the body instead of seeing them
+        all at the band; no exact query per call (libigl builds its tree on every call)."""
         x = np.ascontiguousarray(x, dtype=float).reshape(-1, 3)
         g, n = ck.distances(self.code, self._params, x, self.grid)
         far = g >= self.band
         if np.any(far):
-            ge, _, ne = exact_signed_distance(self.V, self.F, x[far])
-            g[far] = np.maximum(self.band, ge - ck.MESH_LIPSCHITZ * self.spacing)
-            n[far] = ne
+            xf = x[far]
+            B, h = ck.BLOCK, self.spacing
+            lo = self._params[:3]
+            nb = np.array(self._coarse.shape)
+            ib = np.floor((xf - lo) / (B * h)).astype(np.int64)
+            inside = np.all((ib >= 0) & (ib < nb), axis=1)
+            c = lo + (np.clip(ib, 0, nb - 1) + 0.5) * B * h
+            gc = self._coarse[tuple(np.clip(ib, 0, nb - 1).T)]
+            d = xf - c
+            box = np.linalg.norm(np.maximum(np.maximum(self._lo - xf, xf - self._hi), 0.0), axis=1)
+            lb = np.where(inside, gc - np.linalg.norm(d, axis=1), box)
+            g[far] = np.maximum(self.band, lb - ck.MESH_LIPSCHITZ * h)
+            L = np.linalg.norm(d, axis=1)
+            n[far] = d / np.where(L > 0.0, L, 1.0)[:, None]  # (no force acts here: any unit vector)
         return g, n
+
+    def exact_penetration(self, x):
+        """(gap (N,), normal (N,3)) as :meth:`penetration`, with libigl's exact distance where the
+        grid sees the body (|g| < band): the augmented-Lagrangian updates (contact_augment.py) measure
+        the raw penetration with it, so that their shifts take up the grid's interpolation error too
+        (~spacing^2 / (4 rho) on a face of radius rho, ~spacing / 4 at a sharp edge, where the
+        trilinear distance rounds the edge off and a sheet pressed on it sinks in)."""
+        x = np.ascontiguousarray(x, dtype=float).reshape(-1, 3)
+        g, n = self.signed_distance(x)
+        near = np.abs(g) < self.band
+        if np.any(near):
+            g[near], n[near] = self.exact_distance(x[near])
+        return g - self.offset, n
 
     def exact_distance(self, x):
         """(g (N,), outward unit normals (N,3)) of the points x (N,3) from libigl, not the grid."""

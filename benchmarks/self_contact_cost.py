@@ -52,9 +52,9 @@ def turned(nodes, deg: float, shift) -> np.ndarray:
     return nodes @ R.T + np.asarray(shift, dtype=float)
 
 
-def stacked(n: int, size: float = 20.0):
+def stacked(n: int, spacing: float = 0.3):
     """Two n x n sheets, the upper turned 10 degrees, references 1 cm apart, U puts them 0.8 h apart."""
-    a = square((n, n), size=size)
+    a = square((n, n), size=spacing * n)  # elements of one size (5 h) at every n: the same local work
     XB = turned(a.nodes, 10.0, (0.0, 0.0, 1.0))
     mesh = ShellMesh(np.vstack([a.nodes, XB]), np.vstack([a.quads, a.quads + a.n_nodes]))
     U = np.zeros((mesh.n_nodes, 6))

@@ -29,8 +29,11 @@ import numpy as np
 SEARCH = 2.0
 """Layers are looked for within SEARCH x h: min_layer_gap is None beyond."""
 
-SELF_CONTACT_DEFAULT = False
-"""A scene's ``[self_contact] enabled`` when it does not say (solidshell.scenes.schema)."""
+SELF_CONTACT_DEFAULT = True
+"""A scene's ``[self_contact] enabled`` when it does not say (solidshell.scenes.schema): on, as in
+every cloth code users compare with -- a drape whose sheet passes through itself is not a drape.
+Cheap where no layers meet (docs/contact.md §16); a scene whose sheet cannot fold onto itself
+(the paper's strips) says ``enabled = false``."""
 
 LAYER_TOL = 0.1
 """Two layers closer than (1 - LAYER_TOL) h are reported (layer_pairs_close) and warned about:

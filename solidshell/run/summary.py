@@ -203,7 +203,8 @@ def _state_warnings(summary: dict, info: dict) -> list[str]:
     if n_end:
         out.append(
             f"{n_end} node(s) interpenetrated at the end (n_p . d_p < 0, Section 4.3): the "
-            f"sheet passes through itself there; refine the mesh or check the result"
+            f"director is turned through the mid-surface there (the shell's two faces cross); refine "
+            f"the mesh or check the result"
         )
     n_max = info.get("max_interpenetrated_nodes")
     if n_max and not n_end:

@@ -78,12 +78,12 @@ def grid_distance(p, grid, x0, x1, x2):
     The gradient is returned as it is, not normalised: the penalty force k p grad g is then exactly
     minus the gradient of the energy 1/2 k p^2 of this g (|grad g| = 1 up to the interpolation
     error, O(spacing / curvature radius), near the surface)."""
-    h = p[3]
+    inv = 1.0 / p[3]  # one division, not six
     nbx, nby, nbz, s = int(p[4]), int(p[5]), int(p[6]), int(p[7])
     band = grid[s]
-    u = (x0 - p[0]) / h
-    v = (x1 - p[1]) / h
-    w = (x2 - p[2]) / h
+    u = (x0 - p[0]) * inv
+    v = (x1 - p[1]) * inv
+    w = (x2 - p[2]) * inv
     nx, ny, nz = nbx * BLOCK, nby * BLOCK, nbz * BLOCK
     if not (0.0 <= u < nx and 0.0 <= v < ny and 0.0 <= w < nz):  # (NaN lands here too)
         return band, 0.0, 0.0, 0.0
@@ -113,7 +113,7 @@ def grid_distance(p, grid, x0, x1, x2):
     d00, d01 = c001 - c000, c011 - c010
     d10, d11 = c101 - c100, c111 - c110
     gw = (1.0 - fu) * ((1.0 - fv) * d00 + fv * d01) + fu * ((1.0 - fv) * d10 + fv * d11)
-    return g, gu / h, gv / h, gw / h
+    return g, gu * inv, gv * inv, gw * inv
 
 
 @njit(cache=True)

@@ -1,11 +1,11 @@
-"""Compiled kernels of the sheet's penalty self-contact (contact_self_penalty.py): the closest point
-of a triangle to a vertex, the candidate search, and the force pass.
+"""Compiled kernels of the sheet's penalty self-contact (contact_self_penalty.py): the closest points
+of a triangle to a vertex and of two edges, the candidate searches, and the force pass.
 
 Plain functions on plain arrays (positions (N,3) or the flat dof vector (6N,) of Eq. (1), index
-arrays of triangles (T,3) and candidate pairs); lengths in the mesh's unit, forces in
+arrays of triangles (T,3), edges (E,2) and candidate pairs); lengths in the mesh's unit, forces in
 the model's force unit.  Closest points after Ericson, "Real-Time Collision Detection" (2005),
 Sec. 5.1.5 (point-triangle, by Voronoi regions: the barycentric weights of the closest point are
-exact zeros off the triangle's interior).
+exact zeros off the triangle's interior) and Sec. 5.1.9 (segment-segment).
 """
 
 from __future__ import annotations
@@ -76,6 +76,25 @@ def point_triangle(p, a, b, c):
 
 
 @njit(cache=True)
+def segment_segment(p1, q1, p2, q2):
+    """Parameters (s, t) in [0,1] of the closest points p1 + s (q1-p1) and p2 + t (q2-p2) of two
+    segments (3-tuples; Ericson 5.1.9; parallel segments: s = 0)."""
+    d1, d2, r = _sub(q1, p1), _sub(q2, p2), _sub(p1, p2)
+    a, e, f = _d3(d1, d1), _d3(d2, d2), _d3(d2, r)
+    c, b = _d3(d1, r), _d3(d1, d2)
+    den = a * e - b * b
+    s = min(max((b * f - c * e) / den, 0.0), 1.0) if den > 1e-14 * a * e else 0.0
+    t = (b * s + f) / e
+    if t < 0.0:
+        t = 0.0
+        s = min(max(-c / a, 0.0), 1.0)
+    elif t > 1.0:
+        t = 1.0
+        s = min(max((b - c) / a, 0.0), 1.0)
+    return s, t
+
+
+@njit(cache=True)
 def _vf_owned(own, wa, wb, wc):
     """Whether this triangle counts the vertex-triangle pair whose closest point has weights
     (wa, wb, wc): always in the interior; on an edge or a corner only if the triangle owns that
@@ -101,13 +120,16 @@ def _push(C, node, w, f, n):
 
 
 @njit(cache=True)
-def self_pass(X0, D, tri, own, vf, k, h, C):
-    """Add the penalty forces of the candidate vertex-triangle pairs vf (P,2) to C (6N,) at the
-    state D (6N,): a pair at distance d < h with unit direction n (from the triangle's closest point
-    to the vertex) carries the energy k/2 (h - d)^2 and pushes its two closest points
-    apart with k (h - d), spread on their nodes by the closest points' weights (the exact gradient:
-    the weights are those of the closest point, Sec. 5.1 of Ericson).  k (N,) per node; a pair takes
-    the smallest k of its four nodes; a triangle counts only the pairs it owns (_vf_owned).  Returns (energy, pairs in contact, the smallest distance of those (inf: none))."""
+def self_pass(X0, D, tri, own, vf, edges, ee, k, h, C):
+    """Add the penalty forces of the candidate vertex-triangle pairs vf (P,2) and edge-edge pairs ee
+    (Q,2) of ``edges`` (E,2) to C (6N,) at the state D (6N,): a pair at distance d < h with unit
+    direction n (from the triangle's or second edge's closest point to the vertex or the first
+    edge's) carries the energy k/2 (h - d)^2 and pushes its two closest points apart with k (h - d),
+    spread on their nodes by the closest points' weights (the exact gradient: the weights are those
+    of the closest point, Sec. 5.1 of Ericson).  k (N,) per node; a pair takes the smallest k of its
+    four nodes; a triangle counts only the vertex pairs it owns (_vf_owned), an edge pair counts
+    only with both closest points inside the edges (at an end point it is a vertex pair).  Returns
+    (energy, pairs in contact, the smallest distance of those (inf: none))."""
     E, n_act, dmin = 0.0, 0, np.inf
     for i in range(len(vf)):
         v, t = vf[i, 0], vf[i, 1]
@@ -130,6 +152,27 @@ def self_pass(X0, D, tri, own, vf, k, h, C):
         _push(C, a, -wa, f, n)
         _push(C, b, -wb, f, n)
         _push(C, c, -wc, f, n)
+    for i in range(len(ee)):
+        e1, e2 = ee[i, 0], ee[i, 1]
+        a, b, c, dd = edges[e1, 0], edges[e1, 1], edges[e2, 0], edges[e2, 1]
+        xa, xb, xc, xd = _ptd(X0, D, a), _ptd(X0, D, b), _ptd(X0, D, c), _ptd(X0, D, dd)
+        s, u = segment_segment(xa, xb, xc, xd)
+        if not (0.0 < s < 1.0 and 0.0 < u < 1.0):
+            continue
+        r = _sub(_comb3(1.0 - s, xa, s, xb, 0.0, xb), _comb3(1.0 - u, xc, u, xd, 0.0, xd))
+        d = math.sqrt(_d3(r, r))
+        if d >= h or d == 0.0:
+            continue
+        dmin = min(dmin, d)
+        kk = min(min(k[a], k[b]), min(k[c], k[dd]))
+        f = kk * (h - d)
+        E += 0.5 * f * (h - d)
+        n_act += 1
+        n = (r[0] / d, r[1] / d, r[2] / d)
+        _push(C, a, 1.0 - s, f, n)
+        _push(C, b, s, f, n)
+        _push(C, c, -(1.0 - u), f, n)
+        _push(C, dd, -u, f, n)
     return E, n_act, dmin
 
 
@@ -198,6 +241,15 @@ def _pt_dist(x, v, a, b, c):
 
 
 @njit(cache=True)
+def _seg_dist(x, a, b, c, d):
+    """Distance of the segments x[a] x[b] and x[c] x[d]."""
+    xa, xb, xc, xd = _pt(x, a), _pt(x, b), _pt(x, c), _pt(x, d)
+    s, t = segment_segment(xa, xb, xc, xd)
+    r = _sub(_comb3(1.0 - s, xa, s, xb, 0.0, xb), _comb3(1.0 - t, xc, t, xd, 0.0, xd))
+    return math.sqrt(_d3(r, r))
+
+
+@njit(cache=True)
 def vf_candidates(x, X0, tri, r, rest_min):
     """(P,2) the pairs (vertex, triangle) sharing no node whose distance at x (N,3) is below r and
     whose distance in the flat reference X0 is at least rest_min: a uniform grid over the vertices
@@ -249,13 +301,77 @@ def vf_candidates(x, X0, tri, r, rest_min):
 
 
 @njit(cache=True)
-def nearest_rest_pair(X0, tri, r, rest_min):
-    """The smallest flat-reference distance >= rest_min of a vertex-triangle pair sharing no node
-    (inf: none within r): how far the candidates' reach may go before a flat sheet's neighbours
-    become candidates (contact_self_penalty.SelfPenalty)."""
+def ee_candidates(x, X0, edges, r, rest_min):
+    """(Q,2) the pairs (i < j) of edges sharing no node whose distance at x (N,3) is below r and in
+    the flat reference X0 at least rest_min: a uniform grid over the edges' midpoints (cell: the
+    longest edge + r, so that two edges within r have their midpoints in neighbouring cells), each
+    pair's boxes grown by r compared before its distance."""
+    E = len(edges)
+    mid = np.empty((E, 3))
+    lo_e = np.empty((E, 3))
+    hi_e = np.empty((E, 3))
+    ext = 0.0
+    for e in range(E):
+        a, b = edges[e, 0], edges[e, 1]
+        for j in range(3):
+            mid[e, j] = 0.5 * (x[a, j] + x[b, j])
+            lo_e[e, j] = min(x[a, j], x[b, j])
+            hi_e[e, j] = max(x[a, j], x[b, j])
+        r_ab = _sub(_pt(x, a), _pt(x, b))
+        ext = max(ext, math.sqrt(_d3(r_ab, r_ab)))
+    cs = ext + r
+    lo, n, skeys, order = _grid(mid, cs)
+    out = np.empty((max(1024, E), 2), dtype=np.int64)
+    m = 0
+    for e in range(E):
+        a, b = edges[e, 0], edges[e, 1]
+        ci, cj, ck = _cell(mid[e], lo, cs, n)
+        for ix in range(max(ci - 1, 0), min(ci + 2, n[0])):
+            for iy in range(max(cj - 1, 0), min(cj + 2, n[1])):
+                for iz in range(max(ck - 1, 0), min(ck + 2, n[2])):
+                    key = (ix * n[1] + iy) * n[2] + iz
+                    s0 = np.searchsorted(skeys, key)
+                    s1 = np.searchsorted(skeys, key, side="right")
+                    for s in range(s0, s1):
+                        f = order[s]
+                        if f <= e:
+                            continue
+                        if (
+                            lo_e[f, 0] > hi_e[e, 0] + r
+                            or lo_e[e, 0] > hi_e[f, 0] + r
+                            or lo_e[f, 1] > hi_e[e, 1] + r
+                            or lo_e[e, 1] > hi_e[f, 1] + r
+                            or lo_e[f, 2] > hi_e[e, 2] + r
+                            or lo_e[e, 2] > hi_e[f, 2] + r
+                        ):
+                            continue
+                        c, d = edges[f, 0], edges[f, 1]
+                        if c == a or c == b or d == a or d == b:
+                            continue
+                        if _seg_dist(x, a, b, c, d) >= r or _seg_dist(X0, a, b, c, d) < rest_min:
+                            continue
+                        if m == len(out):
+                            grown = np.empty((2 * m, 2), dtype=np.int64)
+                            grown[:m] = out
+                            out = grown
+                        out[m, 0] = e
+                        out[m, 1] = f
+                        m += 1
+    return out[:m].copy()
+
+
+@njit(cache=True)
+def nearest_rest_pair(X0, tri, edges, r, rest_min):
+    """The smallest flat-reference distance >= rest_min of a vertex-triangle or edge-edge pair
+    sharing no node (inf: none within r): how far the candidates' reach may go before a flat
+    sheet's neighbours become candidates (contact_self_penalty.SelfPenalty)."""
     pairs = vf_candidates(X0, X0, tri, r, rest_min)
     best = np.inf
     for i in range(len(pairs)):
         t = pairs[i, 1]
         best = min(best, _pt_dist(X0, pairs[i, 0], tri[t, 0], tri[t, 1], tri[t, 2]))
+    pairs = ee_candidates(X0, X0, edges, r, rest_min)
+    for i in range(len(pairs)):
+        e, f = pairs[i, 0], pairs[i, 1]
+        best = min(best, _seg_dist(X0, edges[e, 0], edges[e, 1], edges[f, 0], edges[f, 1]))
     return best

@@ -3,17 +3,23 @@ evaluated on candidate pairs found by a compiled grid and kept while no node has
 
 The law (issue 37: two layers keep their mid-surfaces about a thickness h apart)
 --------------------------------------------------------------------------------
-The mid-surface as triangles (layers.triangles).  Every pair of a vertex and a triangle sharing no
-node whose distance d lies below h carries the energy
+The mid-surface as triangles (layers.triangles).  Every vertex-triangle pair and every edge-edge
+pair sharing no node whose distance d lies below h carries the energy
 
     E = k/2 (h - d)^2                                                       [force x length]
 
-and pushes the vertex and the triangle's closest point apart along the line joining them with
-k (h - d), spread on the triangle's nodes by the closest point's barycentric weights (the exact
-gradient of E).  A vertex meets a triangle where its closest point lies inside the triangle, and
-an edge or a corner shared by several triangles once, by the triangle that owns it (IPC's
-vertex-edge and vertex-vertex pairs, Li et al., SIGGRAPH 2020).  Both faces of the sheet alike:
+and pushes its two closest points apart along the line joining them with k (h - d), spread on the
+nodes by the closest points' weights (the exact gradient of E).  A vertex meets a triangle where
+its closest point lies inside the triangle, and an edge or a corner shared by several triangles
+once, by the triangle that owns it; an edge meets an edge where both closest points lie inside the
+edges (at an end point the pair is a vertex's): the collision set of Incremental Potential Contact
+(Li et al., SIGGRAPH 2020) with a penalty in place of its barrier.  Both faces of the sheet alike:
 the distance is unsigned.  Frictionless.
+
+The edge pairs are what keeps two folded layers apart between their nodes: on square-on-disc
+10x80 relaxed with vertex-triangle pairs alone, the vertices stayed 0.97 h from the other layer
+while the chords of the curved layers came to 0.66 h of each other (layers.py's gap, 18 pairs
+below 0.9 h).
 
 Pairs closer than REST_MIN h = 2h in the flat reference state are neighbours in the sheet, not
 layers, and never take part: two such points face each other across a fold only if its radius is
@@ -21,25 +27,19 @@ below 2h / pi < h, tighter than two layers of thickness h can fold (on the meshe
 they are the pairs sharing a node, hanging nodes on their coarse neighbours' edges, and in refined
 regions the next ring).
 
-No edge-edge pairs: in two resting layers they outnumber the vertex-triangle pairs three to one
-and made the candidate search ten times dearer (two 70 x 70 sheets 0.055 cm apart: 1.9 x 10^5
-edge pairs against 6.8 x 10^4, 350-450 ms against 30-65 ms a search).  Without them two creases
-crossing each other edge on edge, with every vertex more than h from the other layer, can pass
-through; the scenes' independent check (verification/self_check.py) counts any such crossing.
-
 k: the penalty of the rigid bodies scaled down, k_pair = SELF_SHARE x k_pen per node
 (contact.penalty_stiffness: contact_penalty_factor x m omega_max^2), a pair taking the smallest of
 its nodes'.  A node of one of two resting layers sits in about BUDGET_PAIRS pair springs' worth of
-row sum (its own pairs, two or three near the other layer's edges, each with row sum 2 k_pair, and
-its triangles' share of the other layer's vertices' pairs), so the critical step budgets
-BUDGET_PAIRS x SELF_SHARE x k_pen = k_pen per node for it (solvers/explicit/stepcontrol.limit):
-the price of one more rigid body.
+row sum (its own vertex pairs, two or three near the other layer's edges, its triangles' share of
+the other layer's vertex pairs, and some six crossing edge pairs, each with row sum <= 2 k_pair),
+so the critical step budgets BUDGET_PAIRS x SELF_SHARE x k_pen = k_pen per node for it
+(solvers/explicit/stepcontrol.limit): the price of one more rigid body.
 
 A penalty, not a barrier: nothing forbids a layer from passing through another, it is only pushed
 back, with k (h - d).  Two layers meeting at speed v come within about v / omega_c of each other,
-omega_c = sqrt(2 k_pair / m) = 0.16 omega_max; at the speeds of a drape (a fall of a few cm, ~1
-m/s) that is a small fraction of h.  tests/test_self_penalty.py measures how often random drops
-end with layers through each other.
+omega_c = sqrt(2 k_pair / m) ~ 0.11 omega_max; at the speeds of a drape (a fall of a few cm,
+~1 m/s) that is a small fraction of h.  benchmarks/self_contact_cost.py drops a sheet onto another
+from random heights, angles and places and counts the drops that end with crossing triangles.
 
 Candidates (a Verlet list): at a search, every pair within h + margin by its true distance (and
 not neighbours).  The search is repeated once some node has moved more than margin / 2 since the
@@ -50,9 +50,11 @@ h + margin is still beyond h and the pass over the candidates gives the forces o
 exactly.  The margin is as wide as the mesh allows (MARGIN_MIN h ... MARGIN_MAX h): up to the
 nearest flat-sheet pair that is not a neighbour (contact_self_kernels.nearest_rest_pair), so that in
 a region without folds no pair is a candidate and a sheet without folds pays only the searches.
-The search is a compiled uniform grid (contact_self_kernels.vf_candidates): measured against the IPC
-Toolkit's LBVH on the two sheets above, the library's broad phase takes 35-50 ms and handing its
-candidate objects to numpy another 300 ms; the grid takes 30 ms there and ~4 ms on a 60 x 60 sheet.
+The search is a compiled uniform grid (contact_self_kernels.vf_candidates and ee_candidates):
+measured against the IPC Toolkit's LBVH on two 70 x 70 sheets resting on each other (10^4 nodes,
+the heaviest case), the library's broad phase takes 35-50 ms and handing its 5 x 10^5 candidate
+objects to numpy another 300 ms; the grid gives both kinds of pair in 87 ms (vertex pairs alone:
+30 ms) and takes ~4 ms on a 60 x 60 sheet without folds.
 """
 
 from __future__ import annotations
@@ -64,10 +66,10 @@ import numpy as np
 from . import contact_self_kernels as sk
 from .layers import triangles
 
-SELF_SHARE = 1.0 / 8.0
+SELF_SHARE = 1.0 / 16.0
 """A pair's penalty as a share of the rigid bodies' per-node penalty k_pen."""
 
-BUDGET_PAIRS = 8
+BUDGET_PAIRS = 16
 """Pair springs per node the critical step allows for (module docstring): SELF_SHARE x BUDGET_PAIRS = 1."""
 
 MARGIN_MIN, MARGIN_MAX = 1.0, 8.0
@@ -77,6 +79,12 @@ these bounds."""
 REST_MIN = 2.0
 """Pairs closer than REST_MIN x h in the flat reference state are neighbours, never layers
 (module docstring)."""
+
+
+def edges_of(tri: np.ndarray) -> np.ndarray:
+    """(E, 2) the unique edges (i < j) of the triangles tri (T, 3)."""
+    e = np.vstack([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]])
+    return np.unique(np.sort(e, axis=1), axis=0)
 
 
 def ownership(tri: np.ndarray, n_nodes: int) -> np.ndarray:
@@ -108,13 +116,15 @@ class SelfPenalty:
         self.N = len(self.X0)
         self.tri = np.ascontiguousarray(triangles(mesh), dtype=np.int64)
         self.own = ownership(self.tri, self.N)
+        self.edges = np.ascontiguousarray(edges_of(self.tri), dtype=np.int64)
         self.h = float(h)
         self.k = np.ascontiguousarray(np.broadcast_to(np.asarray(k, dtype=float), (self.N,)))
         self.rest_min = REST_MIN * self.h
         # the widest margin that keeps a flat sheet's neighbours out of the candidates
-        near = sk.nearest_rest_pair(self.X0, self.tri, (1.0 + MARGIN_MAX) * self.h, self.rest_min)
+        near = sk.nearest_rest_pair(self.X0, self.tri, self.edges, (1.0 + MARGIN_MAX) * self.h, self.rest_min)
         self.margin = min(max(0.99 * (near - self.h), MARGIN_MIN * self.h), MARGIN_MAX * self.h)
         self.vf = np.zeros((0, 2), dtype=np.int64)
+        self.ee = np.zeros((0, 2), dtype=np.int64)
         self.Xb = self.X0.copy()  # positions at the last search (none before the first: searches = 0)
         self.searches = 0
         self.min_gap = np.inf  # smallest distance of a pair in contact seen by the passes [length]
@@ -128,6 +138,8 @@ class SelfPenalty:
         # in (triangle, vertex) order: the pairs in contact are then summed in the same order
         # whatever state the search saw, so a restart gives the forces bit for bit
         self.vf = np.ascontiguousarray(vf[np.argsort(vf[:, 1] * self.N + vf[:, 0], kind="stable")])
+        ee = sk.ee_candidates(x, self.X0, self.edges, r, self.rest_min)
+        self.ee = np.ascontiguousarray(ee[np.argsort(ee[:, 0] * len(self.edges) + ee[:, 1], kind="stable")])
         self.Xb = x.copy()
         self.searches += 1
 
@@ -139,7 +151,7 @@ class SelfPenalty:
             return 0.0, 0
         if not self.searches or move > 0.5 * self.margin:
             self.search(self.X0 + D.reshape(self.N, 6)[:, :3])
-        E, n, dmin = sk.self_pass(self.X0, D, self.tri, self.own, self.vf, self.k, self.h, C)
+        E, n, dmin = sk.self_pass(self.X0, D, self.tri, self.own, self.vf, self.edges, self.ee, self.k, self.h, C)
         if dmin < self.min_gap:
             self.min_gap = dmin
         return E, n

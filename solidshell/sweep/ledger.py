@@ -54,7 +54,7 @@ def FIXED_COLUMNS():
         ("fold_count", pa.int64(), "folds of the projected boundary (solidshell.analysis)"),
         ("fold_angles_deg", pa.list_(pa.float64()), "polar angles of the fold crests [deg]"),
         ("mean_radius", pa.float64(), "mean radius of the projected boundary [cm]"),
-        ("interpenetrated_nodes", pa.int64(), "nodes whose director turned through the mid-surface (n_p . d_p < 0, §4.3)"),
+        ("interpenetrated_nodes", pa.int64(), "nodes whose director turned through the sheet (n_p . d_p < 0, §4.3)"),
         ("radius_profile", pa.list_(pa.float32()), f"r(theta) [cm] at {PROFILE_POINTS} angles, 1 deg apart"),
         ("fingerprint", pa.string(), "folds, canonical fold angles (5 deg) under the symmetry group, DC"),
         ("symmetry", pa.string(), "the symmetry group the fingerprint is taken under"),

@@ -37,7 +37,7 @@ def load(tmp_path, extra="", replace=("", "")):
             None,
             "contact[0].radius: must be positive, got 0.0",
         ),
-        ("[[contact]]\nradius=5\n", None, "contact[0].type: required key is missing (sphere, plane or pedestal)"),
+        ("[[contact]]\nradius=5\n", None, "contact[0].type: required key is missing (sphere, plane, pedestal or mesh)"),
         ("[[contact]]\ntype=3\n", None, "contact[0].type: must be a string, got integer 3"),
         (
             "[[contact]]\ntype='pedestal'\nshape='disc'\ndiameter=3\nsize=3\n",

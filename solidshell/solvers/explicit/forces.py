@@ -256,7 +256,7 @@ class Forces:
         return augment.update(self.bodies, x, xq, self.shift_n, self.shift_q)
 
     def with_self(self, D, C):
-        """(C + the self-contact forces at D (6N,, the step's buffer, valid until the next call),
+        """(C + the self-contact forces at D (6N,): the step's buffer, valid until the next call;
         self-contact energy, pairs in contact); C None: no body forces.  (C, 0, 0) without
         self-contact."""
         if self.selfc is None:

@@ -134,6 +134,9 @@ def _relax_driver(max_steps, restart=None, **adapt):
     """An adaptive relaxation (AdaptiveRun) of the scene on its level-0 mesh, not started; ``adapt``:
     more adapt.* overrides."""
     over = {**ADAPT, **{f"adapt.{k}": v for k, v in adapt.items()}}
+    # the pinned step counts were measured without self-contact (its share of the critical step
+    # moves them); hang-20's sheet does not fold onto itself in these steps
+    over["self_contact.enabled"] = False
     sc = load("hang-20").with_overrides(over)
     level0 = run_scene(sc, mesh="4x4", solver="none", progress=False).mesh
     s = {**sc.solver_settings("relax"), "mass_scaling": 1.0, "max_steps": max_steps}

@@ -107,7 +107,7 @@ def test_the_deep_static_drape_no_longer_passes_through_itself(tmp_path):
     for on in (False, True):
         out = run_scene(
             "square-on-disc", mesh="10x80", out_dir=tmp_path / str(on), progress=False,
-            overrides={"solver.static.self_contact": on, "output.pictures": [], "output.snapshots": []},
+            overrides={"self_contact.enabled": on, "output.pictures": [], "output.snapshots": []},
         )  # fmt: skip
         runs[on] = out.summary, self_check.check_run(tmp_path / str(on))
     (off, (_, off_clean)), (s, (line, clean)) = runs[False], runs[True]

@@ -463,6 +463,18 @@ def _other_solver_keys() -> set:
     return {k for name, kind in KINDS.items() if name != "static" for k in kind.settings_model().model_fields}
 
 
+def _solve_problem(problem, s, progress) -> SolveResult:
+    return solve_static(
+        problem.model,
+        problem.fixed,
+        problem.loads,
+        prescribed=problem.prescribed,
+        contact=problem.contact,
+        progress=progress,
+        settings=s,
+    )
+
+
 def run(problem, settings: dict | None = None, progress=None) -> SolveResult:
     """Registry entry ``"static"``: solve a :class:`~solidshell.problem.Problem`.
 
@@ -477,21 +489,24 @@ def run(problem, settings: dict | None = None, progress=None) -> SolveResult:
         settings = {k: v for k, v in settings.items() if k in StaticSettings.model_fields or k not in other}
     s = parse(StaticSettings, settings, "solver.static")
     note = None
+    from_scene = False  # the barrier switched on by the problem's self_contact, not by the settings
     if getattr(problem, "self_contact", False) and not s.self_contact:
         # the scene's [self_contact]: the barrier where the method can keep its steps apart
         if s.method == "newton":
             s = parse(StaticSettings, {**s.as_dict(), "self_contact": True}, "solver.static")
+            from_scene = True
         else:
             note = f"self-contact is left out: the static method {s.method!r} takes none (method 'newton' does)"
-    res = solve_static(
-        problem.model,
-        problem.fixed,
-        problem.loads,
-        prescribed=problem.prescribed,
-        contact=problem.contact,
-        progress=progress,
-        settings=s,
-    )
+    try:
+        res = _solve_problem(problem, s, progress)
+    except InputError as exc:
+        if not (from_scene and str(exc).startswith("self-contact:")):
+            raise
+        # the scene's switch on a mesh the barrier cannot take (elements smaller than about h):
+        # solved without it, and said so (an explicit solver.static.self_contact = true still refuses)
+        s = parse(StaticSettings, {**s.as_dict(), "self_contact": False}, "solver.static")
+        note = f"self-contact is left out: {exc}"
+        res = _solve_problem(problem, s, progress)
     if note:
         res.info.setdefault("warnings", []).append(note)
     return res

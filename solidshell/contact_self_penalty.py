@@ -81,10 +81,14 @@ REST_MIN = 2.0
 (module docstring)."""
 
 
+def _stacked_edges(tri: np.ndarray) -> np.ndarray:
+    """(3T, 2) the edges ab of every triangle, then bc, then ca, each as (i < j)."""
+    return np.sort(np.vstack([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]), axis=1)
+
+
 def edges_of(tri: np.ndarray) -> np.ndarray:
     """(E, 2) the unique edges (i < j) of the triangles tri (T, 3)."""
-    e = np.vstack([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]])
-    return np.unique(np.sort(e, axis=1), axis=0)
+    return np.unique(_stacked_edges(tri), axis=0)
 
 
 def ownership(tri: np.ndarray, n_nodes: int) -> np.ndarray:
@@ -93,7 +97,7 @@ def ownership(tri: np.ndarray, n_nodes: int) -> np.ndarray:
     one owner."""
     T = len(tri)
     own = np.zeros(T, dtype=np.int64)
-    e = np.sort(np.vstack([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]), axis=1)
+    e = _stacked_edges(tri)
     key = e[:, 0].astype(np.int64) * n_nodes + e[:, 1]
     _, first = np.unique(key, return_index=True)
     for bit in range(3):
@@ -146,11 +150,24 @@ class SelfPenalty:
     # ------------------------------------------------------------------ forces
     def add_forces(self, D, C):
         """Add the penalty forces at D (6N,) into C (6N,); (energy, pairs in contact)."""
-        move = sk.relative_move(self.X0, D, self.Xb) if self.searches else 0.0
-        if math.isnan(move):  # a position not finite: no forces (the integrator stops on it)
+        if not self.refresh(D):
             return 0.0, 0
+        return self.forces(D, C)
+
+    def refresh(self, D) -> bool:
+        """Search anew if some node has moved too far since the last search (module docstring):
+        whether any candidate pair stands at D (False too when a position is not finite: no
+        forces then, the integrator stops on it)."""
+        move = sk.relative_move(self.X0, D, self.Xb) if self.searches else 0.0
+        if math.isnan(move):
+            return False
         if not self.searches or move > 0.5 * self.margin:
             self.search(self.X0 + D.reshape(self.N, 6)[:, :3])
+        return bool(len(self.vf) or len(self.ee))
+
+    def forces(self, D, C):
+        """Add the candidates' penalty forces at D into C, the candidates current (:meth:`refresh`);
+        (energy, pairs in contact)."""
         E, n, dmin = sk.self_pass(self.X0, D, self.tri, self.own, self.vf, self.edges, self.ee, self.k, self.h, C)
         if dmin < self.min_gap:
             self.min_gap = dmin

@@ -256,14 +256,16 @@ class Forces:
         return augment.update(self.bodies, x, xq, self.shift_n, self.shift_q)
 
     def with_self(self, D, C):
-        """(C + the self-contact forces at D (6N,): the step's buffer, valid until the next call;
-        self-contact energy, pairs in contact); C None: no body forces.  (C, 0, 0) without
-        self-contact."""
-        if self.selfc is None:
+        """(C + the self-contact forces at D (6N,), self-contact energy, pairs in contact); C None:
+        no body forces.  The sum is the step's buffer, valid until the next call; C itself when
+        no candidate pair stands (or without self-contact), so a sheet without folds pays no
+        pass over its dofs."""
+        sc = self.selfc
+        if sc is None or not sc.refresh(D):
             return C, 0.0, 0
         Cs = self._Cs
         Cs.fill(0.0)
-        es, ns = self.selfc.add_forces(D, Cs)
+        es, ns = sc.forces(D, Cs)
         if C is not None:
             Cs += C
         return Cs, es, ns
@@ -279,7 +281,7 @@ class Forces:
         else:
             C, ec = np.zeros(6 * self.N), 0.0
         C, es, _ = self.with_self(D, C)
-        return C.copy(), ec + es, et
+        return (C.copy() if C is self._Cs else C), ec + es, et
 
     def contact_stiffness(self, D, anchors, eps: float = 1e-7):
         """(rows, cols, vals) of the contact stiffness -dC/dx on the translation dofs at D, anchors

@@ -473,11 +473,13 @@ class Integrator:
     def _self_contact(self, D, f, C):
         """C (None: no body forces) plus the sheet's self-contact forces at D_n, their energy into
         f["Ec"] and the pairs in contact into f["nself"]."""
-        C, es, f["nself"] = self.forces.with_self(D, C)
+        Cs, es, f["nself"] = self.forces.with_self(D, C)
         f["Ec"] = f.get("Ec", 0.0) + es
         f.setdefault("nact", 0)
-        f["C"], f["cnodes"] = C, self._all_nodes
-        return C
+        if Cs is not C:  # self-contact forces added: non-zero anywhere
+            f["C"], f["cnodes"] = Cs, self._all_nodes
+        f.setdefault("C", None)  # no bodies, no pair: no contact force at all
+        return Cs
 
     def _nonfinite(self, n) -> str:
         st = self.state
@@ -495,7 +497,7 @@ class Integrator:
         if n == 0 and self.fresh:
             dd *= 0.5  # trapezoidal rule: the first and last samples weigh half
         st.damp_sum += dd
-        if self.contacting:
+        if self.contacting and f["C"] is not None:
             st.contact_work += 0.5 * contact_power(f["C"], Dn1, Dp, f["cnodes"])
 
     def _sample(self, n, D, vMv, f) -> bool:

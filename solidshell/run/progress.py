@@ -4,6 +4,10 @@ Dask worker), or none.
 
 with reporting(progress, "square-pedestal") as cb:
     cb(0.5, "solving")
+
+A process nobody configured logging in (a Dask worker: the root logger has no handler and passes
+WARNING and up only) would drop the INFO lines; :func:`visible` makes them reach a handler for
+the length of a run (solidshell.sweep.task: the worker's own log).
 """
 
 from __future__ import annotations
@@ -140,6 +144,47 @@ class _Lines:
         self._thread.join(1.0)
         if self.lines and plog.isEnabledFor(logging.INFO):
             plog.info(f"{self.label}: done after {duration(time.perf_counter() - self.t0)}")
+
+
+LOG_FORMAT = "%(asctime)s - %(name)s - %(levelname)s - %(message)s"
+"""The format of the progress lines :func:`visible` prints itself (Dask's own, so that a worker's
+log reads as one)."""
+
+_VISIBLE = threading.Lock()
+_SETUP: dict = {"users": 0, "added": [], "level": logging.NOTSET}  # visible()'s shared set-up
+
+
+@contextmanager
+def visible(handlers=()):
+    """:data:`plog`'s INFO lines reach a handler while inside: its level INFO (when it would pass
+    less), ``handlers`` added, and -- when neither these nor any other handler on its way up would
+    take them -- a stream handler on stderr in :data:`LOG_FORMAT`.  Nested or concurrent uses (the
+    threads of one worker) share the first one's set-up, undone when the last leaves."""
+    with _VISIBLE:
+        if not _SETUP["users"]:
+            _SETUP["level"] = plog.level
+            if plog.getEffectiveLevel() > logging.INFO:
+                plog.setLevel(logging.INFO)
+            added = [h for h in handlers if h not in plog.handlers]
+            for h in added:
+                plog.addHandler(h)
+            if not plog.hasHandlers():
+                h = logging.StreamHandler(sys.stderr)
+                h.setFormatter(logging.Formatter(LOG_FORMAT))
+                plog.addHandler(h)
+                added.append(h)
+            _SETUP["added"] = added
+        _SETUP["users"] += 1
+    try:
+        yield plog
+    finally:
+        with _VISIBLE:
+            _SETUP["users"] -= 1
+            if not _SETUP["users"]:
+                for h in _SETUP["added"]:
+                    plog.removeHandler(h)
+                plog.setLevel(_SETUP["level"])
+                _SETUP["added"] = []
 
 
 def _is_terminal(stream) -> bool:

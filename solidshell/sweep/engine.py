@@ -23,7 +23,7 @@ from typing import TextIO
 from ..errors import InputError
 from .ledger import Ledger
 from .spec import SweepSpec
-from .task import make_task, run_task
+from .task import make_task, run_label, run_task
 
 __all__ = ["run_sweep", "Cluster", "SweepResult", "require_dask", "describe", "INSTALL_HINT"]
 
@@ -178,11 +178,7 @@ class _Progress:
 def describe(spec: SweepSpec, key: str) -> str:
     """``run <index> (<its varied settings>) [key <key>]``: which entry of the sweep a key is."""
     run = next((r for r in spec.runs if r.key == key), None)
-    if run is None:
-        return f"run [key {key}]"
-    varied = {k: v for k, v in run.inputs().items() if k in spec.axes}
-    what = ", ".join(f"{k}={v}" for k, v in varied.items())[:120]
-    return f"run {run.index}" + (f" ({what})" if what else "") + f" [key {key}]"
+    return f"run [key {key}]" if run is None else run_label(spec, run)
 
 
 def _label(row) -> str:
@@ -210,6 +206,8 @@ def run_sweep(
     cluster   : the scheduler or local workers, threads per run, retries (:class:`Cluster`)
     group     : the symmetry group of the fingerprints (solidshell.sweep.states.symmetry_group)
     limit     : submit at most this many of the missing runs (a partial sweep; resumable)
+    progress  : the client's bar (a terminal) or one line per run, and each run's progress lines in
+                its worker's log (solidshell.sweep.task); False: neither
     """
     require_dask()
     from distributed import as_completed
@@ -265,7 +263,8 @@ def run_sweep(
             file=stream,
             flush=True,
         )
-        tasks = [make_task(spec, r, out, threads, group, pictures) for r in todo]
+        # progress: the client's bar or lines, and each run's own lines in its worker's log
+        tasks = [make_task(spec, r, out, threads, group, pictures, progress) for r in todo]
         futures = [
             client.submit(run_task, t, key=f"solidshell-{spec.name}-{t['key']}", retries=retries, pure=False)
             for t in tasks

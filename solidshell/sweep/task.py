@@ -5,6 +5,14 @@ The task runs ``solidshell.runner.run_scene`` in the worker's process, writes th
 It limits the process to ``threads`` threads (numba's kernels and BLAS) so that N single-threaded
 workers use N cores, which is what the speed-up of a sweep rests on.
 
+Its progress goes to the worker's log: a ``logging`` line every SOLIDSHELL_PROGRESS_INTERVAL
+seconds (10 by default; solidshell.run.progress) with the run's index, varied settings and key, the
+fraction done, elapsed time, ETA and the solver's figures (step, t, E_kin, residual).  On a Dask
+worker the lines are handed to the worker's own logger ("distributed.worker"), so they print where
+the worker logs (a ``dask worker``'s stderr; a LocalCluster's, the console of the sweep) and come
+back with ``Client.get_worker_logs()``; elsewhere they print on stderr unless a handler takes them.
+A run shorter than the interval logs nothing.  ``solidshell sweep --no-progress`` turns them off.
+
 A run refused by its own checks (InputError) or stopped by its solver (SolverError) is recorded
 but counted as failed: its row says ``status = "error"`` with the one-line reason, a resumed sweep
 does not repeat it, and ``solidshell sweep`` names it and exits 1.
@@ -14,7 +22,9 @@ Anything else (a bug, a lost worker) propagates, and Dask retries the task.
 from __future__ import annotations
 
 import json
+import logging
 import time
+from contextlib import nullcontext
 from datetime import datetime, timezone
 from pathlib import Path
 
@@ -25,8 +35,15 @@ from .ledger import PROFILE_POINTS
 __all__ = ["run_task", "make_task", "row_from_output"]
 
 
-def make_task(spec, run, out, threads: int = 1, group: str = "C1", pictures=("top",)) -> dict:
-    """The plain-data task of a run (pickled to the worker)."""
+def run_label(spec, run) -> str:
+    """``run <index> (<its varied settings>) [key <key>]``: which entry of the sweep a run is."""
+    varied = {k: v for k, v in run.inputs().items() if k in spec.axes}
+    what = ", ".join(f"{k}={v}" for k, v in varied.items())[:120]
+    return f"run {run.index}" + (f" ({what})" if what else "") + f" [key {run.key}]"
+
+
+def make_task(spec, run, out, threads: int = 1, group: str = "C1", pictures=("top",), progress: bool = True) -> dict:
+    """The plain-data task of a run (pickled to the worker); ``progress``: log its progress lines."""
     return {
         "key": run.key,
         "index": run.index,
@@ -40,6 +57,8 @@ def make_task(spec, run, out, threads: int = 1, group: str = "C1", pictures=("to
         "threads": int(threads),
         "group": group,
         "pictures": list(pictures),
+        "label": f"sweep {spec.name} {run_label(spec, run)}",
+        "progress": bool(progress),
     }
 
 
@@ -63,6 +82,32 @@ def _worker_address() -> str:
         return get_worker().address
     except (ImportError, ValueError):
         return "local"
+
+
+class _WorkerLog(logging.Handler):
+    """Records handed to the Dask worker's own logger, "distributed.worker": its handlers print
+    them where the worker logs and keep them for Client.get_worker_logs() (its deque)."""
+
+    def emit(self, record):
+        logging.getLogger("distributed.worker").handle(record)
+
+
+def _worker_handlers() -> tuple:
+    """(_WorkerLog(),) inside a Dask worker, else ()."""
+    try:
+        from distributed import get_worker
+
+        get_worker()
+    except (ImportError, ValueError):
+        return ()
+    return (_WorkerLog(),)
+
+
+def _shown(task: dict):
+    """The context in which the run's progress lines reach the worker's log (module docstring)."""
+    from ..run import progress
+
+    return progress.visible(_worker_handlers()) if task.get("progress") else nullcontext()
 
 
 def row_from_output(task: dict, out, wall: float) -> dict:
@@ -124,17 +169,19 @@ def run_task(task: dict) -> dict:
     """Run one sweep run (see the module docstring); returns its ledger row."""
     from ..errors import InputError, SolverError
     from ..run import run_scene
+    from ..run.progress import _Lines
 
     t0, c0 = time.perf_counter(), time.process_time()
     over = {"output.pictures": task["pictures"], **task["overrides"]}
-    with _limit_threads(task["threads"]):
+    with _limit_threads(task["threads"]), _shown(task):
+        lines = _Lines(task.get("label") or f"run [key {task['key']}]") if task.get("progress") else None
         try:
             out = run_scene(
                 task["scene"],
                 mesh=task["mesh"],
                 solver=task["solver"],
                 out_dir=task["run_dir"],
-                progress=False,
+                progress=lines or False,
                 overrides=over,
                 force=True,
             )
@@ -147,6 +194,9 @@ def run_task(task: dict) -> dict:
             )
             row["finished_at"] = _now()
             return row
+        finally:
+            if lines is not None:
+                lines.close()  # its "done" line, while the lines are still shown
     row = row_from_output(task, out, time.perf_counter() - t0)
     row["cpu_time_s"] = time.process_time() - c0  # all threads of the worker process
     row["finished_at"] = _now()

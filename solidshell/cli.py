@@ -298,6 +298,10 @@ def _cmd_mesh(args) -> int:
 
 
 def _cmd_run(args) -> int:
+    if not args.no_pictures:  # the pictures' process starts before our own imports (render.server)
+        from .render import server
+
+        server.start()
     from .run import run_scene
     from .scenes import parse_overrides
 

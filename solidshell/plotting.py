@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .render.geometry import CAMERAS, bodies_of
+from .render.geometry import CAMERAS, MARK_COLOR, bodies_of
 from .render.panel import ViewStyle, colorbar, draw_view, height_norm, scene_warp_deg
 
 VIEWS = ("top", "iso", "side", "side_yz")
@@ -50,12 +50,15 @@ def render(
     dpi: int = 130,
     mesh_lines: bool = True,
     reference: dict | None = None,
+    marks: dict | None = None,
 ) -> Path:
     """Draw the mesh at X_o + U_o (U (N,6) or None for the undeformed mesh) and write a PNG.
 
     reference : a clamped strip's reference centre line, {"x": [...], "z": [...], "label": str} [cm]
         from its clamp along the strip (solidshell.references.strip_elastica's ``curve``), drawn
         dashed in the side view from the mean of the mesh's ``clamped`` nodes.
+    marks : what the picture marks in red, with a legend line each (:func:`crossing_marks`):
+        {"cells": 0/1 per element, "points": node indices, "pairs": crossing triangle pairs}.
     The colour bar of height is left out of a view that sees the sheet edge-on (a strip from the
     side: less than 5 % of its area faces the camera), where it would colour nothing."""
     from .io import atomic_path
@@ -77,11 +80,20 @@ def render(
         norm=height_norm(X),
         warp_deg=scene_warp_deg(scene),
         style=ViewStyle(mesh_lines=mesh_lines),
+        marks=marks,
     )
     if _facing_fraction(mesh, X, CAMERAS[view]) >= 0.05:
         colorbar(fig, ax, sm)
     if reference is not None and view == "side":
-        _draw_reference(ax, mesh, reference, CAMERAS[view])
+        ax.legend(
+            handles=_draw_reference(ax, mesh, reference, CAMERAS[view]), loc="lower left", fontsize=7.5, frameon=False
+        )
+    handles = _mark_handles(marks)
+    if handles:  # a caption under the picture (below the x label of a labelled view): it hides nothing
+        if ax.get_legend() is not None:
+            ax.add_artist(ax.get_legend())  # the reference's legend stays beside this one
+        below = -0.01 if view == "iso" else -0.12
+        ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, below), fontsize=8, frameon=False)
     head = title or "solidshell"
     sub = _VIEW_NAMES[view] + (f" -- {subtitle}" if subtitle else "")
     ax.set_title(f"{head}\n{sub}", fontsize=9.5)
@@ -107,18 +119,18 @@ def _facing_fraction(mesh, X, camera) -> float:
     return float(np.abs(n @ d).sum() / area) if area > 0 else 1.0
 
 
-def _draw_reference(ax, mesh, reference: dict, camera) -> None:
+def _draw_reference(ax, mesh, reference: dict, camera) -> list:
     """The reference centre line from the strip's clamp, along the undeformed strip's horizontal
-    direction, dashed, with a legend."""
+    direction, dashed; returns its legend handles."""
     clamp = mesh.node_sets.get("clamped")
     if clamp is None or not len(clamp):
-        return
+        return []
     X0 = np.asarray(mesh.nodes, float)
     origin = X0[clamp].mean(0)
     along = X0.mean(0) - origin
     along[2] = 0.0
     if not np.linalg.norm(along) > 0:
-        return
+        return []
     along /= np.linalg.norm(along)
     P = origin + np.outer(reference["x"], along) + np.outer(reference["z"], [0.0, 0.0, 1.0])
     sx, sy, _ = camera.project(P)
@@ -126,4 +138,52 @@ def _draw_reference(ax, mesh, reference: dict, camera) -> None:
     from matplotlib.lines import Line2D
 
     sheet = Line2D([], [], color=(0.05, 0.05, 0.05), lw=1.6, label="this run")
-    ax.legend(handles=[sheet, line], loc="lower left", fontsize=7.5, frameon=False)
+    return [sheet, line]
+
+
+def _mark_handles(marks: dict | None) -> list:
+    """Legend handles saying what is marked red and how much of it there is."""
+    if not marks:
+        return []
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
+    out = []
+    n_cells = int(np.count_nonzero(marks.get("cells", ())))
+    if n_cells:
+        pairs = marks.get("pairs")
+        what = f" ({pairs} crossing triangle pair{'s' if pairs != 1 else ''})" if pairs else ""
+        out.append(Patch(color=MARK_COLOR, label=f"{n_cells} element(s) through the sheet itself{what}"))
+    n_pts = len(marks.get("points", ()))
+    if n_pts:
+        out.append(
+            Line2D(
+                [],
+                [],
+                ls="none",
+                marker="o",
+                mfc="none",
+                mec=MARK_COLOR,
+                label=f"{n_pts} interpenetrated node(s) (n$_p$·d$_p$ < 0)",
+            )
+        )
+    return out
+
+
+def crossing_marks(model, U, summary: dict) -> dict | None:
+    """What a run's pictures mark red (on when there is any, docs/output.md): the elements whose
+    mid-surface triangles cross another's sharing no node (solidshell/layers.py, summary.json
+    ``self_intersections``) and the interpenetrated nodes (n_p . d_p < 0, Section 4.3, summary.json
+    ``interpenetrated_nodes``), from solidshell.fields' flags of the state U (N,6).  None when the
+    summary counts neither (nothing computed)."""
+    pairs = int(summary.get("self_intersections") or 0)
+    if not pairs and not summary.get("interpenetrated_nodes"):
+        return None
+    from .fields import flag_fields
+
+    point, cell = flag_fields(model, U, self_intersection=bool(pairs))
+    return {
+        "cells": cell.get("self_intersecting", np.zeros(model.mesh.n_elements, np.int8)),
+        "points": np.flatnonzero(point["interpenetrated"]),
+        "pairs": pairs,
+    }

@@ -40,6 +40,7 @@ def test_strip_run_side_picture_draws_the_heavy_elastica(tmp_path, monkeypatch):
         return real(path, *a, **kw)
 
     monkeypatch.setattr(plotting, "render", spy)
+    monkeypatch.setenv("SOLIDSHELL_RENDER_SERVER", "0")  # drawn here, where the spy is (not in the child)
     run_scene("strip-warp", mesh="10x1", out_dir=tmp_path, progress=False)
     ref = seen["side"]
     assert ref is not None and ref["label"] == "heavy elastica"

@@ -94,6 +94,24 @@ def cloth_surface(mesh, X, edges: bool = True) -> Surface:
     return Surface(np.asarray(X, float), quads, tris, scalars=np.asarray(X, float)[:, 2], edges=edges)
 
 
+MARK_COLOR = (0.86, 0.08, 0.08)
+"""The red of the elements a picture marks (solidshell.plotting: self-intersecting elements)."""
+
+
+def split_marked(cloth: Surface, marked) -> list:
+    """[cloth without the marked elements, the marked ones in :data:`MARK_COLOR`] -- ``marked`` a
+    0/1 per element, quads then triangles (the mesh's element order) -- or [cloth] when none is
+    marked.  Two surfaces on the same points and no shared cell: no depth fight between them."""
+    m = np.asarray(marked, bool).ravel() if marked is not None else np.zeros(0, bool)
+    if not m.any():
+        return [cloth]
+    nq = len(cloth.quads)
+    mq, mt = m[:nq], m[nq : nq + len(cloth.tris)]
+    rest = Surface(cloth.points, cloth.quads[~mq], cloth.tris[~mt], scalars=cloth.scalars, edges=cloth.edges)
+    red = Surface(cloth.points, cloth.quads[mq], cloth.tris[mt], color=MARK_COLOR, edges=True)
+    return [rest, red]
+
+
 def _grid_quads(nu: int, nv: int, closed_u: bool = False) -> np.ndarray:
     """Quads of a (nv+1) x (nu+1) point grid (row-major, u fastest); closed_u wraps u."""
     i, j = np.meshgrid(np.arange(nv), np.arange(nu), indexing="ij")
@@ -212,11 +230,11 @@ def bodies_of(scene) -> list:
     return out
 
 
-def scene_surfaces(mesh, X, bodies, mesh_lines: bool = True, cover_pedestal: bool = True) -> list:
-    """The sheet and the bodies of a picture: [cloth, (flat cloth on the pedestal top), bodies...].
-    A pedestal is drawn as it is: from its top face down to its base (``height``)."""
-    cloth = cloth_surface(mesh, X, edges=mesh_lines)
-    out = [cloth]
+def scene_surfaces(mesh, X, bodies, mesh_lines: bool = True, cover_pedestal: bool = True, marked=None) -> list:
+    """The sheet and the bodies of a picture: [cloth, (its marked elements), (flat cloth on the
+    pedestal top), bodies...].  A pedestal is drawn as it is: from its top face down to its base
+    (``height``).  ``marked``: 0/1 per element, drawn red (:func:`split_marked`)."""
+    out = split_marked(cloth_surface(mesh, X, edges=mesh_lines), marked)
     for b in bodies:
         if b["type"] == "sphere":
             out.append(sphere_surface(b["centre"], b["radius"] - chord_sag(mesh, X, b["radius"])))

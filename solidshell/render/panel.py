@@ -19,7 +19,7 @@ import numpy as np
 
 from ..material import Fabric
 from . import mpl_backend, vtk_backend
-from .geometry import CAMERAS, Camera, scene_surfaces, screen_extent
+from .geometry import CAMERAS, MARK_COLOR, Camera, scene_surfaces, screen_extent
 
 log = logging.getLogger("solidshell")
 CMAP = "viridis"
@@ -99,7 +99,17 @@ class ViewStyle:
 
 
 def draw_view(
-    ax, mesh, X, view="iso", bodies=(), norm=None, warp_deg=None, zoom=None, extent=None, style: ViewStyle = ViewStyle()
+    ax,
+    mesh,
+    X,
+    view="iso",
+    bodies=(),
+    norm=None,
+    warp_deg=None,
+    zoom=None,
+    extent=None,
+    style: ViewStyle = ViewStyle(),
+    marks=None,
 ):
     """Draw the sheet at positions X (N,3) [cm] with the bodies into ``ax``; returns a
     ScalarMappable for a colour bar of height z [cm].
@@ -109,6 +119,8 @@ def draw_view(
     zoom   : (xmin, xmax, ymin, ymax) of the screen [cm] to show (Fig. 12c); None: everything
     extent : a fixed screen rectangle instead of the fitted one (the same frame across panels)
     style  : colour map, mesh lines, labels, image height, pedestal cover (:class:`ViewStyle`)
+    marks  : {"cells": 0/1 per element, drawn red; "points": node indices, red rings drawn over
+             the picture (seen through the sheet: a warning, not a shape)} or None
     """
     import matplotlib.cm as mcm
 
@@ -116,7 +128,15 @@ def draw_view(
     cam = CAMERAS[view] if isinstance(view, str) else view
     X = np.asarray(X, float)
     norm = norm or height_norm(X)
-    surfaces = scene_surfaces(mesh, X, list(bodies), mesh_lines=style.mesh_lines, cover_pedestal=style.cover_pedestal)
+    marks = marks or {}
+    surfaces = scene_surfaces(
+        mesh,
+        X,
+        list(bodies),
+        mesh_lines=style.mesh_lines,
+        cover_pedestal=style.cover_pedestal,
+        marked=marks.get("cells"),
+    )
     ext = zoom or extent or screen_extent(surfaces, cam)
     use_vtk = renderer() == "vtk"
     ew = _edge_width(mesh.n_elements, use_vtk)
@@ -125,6 +145,10 @@ def draw_view(
         ax.imshow(img, extent=ext, origin="upper", interpolation="antialiased", zorder=1)
     else:
         mpl_backend.draw(ax, surfaces, cam, norm, cmap, edge_width=ew)
+    pts = np.asarray(marks.get("points", ()), dtype=np.int64)
+    if len(pts):
+        sx, sy, _ = cam.project(X[pts])
+        ax.scatter(sx, sy, s=22, facecolors="none", edgecolors=[MARK_COLOR], linewidths=1.2, zorder=6)
     ax.set_xlim(ext[0], ext[1])
     ax.set_ylim(ext[2], ext[3])
     ax.set_aspect("equal")

@@ -144,14 +144,15 @@ def render_image(
     # edge-on, as in a side view of a flat sheet); polygons are pushed back so the lines on them win
     vtkMapper.SetResolveCoincidentTopologyToPolygonOffset()
     vtkMapper.SetResolveCoincidentTopologyPolygonOffsetParameters(2.0, 8.0)
-    p = pv.Plotter(off_screen=True, window_size=(W, H), lighting="light_kit")
+    p = _plotter(W, H)
     try:
-        p.set_background("white")
         for s in surfaces:
             poly = _polydata(s)
             # per-node normals (Gouraud): flat shading lit each warped quad's two render triangles
             # differently, a zig-zag on every element of a coarse mesh; bodies keep their edges sharp
-            kw = dict(show_edges=False, smooth_shading=True, ambient=0.18, diffuse=0.85)
+            # render=False: the reused window would render again at each actor added (pyvista renders
+            # a shown plotter on add_actor); the screenshot renders once
+            kw = dict(show_edges=False, smooth_shading=True, ambient=0.18, diffuse=0.85, render=False)
             if s.scalars is None:
                 kw["split_sharp_edges"] = True
             if s.scalars is not None:
@@ -168,6 +169,7 @@ def render_image(
                     line_width=edge_width,
                     lighting=False,
                     opacity=0.75,
+                    render=False,
                 )
             if s.scalars is not None and s.edges:
                 # the sheet's rim, a thicker dark line: a sheet seen edge-on still reads as a curve
@@ -175,7 +177,13 @@ def render_image(
                     boundary_edges=True, feature_edges=False, manifold_edges=False, non_manifold_edges=False
                 )
                 if rim.n_points:
-                    p.add_mesh(rim, color=(0.05, 0.05, 0.05), line_width=max(1.6, 2.0 * edge_width), lighting=False)
+                    p.add_mesh(
+                        rim,
+                        color=(0.05, 0.05, 0.05),
+                        line_width=max(1.6, 2.0 * edge_width),
+                        lighting=False,
+                        render=False,
+                    )
         r, u, d = camera.frame()
         cx, cy = 0.5 * (x0 + x1), 0.5 * (y0 + y1)
         pts = np.concatenate([s.points for s in surfaces])
@@ -190,7 +198,42 @@ def render_image(
         p.enable_parallel_projection()
         cam.parallel_scale = 0.5 * (y1 - y0)
         cam.clipping_range = (1e-3 * dist, 3.0 * dist)
+        if not getattr(p, "_first_time", True):
+            p.render()  # pyvista's screenshot renders a plotter's first picture only
         img = p.screenshot(return_img=True)
-    finally:
-        p.close()
+    except BaseException:
+        _drop_plotter()  # a window in an unknown state is not drawn in again
+        raise
     return np.asarray(img)[..., :3]
+
+
+_PLOTTER: dict = {}  # {"p": the off-screen Plotter this process draws in}
+
+
+def _plotter(W: int, H: int):
+    """The process's one off-screen Plotter, resized to W x H px and emptied: one window and one
+    OpenGL context for all its pictures, so the shaders are compiled once (a new window per picture
+    took ~0.4 s of compiling in each Render with Mesa's software GL)."""
+    import pyvista as pv
+
+    p = _PLOTTER.get("p")
+    if p is None or getattr(p, "render_window", None) is None:
+        p = pv.Plotter(off_screen=True, window_size=[W, H], lighting="light_kit")
+        p.set_background("white")
+        _PLOTTER["p"] = p
+        import atexit
+
+        atexit.register(_drop_plotter)
+    else:  # VTK's own calls: pyvista's clear_actors and window_size setter each render once more
+        p.renderer.RemoveAllViewProps()
+        p.render_window.SetSize(W, H)
+    return p
+
+
+def _drop_plotter() -> None:
+    p = _PLOTTER.pop("p", None)
+    if p is not None:
+        try:
+            p.close()
+        except Exception:  # noqa: BLE001, S110 - closing a broken window at exit
+            pass

@@ -3,10 +3,13 @@ mesh, the state, its series, the projected boundary and the pictures, each stamp
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 
 from .. import io as sio
 from .. import solvers
+from ..errors import IOFailure
 from ..rundir import RunFolder
 from ..scenes import Scene
 from . import state_fields
@@ -23,10 +26,13 @@ def prepare_folder(out_dir, run_id: str, force: bool, settings: dict | None, out
     )
     folder.check()
     if output["pictures"] or output["snapshots"]:
-        # whether VTK can render is asked in a child process (~2 s): it runs while we mesh
-        from ..render import vtk_backend
+        # the pictures' child process (solidshell.render.server) starts now: its imports, its VTK
+        # probe and warm-up run while we mesh and solve.  Without it, whether VTK can render is
+        # asked in a child process (~2 s) that also runs while we mesh
+        from ..render import server, vtk_backend
 
-        vtk_backend.start_probe()
+        if server.start() is None:
+            vtk_backend.start_probe()
     return folder
 
 
@@ -76,9 +82,13 @@ def _write_outputs(folder, sc: Scene, kind: str, mesh_name: str, solved, summary
     ``solved``: the run's driver.Solved; an adaptive run's ``series`` [(t, mesh, U)], each frame on
     its own mesh, is written as series.pvd of VTUs."""
     rid = folder.run_id
-    mesh, U, result, series = solved.mesh, solved.U, solved.result, solved.series
-    files = [folder.write(name, sio.write_mesh_file, mesh, run_id=rid) for name in ("mesh.xdmf", "mesh.vtu")]
+    mesh, U, result = solved.mesh, solved.U, solved.result
     finite = result is not None and bool(np.all(np.isfinite(U)))
+    # the pictures first: with a picture process (solidshell.render.server) they are drawn there
+    # while this process writes the other files, and collected at the end
+    pictures = _Pictures(folder, cb)
+    files = _picture_files(pictures, sc, kind, mesh_name, solved, summary, snaps, finite)
+    files += [folder.write(name, sio.write_mesh_file, mesh, run_id=rid) for name in ("mesh.xdmf", "mesh.vtu")]
     if result is not None:
         files += _state_files(folder, sc, kind, solved, summary, finite)
     boundary = summary.get("projected_boundary")
@@ -94,20 +104,76 @@ def _write_outputs(folder, sc: Scene, kind: str, mesh_name: str, solved, summary
 
         files.append(folder.write("projected_boundary.csv", csv))
 
-    def picture(p, *a, **kw):
-        from ..plotting import render  # matplotlib only when a picture is drawn
+    pictures.collect()
+    return files
 
-        return sio.stamp_png(render(p, *a, **kw), rid)
 
+class _Pictures:
+    """A run's pictures, each drawn by the run's picture process when there is one (submitted,
+    then collected), else -- or when the child could not draw it -- here; stamped with the run id."""
+
+    def __init__(self, folder, cb):
+        from ..render import server
+
+        self.folder, self.cb = folder, cb
+        self.child = server.current()
+        self.sent: dict = {}  # path -> (name, args, kwargs)
+
+    def _here(self, p, *a, **kw) -> Path:
+        from ..plotting import render  # matplotlib only when a picture is drawn here
+
+        return sio.stamp_png(render(p, *a, **kw), self.folder.run_id)
+
+    def draw(self, name: str, *args, **kwargs) -> Path:
+        """The picture ``name`` of ``plotting.render(path, *args, **kwargs)``: sent or drawn."""
+
+        def send(p, *a, **kw):
+            if self.child is not None and self.child.submit(p, a, kw, self.folder.run_id):
+                self.sent[Path(p)] = (name, a, kw)
+                return Path(p)
+            return self._here(p, *a, **kw)
+
+        return self.folder.write(name, send, *args, **kwargs)
+
+    def collect(self) -> None:
+        """Wait for the child's pictures; draw here what it could not (a write failure is raised
+        as the run's I/O failure, naming the file)."""
+        if self.child is None:
+            return
+        if self.sent:
+            self.cb(0.97, "pictures")
+        failed = self.child.collect()
+        self.child.close()
+        for p, why in failed.items():
+            name, a, kw = self.sent[p]
+            if why.startswith(("OSError", "PermissionError", "FileNotFoundError")):
+                raise IOFailure(self.folder.path / name, why.split(": ", 1)[-1])
+            self.folder.write(name, self._here, *a, **kw)
+
+
+def _picture_files(pictures, sc, kind, mesh_name, solved, summary, snaps, finite) -> list:
+    """The run's pictures (the scene's views of the final state, with its crossings marked, and
+    the snapshots), handed to ``pictures``; returns their paths."""
+    mesh, U, result, series = solved.mesh, solved.U, solved.result, solved.series
+    files = []
     state = U if finite else None
     sub = _subtitle(sc, mesh_name, mesh, kind, summary)
     views = sc.output["pictures"]
     ref = _strip_curve(summary) if state is not None else None
+    marks = _marks(solved, summary) if state is not None and views else None
     for i, view in enumerate(views):
-        cb(0.92 + 0.08 * i / max(1, len(views)), f"{view} picture")
+        pictures.cb(0.92 + 0.05 * i / max(1, len(views)), f"{view} picture")
         files.append(
-            folder.write(
-                f"{view}.png", picture, mesh, state, view=view, title=sc.title, scene=sc, subtitle=sub, reference=ref
+            pictures.draw(
+                f"{view}.png",
+                mesh,
+                state,
+                view=view,
+                title=sc.title,
+                scene=sc,
+                subtitle=sub,
+                reference=ref,
+                marks=marks,
             )
         )
     for ts, j, _ in snaps:
@@ -117,9 +183,8 @@ def _write_outputs(folder, sc: Scene, kind: str, mesh_name: str, solved, summary
             sub_j = f"t = {tj:.3f} s" + ("" if series is None else f", {mj.n_nodes} active nodes")
             for view in ("iso", "top") if series is not None else ("iso",):
                 files.append(
-                    folder.write(
+                    pictures.draw(
                         f"{view}_t{ts:.3f}.png",
-                        picture,
                         mj,
                         result.frames[j][1],
                         view=view,
@@ -157,6 +222,18 @@ def _state_files(folder, sc, kind: str, solved, summary: dict, finite: bool) -> 
         files += sio.series_frame_paths(folder.path / "series.pvd", len(series))
         summary["series_parameter"] = "time [s]" if solvers.dynamic(kind) else "load factor"
     return files
+
+
+def _marks(solved, summary: dict) -> dict | None:
+    """The final state's crossings the pictures mark red (solidshell.plotting.crossing_marks): on
+    whenever summary.json counts self-intersections or interpenetrated nodes; None without a
+    solidshell Model (a user's own model has no element blocks to flag)."""
+    model = getattr(solved.problem, "model", None)
+    if model is None or not hasattr(model, "blocks"):
+        return None
+    from ..plotting import crossing_marks
+
+    return crossing_marks(model, solved.U, summary)
 
 
 def _strip_curve(summary: dict) -> dict | None:

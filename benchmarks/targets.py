@@ -1,28 +1,42 @@
-"""Issue 13's run-time targets in one table: each case is a new process running the CLI, as a user
-runs it, ``--repeats`` times (default 2), with the load average before each run.
+"""Run-time targets in one table (issues 13 and 41): each case is a new process running the CLI, as a
+user runs it, ``--repeats`` times (default 2), with the load average before each run.
 
-| case | command | target |
-|---|---|---|
-| static | ``solidshell run square-pedestal --no-pictures`` (48x16x4) | ``wall_time_s`` < 5 s, peak memory < 300 MB |
-| disc | ``solidshell run square-on-disc --no-pictures`` (30x240) | ``wall_time_s`` < 30 s |
-| relax | ``solidshell run square-pedestal --solver relax --no-pictures`` | ``wall_time_s`` < 15 s |
-| sphere | ``solidshell run sphere --mesh 100x100 --no-pictures`` | ``wall_time_s`` < 60 s |
-| strip | ``solidshell run strip-warp --no-pictures`` | the whole process < 1 s |
+| case | command | target | issue |
+|---|---|---|---|
+| disc | ``solidshell run square-on-disc --no-pictures`` (30x240, static) | ``wall_time_s`` < 20 s, clean checks | 41 item 1 |
+| static | ``solidshell run square-pedestal --no-pictures`` (48x16x4) | ``wall_time_s`` < 5 s, peak memory < 300 MB | 13, 36 |
+| pedestal-pictures | ``solidshell run square-pedestal`` (its two pictures) | the whole process <= 5 s | 41 item 3 |
+| strip-pictures | ``solidshell run strip-warp`` (its pictures) | the whole process <= 1.2 s | 41 item 3 |
+| adapt | the adaptivity rows of issue 41 item 2 (``adaptivity_rows``) | >= 2x faster than the uniform mesh of equal DC | 41 item 2 |
+| pictures | the picture timing of issue 41 item 3 (``picture_rows``) | the two default pictures <= 0.5 s after the solve | 41 item 3 |
+| relax | ``solidshell run square-pedestal --solver relax --no-pictures`` | ``wall_time_s`` < 15 s | 13 |
+| sphere | ``solidshell run sphere --mesh 100x100 --no-pictures`` | ``wall_time_s`` < 60 s | 13 |
+| strip | ``solidshell run strip-warp --no-pictures`` | the whole process < 1 s | 13 |
+
+The default ``--cases`` are issue 41's (disc, static, pedestal-pictures, strip-pictures, adapt,
+pictures).  ``adapt`` and ``pictures`` are hooks: :func:`adaptivity_rows` and :func:`picture_rows`
+return the rows of those items (each a dict with the keys of a measured row, see ``measure``); until
+their owners fill them they return no row and the table says "not measured".
 
 ``wall_time_s`` is the summary's solver time (set-up, critical-step estimate and stepping, or the
-Newton iterations; no meshing or files).  Each run also records the share of the CPUs' time the
-hypervisor stole during it (/proc/stat), one visible cause of a slow run on a virtual machine.  It
-is not the only one: the sphere took 73.6 s and 105.7 s hours apart on the same code path, with
-3 % stolen in the slow run (a shared host's memory bandwidth shows in neither figure).  Each row
-gives the median, every run's figure, the state (iterations or steps, drape coefficient, folds) so
-that a faster run is seen to reach the same state, and whether the median meets the target.  The explicit loop's target (>= 5 M element-steps/s)
-has its own script: ``benchmarks/explicit_throughput.py --sizes 100 --steps 300 --threads 2``.
-Rules for timing on this shared machine: docs/benchmarks.md, section 1 (nothing else running; the
-load these runs report includes their own two threads).
+Newton iterations; no meshing or files); ``process_s`` the whole process.  Each run also records the
+share of the CPUs' time the hypervisor stole during it (/proc/stat), one visible cause of a slow run
+on a virtual machine.  It is not the only one: the sphere took 73.6 s and 105.7 s hours apart on the
+same code path, with 3 % stolen in the slow run (a shared host's memory bandwidth shows in neither
+figure).  Each row gives the median, every run's figure, the state (iterations or steps and, for
+static runs, seconds per iteration; drape coefficient, folds) so that a faster run is seen to reach the
+same state, and whether the median meets the target.  The disc case also runs the independent checks
+of the written result: ``python -m verification.penetration_check RUN`` and ``python -m
+verification.self_check RUN`` (exit 0: clean), and reports the final state's stability
+(``positive_definite``, ``min_tangent_eigenvalue``).  The explicit loop's target (>= 5 M
+element-steps/s) has its own script: ``benchmarks/explicit_throughput.py --sizes 100 --steps 300
+--threads 2``.  Rules for timing on this shared machine: docs/benchmarks.md, section 1 (nothing else
+running; the load these runs report includes their own two threads).
 
-    python benchmarks/targets.py [--cases static,disc,relax,sphere,strip] [--repeats 2]
+    python benchmarks/targets.py [--cases disc,static,...] [--repeats 2] [--out PATH]
 
-Writes benchmarks/out/targets.{md,json}; the runs' folders go to a temporary directory.
+Writes PATH.{md,json} (default benchmarks/out/targets_issue41); the runs' folders go to a temporary
+directory.
 """
 
 from __future__ import annotations
@@ -40,14 +54,41 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 
 CASES = {
-    # name: (CLI arguments after "run", figure, limit [s])
-    "static": (["square-pedestal"], "wall_time_s", 5.0),
-    "disc": (["square-on-disc"], "wall_time_s", 30.0),
-    "relax": (["square-pedestal", "--solver", "relax"], "wall_time_s", 15.0),
-    "sphere": (["sphere", "--mesh", "100x100"], "wall_time_s", 60.0),
-    "strip": (["strip-warp"], "process_s", 1.0),
+    # name: (CLI arguments after "run", figure, limit [s], with pictures)
+    "disc": (["square-on-disc"], "wall_time_s", 20.0, False),
+    "static": (["square-pedestal"], "wall_time_s", 5.0, False),
+    "pedestal-pictures": (["square-pedestal"], "process_s", 5.0, True),
+    "strip-pictures": (["strip-warp"], "process_s", 1.2, True),
+    "relax": (["square-pedestal", "--solver", "relax"], "wall_time_s", 15.0, False),
+    "sphere": (["sphere", "--mesh", "100x100"], "wall_time_s", 60.0, False),
+    "strip": (["strip-warp"], "process_s", 1.0, False),
 }
+HOOKS = ("adapt", "pictures")
+"""Cases whose rows other scripts' functions give (issue 41 items 2 and 3): ``adaptivity_rows``,
+``picture_rows``."""
+DEFAULT_CASES = ("disc", "static", "pedestal-pictures", "strip-pictures", "adapt", "pictures")
 MEMORY_LIMIT_MB = {"static": 300.0}
+CHECKED = ("disc",)
+"""Cases whose written result the independent contact checks read (verification/)."""
+CHECKS = ("verification.penetration_check", "verification.self_check")
+
+
+def adaptivity_rows(repeats: int, tmp: str) -> list[dict]:
+    """Issue 41 item 2 (hook, to be filled by the adaptivity work): on square-pedestal,
+    large-square-pedestal and sphere, ``--adaptive`` on each scene's default relaxation against the
+    uniform mesh of equal DC (+-1 %), same machine, ``repeats`` runs each with the load before each
+    (``run_once``).  Returns rows shaped as ``measure``'s (case, command, figure, limit, median,
+    runs, met); the target is a time ratio adaptive / uniform <= 0.5 with <= 50 % of the nodes.
+    Not filled yet: no row."""
+    return []
+
+
+def picture_rows(repeats: int, tmp: str) -> list[dict]:
+    """Issue 41 item 3 (hook, to be filled by the pictures work): the time of a run's two default
+    pictures after the solve (target <= 0.5 s together), ``repeats`` times with the load before each.
+    Returns rows shaped as ``measure``'s.  The whole-process cases with pictures are
+    ``pedestal-pictures`` and ``strip-pictures``.  Not filled yet: no row."""
+    return []
 
 
 def steal_seconds() -> float | None:
@@ -61,18 +102,16 @@ def steal_seconds() -> float | None:
         return None
 
 
-def run_once(args: list[str], out: str) -> dict:
+def run_once(args: list[str], out: str, pictures: bool = False) -> dict:
     """One CLI run in a new process: its summary plus the whole process's wall time, the load
     average before it and the share of the CPUs' time stolen by the hypervisor during it (on a
     virtual machine, time the run waited while the load average shows nothing)."""
-    load = os.getloadavg()[0]
+    load = os.getloadavg()
     steal0 = steal_seconds()
     t0 = time.perf_counter()
+    flags = ["--no-progress", "--out", out] + ([] if pictures else ["--no-pictures"])
     p = subprocess.run(
-        [sys.executable, "-m", "solidshell", "run", *args, "--no-pictures", "--no-progress", "--out", out],
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
+        [sys.executable, "-m", "solidshell", "run", *args, *flags], cwd=ROOT, capture_output=True, text=True
     )
     wall = time.perf_counter() - t0
     steal1 = steal_seconds()
@@ -83,40 +122,60 @@ def run_once(args: list[str], out: str) -> dict:
             f"{(p.stderr or p.stdout).strip().splitlines()[-1:]}"
         )
     s = json.loads((Path(out) / "summary.json").read_text())
+    its = s.get("iterations")
     return {
         "process_s": wall,
-        "load": load,
+        "load": load[0],
+        "load_5_15": list(load[1:]),
         "steal": steal,
         "wall_time_s": s["wall_time_s"],
         "peak_memory_mb": s.get("peak_memory_mb"),
-        "iterations": s.get("iterations"),
+        "iterations": its,
+        "s_per_iteration": s["wall_time_s"] / its if its else None,
         "steps": s.get("steps"),
         "drape_coefficient": s.get("drape_coefficient"),
         "fold_count": s.get("fold_count"),
+        "positive_definite": s.get("positive_definite"),
+        "min_tangent_eigenvalue": s.get("min_tangent_eigenvalue"),
+        "sequence": [(r["mesh"], r["iterations"]) for r in s.get("sequence") or []],
     }
 
 
+def checks(out: str) -> dict:
+    """The independent contact checks of a written run: {module: (exit code, its line)}."""
+    res = {}
+    for mod in CHECKS:
+        p = subprocess.run([sys.executable, "-m", mod, out], cwd=ROOT, capture_output=True, text=True)
+        res[mod.split(".")[-1]] = (p.returncode, " ".join((p.stdout or p.stderr).split())[:300])
+    return res
+
+
 def measure(name: str, repeats: int, tmp: str) -> dict:
-    args, key, limit = CASES[name]
+    args, key, limit, pictures = CASES[name]
     runs = []
     for k in range(repeats):
-        r = run_once(args, os.path.join(tmp, f"{name}_{k}"))
+        out = os.path.join(tmp, f"{name}_{k}")
+        r = run_once(args, out, pictures)
+        if name in CHECKED:
+            r["checks"] = checks(out)
         runs.append(r)
         print(
             f"  {name} run {k + 1}: {key} {r[key]:.2f} s, process {r['process_s']:.2f} s, "
-            f"load {r['load']:.2f}, stolen {_pct(r['steal'])}",
+            f"load {r['load']:.2f}, stolen {_pct(r['steal'])}; {state(r)}",
             flush=True,
         )
     med = statistics.median(r[key] for r in runs)
     row = {
         "case": name,
-        "command": "solidshell run " + " ".join(args) + " --no-pictures",
+        "command": "solidshell run " + " ".join(args) + ("" if pictures else " --no-pictures"),
         "figure": key,
         "limit": limit,
         "median": med,
         "runs": runs,
         "met": med < limit,
     }
+    if name in CHECKED:
+        row["met"] = row["met"] and all(c[0] == 0 for r in runs for c in r["checks"].values())
     if name in MEMORY_LIMIT_MB:
         peak = max(r["peak_memory_mb"] for r in runs)
         row.update(
@@ -130,9 +189,21 @@ def _pct(x) -> str:
 
 
 def state(r: dict) -> str:
-    count = f"{r['iterations']} iterations" if r.get("iterations") is not None else f"{r.get('steps')} steps"
+    if r.get("iterations") is not None:
+        count = f"{r['iterations']} iterations, {r['s_per_iteration']:.3f} s/iteration"
+        if r.get("sequence"):
+            count += " (" + " + ".join(f"{m}: {i}" for m, i in r["sequence"]) + ")"
+    else:
+        count = f"{r.get('steps')} steps"
     dc = r.get("drape_coefficient")
-    return count + ("" if dc is None else f", DC {dc:.6f}, {r.get('fold_count')} folds")
+    out = count + ("" if dc is None else f", DC {dc:.6f}, {r.get('fold_count')} folds")
+    if r.get("positive_definite") is not None:
+        lmin = r.get("min_tangent_eigenvalue")
+        out += ", stable" if r["positive_definite"] else ", NOT stable"
+        out += "" if lmin is None else f" (min eigenvalue {lmin:.3g})"
+    if r.get("checks"):
+        out += ", checks " + " ".join(f"{k} {'clean' if c[0] == 0 else f'exit {c[0]}'}" for k, c in r["checks"].items())
+    return out
 
 
 def table(rows: list[dict]) -> str:
@@ -141,11 +212,18 @@ def table(rows: list[dict]) -> str:
         "|---|---|---|---|---|---|---|",
     ]
     for row in rows:
+        if not row.get("runs"):
+            lines.append(
+                f"| {row['case']} | {row.get('command', '')} | {row.get('target', '')} | – | – | not measured | – |"
+            )
+            continue
         target = f"{row['figure']} < {row['limit']:g} s"
         runs = ", ".join(f"{r[row['figure']]:.2f} ({r['load']:.2f}, {_pct(r['steal'])})" for r in row["runs"])
         if "peak_memory_mb" in row:
             target += f", memory < {row['memory_limit_mb']:g} MB"
             runs += f"; peak {row['peak_memory_mb']:.1f} MB"
+        if row["case"] in CHECKED:
+            target += ", checks clean"
         states = "; ".join(sorted({state(r) for r in row["runs"]}))
         lines.append(
             f"| {row['case']} | `{row['command']}` | {target} | {row['median']:.2f} s | {runs} | "
@@ -154,25 +232,35 @@ def table(rows: list[dict]) -> str:
     return "\n".join(lines)
 
 
+def _hook(name: str, repeats: int, tmp: str) -> list[dict]:
+    rows = (adaptivity_rows if name == "adapt" else picture_rows)(repeats, tmp)
+    if not rows:
+        item = "item 2: adaptivity_rows" if name == "adapt" else "item 3: picture_rows"
+        print(f"  {name}: hook not filled yet (issue 41 {item})", flush=True)
+        return [{"case": name, "command": f"issue 41 {item}", "target": "", "runs": []}]
+    return rows
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--cases", default=",".join(CASES))
+    ap.add_argument("--cases", default=",".join(DEFAULT_CASES), help=f"of {', '.join([*CASES, *HOOKS])}")
     ap.add_argument("--repeats", type=int, default=2)
-    ap.add_argument("--out", default=str(ROOT / "benchmarks" / "out" / "targets"))
+    ap.add_argument("--out", default=str(ROOT / "benchmarks" / "out" / "targets_issue41"))
     a = ap.parse_args(argv)
     names = [c.strip() for c in a.cases.split(",") if c.strip()]
-    bad = [c for c in names if c not in CASES]
+    bad = [c for c in names if c not in CASES and c not in HOOKS]
     if bad or a.repeats < 1:
-        print(f"unknown case(s) {bad}; known: {', '.join(CASES)}" if bad else "--repeats must be >= 1", file=sys.stderr)
+        known = ", ".join([*CASES, *HOOKS])
+        print(f"unknown case(s) {bad}; known: {known}" if bad else "--repeats must be >= 1", file=sys.stderr)
         return 2
     started = time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime())
     rows = []
     with tempfile.TemporaryDirectory(prefix="targets_") as tmp:
         for name in names:
-            print(f"{name}:", flush=True)
-            rows.append(measure(name, a.repeats, tmp))
+            print(f"{name}: (load average {' '.join(f'{x:.2f}' for x in os.getloadavg())})", flush=True)
+            rows += _hook(name, a.repeats, tmp) if name in HOOKS else [measure(name, a.repeats, tmp)]
     md = (
-        f"Issue 13 targets, {started}, {a.repeats} runs each, numba threads "
+        f"Targets (issues 13, 41), {started}, {a.repeats} runs each, numba threads "
         f"{os.environ.get('NUMBA_NUM_THREADS', 'default')}\n\n{table(rows)}\n"
     )
     print("\n" + md)

@@ -66,18 +66,32 @@ def _box(a0, a1, a2, h0, h1, h2, k):
     return g, 0.0, 0.0, s2
 
 
+HEADER = 3
+"""A MESH body's grid opens with the band, then the offsets (from its start) of its exact section
+(0: none) and of its triangle records; the table of blocks follows (:func:`grid_distance`)."""
+TRI = 30
+"""Floats per triangle record of a MESH body's exact cells: corners a, b, c, the unit face normal,
+the edges' pseudonormals (ab, bc, ca: the sums of their two faces' unit normals) and the corners'
+(angle-weighted sums of their faces' unit normals)."""
+
+
 @njit(cache=True, inline="always")
 def grid_distance(p, grid, x0, x1, x2):
-    """(g, grad g) of a MESH body at x: the trilinear interpolant of its narrow-band signed-distance
-    samples (contact_mesh.py builds them).  ``grid[start]`` is the band b; the table of blocks
-    (nbx, nby, nbz, C order) follows, each entry a block number k >= 0, FAR_OUT (every sample of the
-    block is +b) or FAR_IN (-b); then the exact distances at the blocks' centres (same order,
-    :func:`far_bound`); then block k's (BLOCK + 1)^3 samples (C order) at start + 1 + 2 nbx nby nbz
-    + k (BLOCK + 1)^3.  Samples are the exact distance clamped to [-b, b] (clamping keeps
-    it 1-Lipschitz), so the interpolant is continuous everywhere; outside the grid's box it is b.
-    The gradient is returned as it is, not normalised: the penalty force k p grad g is then exactly
-    minus the gradient of the energy 1/2 k p^2 of this g (|grad g| = 1 up to the interpolation
-    error, O(spacing / curvature radius), near the surface)."""
+    """(g, grad g) of a MESH body at x (contact_mesh.py builds its grid).  ``grid[start]`` is the
+    band b, ``grid[start + 1]`` the offset E of the exact section (0: none), ``grid[start + 2]`` the
+    offset T of the triangle records; the table of blocks (nbx, nby, nbz, C order) follows, each entry a
+    block number k >= 0, FAR_OUT (every sample of the block is +b), FAR_IN (-b) or -(3 + k) for a
+    block k with exact cells; then the exact distances at the blocks' centres (same order,
+    :func:`far_bound`); then block k's (BLOCK + 1)^3 samples (C order) at start + HEADER + 2 nbx nby
+    nbz + k (BLOCK + 1)^3.  Samples are the exact distance clamped to [-b, b] (clamping keeps it
+    1-Lipschitz); in a cell they are interpolated trilinearly, so the interpolant is continuous;
+    outside the grid's box it is b.  The gradient is returned as it is, not normalised: the penalty
+    force k p grad g is then exactly minus the gradient of the energy 1/2 k p^2 of this g (|grad g| =
+    1 up to the interpolation error, O(spacing / curvature radius), near the surface).
+
+    An *exact cell* (where the trilinear interpolant would round a sharp edge or a corner off:
+    contact_mesh.build_grid) is evaluated from the triangles instead (:func:`exact_cell`): the
+    exact signed distance, clamped to [-b, b], and its gradient."""
     inv = 1.0 / p[3]  # one division, not six
     nbx, nby, nbz, s = int(p[4]), int(p[5]), int(p[6]), int(p[7])
     band = grid[s]
@@ -90,12 +104,18 @@ def grid_distance(p, grid, x0, x1, x2):
     i, j, k = int(u), int(v), int(w)
     fu, fv, fw = u - i, v - j, w - k
     bi, bj, bk = i >> 3, j >> 3, k >> 3  # // BLOCK (8; i, j, k >= 0)
-    kb = grid[s + 1 + (bi * nby + bj) * nbz + bk]
+    kb = grid[s + HEADER + (bi * nby + bj) * nbz + bk]
+    li, lj, lk = i - bi * BLOCK, j - bj * BLOCK, k - bk * BLOCK
     if kb < 0.0:
-        return (band if kb == FAR_OUT else -band), 0.0, 0.0, 0.0
+        if kb > -2.5:  # FAR_OUT or FAR_IN
+            return (band if kb == FAR_OUT else -band), 0.0, 0.0, 0.0
+        kb = -kb - 3.0  # a block with exact cells
+        ct = s + int(grid[s + int(grid[s + 1]) + int(kb)])  # its cell table
+        c = grid[ct + (li * BLOCK + lj) * BLOCK + lk]
+        if c >= 0.0:
+            return exact_cell(grid, s, s + int(c), x0, x1, x2, band)
     m = BLOCK + 1
-    o = s + 1 + 2 * nbx * nby * nbz + int(kb) * m * m * m + ((i - bi * BLOCK) * m + (j - bj * BLOCK)) * m
-    o += k - bk * BLOCK
+    o = s + HEADER + 2 * nbx * nby * nbz + int(kb) * m * m * m + (li * m + lj) * m + lk
     c000, c001 = grid[o], grid[o + 1]
     c010, c011 = grid[o + m], grid[o + m + 1]
     c100, c101 = grid[o + m * m], grid[o + m * m + 1]
@@ -117,6 +137,87 @@ def grid_distance(p, grid, x0, x1, x2):
 
 
 @njit(cache=True)
+def closest_on_triangle(r, x0, x1, x2):
+    """(squared distance, closest point (3), feature) of the point x to the triangle whose record
+    starts at r (TRI floats in the array r's owner: see :func:`exact_cell`); feature 0 the face, 1..3
+    the edges ab, bc, ca, 4..6 the corners a, b, c.  Ericson, Real-Time Collision Detection (2005),
+    Sec. 5.1.5, by the Voronoi regions of the corners and edges."""
+    a0, a1, a2 = r[0], r[1], r[2]
+    ab0, ab1, ab2 = r[3] - a0, r[4] - a1, r[5] - a2
+    ac0, ac1, ac2 = r[6] - a0, r[7] - a1, r[8] - a2
+    ap0, ap1, ap2 = x0 - a0, x1 - a1, x2 - a2
+    d1 = ab0 * ap0 + ab1 * ap1 + ab2 * ap2
+    d2 = ac0 * ap0 + ac1 * ap1 + ac2 * ap2
+    if d1 <= 0.0 and d2 <= 0.0:
+        c0, c1, c2, f = a0, a1, a2, 4
+    else:
+        bp0, bp1, bp2 = x0 - r[3], x1 - r[4], x2 - r[5]
+        d3 = ab0 * bp0 + ab1 * bp1 + ab2 * bp2
+        d4 = ac0 * bp0 + ac1 * bp1 + ac2 * bp2
+        cp0, cp1, cp2 = x0 - r[6], x1 - r[7], x2 - r[8]
+        d5 = ab0 * cp0 + ab1 * cp1 + ab2 * cp2
+        d6 = ac0 * cp0 + ac1 * cp1 + ac2 * cp2
+        vc = d1 * d4 - d3 * d2
+        vb = d5 * d2 - d1 * d6
+        va = d3 * d6 - d5 * d4
+        if d3 >= 0.0 and d4 <= d3:
+            c0, c1, c2, f = r[3], r[4], r[5], 5
+        elif vc <= 0.0 and d1 >= 0.0 and d3 <= 0.0:
+            t = d1 / (d1 - d3)
+            c0, c1, c2, f = a0 + t * ab0, a1 + t * ab1, a2 + t * ab2, 1
+        elif d6 >= 0.0 and d5 <= d6:
+            c0, c1, c2, f = r[6], r[7], r[8], 6
+        elif vb <= 0.0 and d2 >= 0.0 and d6 <= 0.0:
+            t = d2 / (d2 - d6)
+            c0, c1, c2, f = a0 + t * ac0, a1 + t * ac1, a2 + t * ac2, 3
+        elif va <= 0.0 and (d4 - d3) >= 0.0 and (d5 - d6) >= 0.0:
+            t = (d4 - d3) / ((d4 - d3) + (d5 - d6))
+            c0, c1, c2, f = r[3] + t * (r[6] - r[3]), r[4] + t * (r[7] - r[4]), r[5] + t * (r[8] - r[5]), 2
+        else:
+            den = 1.0 / (va + vb + vc)
+            t, q = vb * den, vc * den
+            c0, c1, c2, f = a0 + t * ab0 + q * ac0, a1 + t * ab1 + q * ac1, a2 + t * ab2 + q * ac2, 0
+    e0, e1, e2 = x0 - c0, x1 - c1, x2 - c2
+    return e0 * e0 + e1 * e1 + e2 * e2, c0, c1, c2, f
+
+
+@njit(cache=True)
+def exact_cell(grid, s, o, x0, x1, x2, band):
+    """(g, grad g) of a MESH body at x in an exact cell whose list of triangles starts at o (a count,
+    then the triangles' numbers; contact_mesh.build_grid lists every triangle that can hold the
+    closest point of a point of the cell): the exact distance to the nearest of them, its sign by the
+    pseudonormal of the nearest feature (Baerentzen & Aanaes, IEEE TVCG 11 (2005) 243-253: the face's
+    normal, an edge's or a corner's pseudonormal; the sign libigl's signed_distance gives), the
+    gradient the unit vector from the closest point (sign times), or the feature's unit pseudonormal
+    on the surface itself; clamped to [-b, b] as the samples are (gradient 0 there)."""
+    T = s + int(grid[s + 2])
+    best = math.inf
+    bt = 0
+    bf = 0
+    b0 = b1 = b2 = 0.0
+    for t in range(int(grid[o])):
+        r = T + TRI * int(grid[o + 1 + t])
+        d2, c0, c1, c2, f = closest_on_triangle(grid[r : r + TRI], x0, x1, x2)
+        if d2 < best:
+            best, bt, bf, b0, b1, b2 = d2, r, f, c0, c1, c2
+    # the nearest feature's pseudonormal, 9 + 3 f floats into its record (face 9, edges 12, 15, 18, corners 21, 24, 27)
+    q = bt + 9 + 3 * bf
+    e0, e1, e2 = x0 - b0, x1 - b1, x2 - b2
+    sgn = 1.0 if e0 * grid[q] + e1 * grid[q + 1] + e2 * grid[q + 2] >= 0.0 else -1.0
+    d = math.sqrt(best)
+    g = sgn * d
+    if g >= band:
+        return band, 0.0, 0.0, 0.0
+    if g <= -band:
+        return -band, 0.0, 0.0, 0.0
+    if d > 1e-12 * (1.0 + abs(x0) + abs(x1) + abs(x2)):
+        return g, sgn * e0 / d, sgn * e1 / d, sgn * e2 / d
+    n0, n1, n2 = grid[q], grid[q + 1], grid[q + 2]
+    L = math.sqrt(n0 * n0 + n1 * n1 + n2 * n2)
+    return g, n0 / L, n1 / L, n2 / L
+
+
+@njit(cache=True)
 def far_bound(p, grid, x0, x1, x2):
     """A lower bound of a MESH body's exact distance at x (for skipping what is far from it): the
     exact distance at the centre c of x's block less |x - c| (the distance is 1-Lipschitz), or,
@@ -133,7 +234,7 @@ def far_bound(p, grid, x0, x1, x2):
         return grid[s] + math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
     bi, bj, bk = int(u), int(v), int(w)
     c0, c1, c2 = (bi + 0.5 - u) * bh, (bj + 0.5 - v) * bh, (bk + 0.5 - w) * bh
-    return grid[s + 1 + nbx * nby * nbz + (bi * nby + bj) * nbz + bk] - math.sqrt(c0 * c0 + c1 * c1 + c2 * c2)
+    return grid[s + HEADER + nbx * nby * nbz + (bi * nby + bj) * nbz + bk] - math.sqrt(c0 * c0 + c1 * c1 + c2 * c2)
 
 
 @njit(cache=True)

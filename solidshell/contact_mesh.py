@@ -41,6 +41,7 @@ import math
 from pathlib import Path
 
 import numpy as np
+from numba import njit
 
 from . import contact_kernels as ck
 from .contact import RigidBody, _pos, _vec3, friction_coefficient
@@ -170,12 +171,122 @@ def exact_signed_distance(V, F, x):
     return np.asarray(g, float), np.asarray(c, float), nn
 
 
+SHARP_DEG = 5.0
+"""A grid cell near the surface whose corners' directions to their closest points spread by more than
+this angle (over the cell's diagonal) is an exact cell (:func:`build_grid`): the trilinear interpolant
+there would round an edge or a corner off by up to ~spacing / 4; below it its error is at most
+~spacing x angle / 8 (spacing 0.2 cm: 2e-3 cm), as on a smooth face of radius spacing / angle."""
+
+
+def pseudonormals(V, F):
+    """(face unit normals (m,3), edge pseudonormals (m,3,3) of the edges ab, bc, ca, corner
+    pseudonormals (m,3,3) of a, b, c) of the closed surface (V, F): an edge's the sum of its two faces'
+    unit normals, a vertex's the sum of its faces' unit normals weighted by their angles there
+    (Baerentzen & Aanaes 2005; the sign of x - closest point against the closest feature's
+    pseudonormal is the sign of the distance)."""
+    F = np.asarray(F, np.int64)
+    P = np.asarray(V, float)[F]  # (m, 3 corners, 3)
+    nf = np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0])
+    nf /= np.maximum(np.linalg.norm(nf, axis=1), 1e-300)[:, None]
+    e = np.sort(np.stack([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]], axis=1).reshape(-1, 2), axis=1)
+    _, inv = np.unique(e, axis=0, return_inverse=True)
+    inv = inv.ravel()
+    es = np.zeros((inv.max() + 1, 3))
+    np.add.at(es, inv, np.repeat(nf, 3, axis=0))
+    vn = np.zeros((len(V), 3))
+    for i in range(3):  # the angle at corner i
+        u, w = P[:, (i + 1) % 3] - P[:, i], P[:, (i + 2) % 3] - P[:, i]
+        cos = np.einsum("ij,ij->i", u, w) / np.maximum(np.linalg.norm(u, axis=1) * np.linalg.norm(w, axis=1), 1e-300)
+        np.add.at(vn, F[:, i], np.arccos(np.clip(cos, -1.0, 1.0))[:, None] * nf)
+    return nf, es[inv].reshape(-1, 3, 3), vn[F]
+
+
+@njit(cache=True)
+def _pair_distances(rec, tri, pts, which):
+    """Distances of the points pts[which[j]] to the triangles tri[j] (records ``rec`` (m, TRI))."""
+    out = np.empty(tri.size)
+    for j in range(tri.size):
+        x = pts[which[j]]
+        out[j] = math.sqrt(ck.closest_on_triangle(rec[tri[j]], x[0], x[1], x[2])[0])
+    return out
+
+
+def exact_cells(V, F, lo, h, ib_kept, S, N, band):
+    """The exact section of the grid (contact_kernels.grid_distance, exact_cell) for the kept
+    blocks ``ib_kept`` (n, 3) with samples S (n, 9, 9, 9) and directions to their closest points N
+    (n, 9, 9, 9, 3): (the blocks that hold exact cells, the section as a float array whose offsets
+    count from the grid's start: a function of where it will start, ``section(base)`` -> (floats,
+    offset of the triangle records); number of exact cells).
+
+    A cell is exact when it comes near the surface (its smallest |corner sample| below (1 + sqrt 3)
+    spacing: every point of it within one spacing of the surface is in such a cell) and its corners'
+    directions spread by more than SHARP_DEG.  Its triangles: every triangle within d(c) + 2 r of the
+    cell's centre c (r its half diagonal, d(c) the exact distance there) -- the closest point of any
+    point x of the cell lies within d(x) + r <= d(c) + 2 r of c, so its triangle is among them."""
+    B = ck.BLOCK
+    n = len(ib_kept)
+    sl = [
+        (slice(None), slice(a, a + B), slice(b, b + B), slice(c, c + B)) for a in (0, 1) for b in (0, 1) for c in (0, 1)
+    ]
+    amin = np.min([np.abs(S[t]) for t in sl], axis=0)  # (n, 8, 8, 8)
+    m = np.sum([N[t] for t in sl], axis=0)
+    m /= np.maximum(np.linalg.norm(m, axis=-1), 1e-300)[..., None]
+    cmin = np.min([np.einsum("...i,...i->...", N[t], m) for t in sl], axis=0)
+    flag = (amin < (1.0 + math.sqrt(3.0)) * h) & (cmin < math.cos(math.radians(0.5 * SHARP_DEG)))
+    kk, li, lj, lk = np.nonzero(flag)
+    if not len(kk):
+        return np.zeros(0, np.int64), None, 0
+    loc = np.column_stack([li, lj, lk])
+    centres = lo + (ib_kept[kk] * B + loc + 0.5) * h
+    dc = np.abs(exact_signed_distance(V, F, centres)[0])
+    R = dc + math.sqrt(3.0) * h  # d(c) + 2 r
+    nf, ne, nv = pseudonormals(V, F)
+    P = V[F]
+    rec = np.ascontiguousarray(np.concatenate([P.reshape(-1, 9), nf, ne.reshape(-1, 9), nv.reshape(-1, 9)], axis=1))
+    cen = P.mean(axis=1)
+    rmax = float(np.max(np.linalg.norm(P - cen[:, None], axis=-1)))
+    from scipy.spatial import cKDTree
+
+    hits = cKDTree(cen).query_ball_point(centres, R + rmax, return_sorted=True)
+    cnt = np.fromiter((len(x) for x in hits), np.int64, len(hits))
+    tri = np.fromiter((t for x in hits for t in x), np.int64, int(cnt.sum()))
+    which = np.repeat(np.arange(len(hits)), cnt)
+    keep = _pair_distances(rec, tri, centres, which) <= R[which] * (1.0 + 1e-12) + 1e-12
+    tri, which = tri[keep], which[keep]
+    cnt = np.bincount(which, minlength=len(hits))
+    used, tri_local = np.unique(tri, return_inverse=True)
+    blocks = np.unique(kk)
+    bpos = np.full(n, -1, np.int64)
+    bpos[blocks] = np.arange(len(blocks))
+    ncell = B**3
+
+    def section(base: int):
+        """(the section's floats, where its triangle records start), offsets counted from the grid's
+        start given that the section starts at ``base``."""
+        ct0 = base + n  # the cell tables
+        lists0 = ct0 + len(blocks) * ncell
+        lstart = lists0 + np.concatenate([[0], np.cumsum(cnt + 1)[:-1]])
+        per_block = np.where(bpos >= 0, ct0 + bpos * ncell, -1).astype(float)
+        cells = np.full(len(blocks) * ncell, -1.0)
+        cells[bpos[kk] * ncell + (li * B + lj) * B + lk] = lstart
+        lists = np.empty(int(cnt.sum()) + len(cnt))
+        heads = lstart - lists0
+        lists[heads] = cnt
+        body = np.ones(len(lists), bool)
+        body[heads] = False
+        lists[body] = tri_local  # (sorted by cell: which is)
+        return np.concatenate([per_block, cells, lists, rec[used].ravel()]), lists0 + lists.size
+
+    return blocks, section, len(kk)
+
+
 def build_grid(V, F, spacing: float, band: float, where: str = "mesh body"):
     """The narrow-band grid of the body (V, F) as one float array in contact_kernels.grid_distance's
-    layout (start 0), its parameter row (contact_kernels.PARAMS), the number of blocks kept and the
-    exact distances at the blocks' centres (nbx, nby, nbz; MeshBody.signed_distance's far bound).  The box
-    is the body's bounding box grown by band plus one block on every side (so that the grid's outer
-    samples are all +band), rounded up to whole blocks about the same centre."""
+    layout (start 0), its parameter row (contact_kernels.PARAMS), the number of blocks kept, the
+    exact distances at the blocks' centres (nbx, nby, nbz; MeshBody.signed_distance's far bound) and
+    the number of exact cells (:func:`exact_cells`).  The box is the body's bounding box grown by
+    band plus one block on every side (so that the grid's outer samples are all +band), rounded up to
+    whole blocks about the same centre."""
     B = ck.BLOCK
     h = float(spacing)
     lo = V.min(axis=0) - band - B * h
@@ -202,11 +313,24 @@ def build_grid(V, F, spacing: float, band: float, where: str = "mesh body"):
     table[kept] = np.arange(len(kept))
     loc = np.stack(np.meshgrid(*(np.arange(m),) * 3, indexing="ij"), axis=-1).reshape(-1, 3)
     pts = (lo + (ib[kept][:, None, :] * B + loc[None]) * h).reshape(-1, 3)
-    samples = np.clip(exact_signed_distance(V, F, pts)[0], -band, band) if len(pts) else np.zeros(0)
-    grid = np.concatenate([[band], table.astype(float), gc, samples])
+    if len(pts):
+        g, _, nrm = exact_signed_distance(V, F, pts)
+        samples = np.clip(g, -band, band)
+        blocks, section, n_exact = exact_cells(
+            V, F, lo, h, ib[kept], samples.reshape(-1, m, m, m), nrm.reshape(-1, m, m, m, 3), band
+        )
+    else:
+        samples, blocks, section, n_exact = np.zeros(0), np.zeros(0, np.int64), None, 0
+    table[kept[blocks]] = -3.0 - blocks  # blocks with exact cells (contact_kernels.grid_distance)
+    head = ck.HEADER + 2 * table.size + samples.size
+    grid = np.concatenate([[band, 0.0, 0.0], table.astype(float), gc, samples])
+    if section is not None:
+        extra, rec_at = section(head)
+        grid[1], grid[2] = head, rec_at
+        grid = np.concatenate([grid, extra])
     params = np.zeros(ck.PARAMS)
     params[:8] = (*lo, h, *nb, 0.0)
-    return grid, params, len(kept), gc.reshape(*nb)
+    return grid, params, len(kept), gc.reshape(*nb), n_exact
 
 
 def _geometry(V, F, spacing, band, where: str) -> dict:
@@ -228,11 +352,20 @@ def _geometry(V, F, spacing, band, where: str) -> dict:
         spacing = float(np.clip(np.median(e), diag / 400.0, diag / 50.0))
     spacing = _pos(spacing, f"{where}: spacing")
     band = _pos(band, f"{where}: band") if band is not None else 8.0 * spacing
-    grid, params, n_blocks, coarse = build_grid(V, F, spacing, band, where)
+    grid, params, n_blocks, coarse, n_exact = build_grid(V, F, spacing, band, where)
     V, F = np.ascontiguousarray(V), np.ascontiguousarray(F)
     rho = curvature_radius(V, F)
     return dict(
-        V=V, F=F, spacing=spacing, band=band, grid=grid, params=params, n_blocks=n_blocks, rho=rho, coarse=coarse
+        V=V,
+        F=F,
+        spacing=spacing,
+        band=band,
+        grid=grid,
+        params=params,
+        n_blocks=n_blocks,
+        rho=rho,
+        coarse=coarse,
+        n_exact=n_exact,
     )
 
 
@@ -263,6 +396,7 @@ class MeshBody(RigidBody):
         self.spacing, self.band = geo["spacing"], geo["band"]
         self.grid, self._params, self.n_blocks, self._rho = geo["grid"], geo["params"], geo["n_blocks"], geo["rho"]
         self._coarse, self._lo, self._hi = geo["coarse"], self.V.min(axis=0), self.V.max(axis=0)
+        self.n_exact = geo["n_exact"]  # grid cells evaluated from the triangles (build_grid)
 
     @property
     def params(self) -> np.ndarray:

@@ -77,6 +77,31 @@ def test_box_grid_matches_the_analytic_box():
     np.testing.assert_array_equal(g[inn], -b.band)
 
 
+def test_sharp_edges_and_corners_are_exact():
+    """Near the box's edges and corners, where a trilinear interpolant would round them off by up to
+    ~spacing / 4 (0.03 cm here: half a wool thickness), the kernels evaluate the exact distance from
+    the triangles (contact_kernels.exact_cell): within one spacing of the surface the compiled g
+    equals the analytic box's to 1e-12 (round-off), inside and out, at a spacing that puts the edges
+    off the lattice; outside, its gradient is the analytic one (1e-9).  The exact cells are those
+    along the edges (48 cm of edge / 0.23 x ~4 x 4 cells of the cross-section), not the faces'
+    middles: under half of the cells within (1 + sqrt 3) spacings of the surface (~40 % here)."""
+    b = MeshBody(BOX_V, BOX_F, spacing=0.23, band=1.6)
+    rng = np.random.default_rng(5)
+    pts = []
+    for ex, ez in ((0.0, 0.0), (4.0, 2.0), (0.0, 2.0), (4.0, 0.0)):  # the four edges along y
+        t = rng.uniform(-0.2, 0.2, (3000, 2))
+        pts.append(np.column_stack([ex + t[:, 0], rng.uniform(-0.2, 6.2, 3000), ez + t[:, 1]]))
+    x = np.concatenate(pts)
+    g, n = b.signed_distance(x)
+    ga, na = _box_analytic().signed_distance(x)
+    near = np.abs(ga) < b.spacing
+    np.testing.assert_allclose(g[near], ga[near], atol=1e-12)
+    out = near & (ga > 1e-6)
+    np.testing.assert_allclose(n[out], na[out], atol=1e-9)
+    cells_near = 2 * (2 * (4 * 6 + 4 * 2 + 6 * 2)) / b.spacing**2 * (1 + math.sqrt(3))  # area x thickness / h^3
+    assert 0 < b.n_exact < 0.5 * cells_near
+
+
 def test_sphere_grid_error_and_lipschitz_bound():
     """A gmsh sphere (R = 5 cm, triangles 0.15 cm): the grid's distance against |x| - R near the
     surface within the tessellation's sagitta (e^2 / (8 R) for the longest edge e) plus the
@@ -327,9 +352,9 @@ def test_example_scenes_run(tmp_path, name):
 
 def test_updates_measure_against_the_triangles():
     """The augmented-Lagrangian updates measure a mesh body's raw penetration with the exact distance
-    (contact_augment.raw_penetration -> MeshBody.exact_penetration): at a sharp edge, where the
-    trilinear grid rounds the edge off by up to ~spacing / 4, the updates see the true depth, so
-    their shifts take the grid's error up too.  Exact to 1e-12 against the analytic box."""
+    (contact_augment.raw_penetration -> MeshBody.exact_penetration); at a sharp edge the kernels'
+    distance is exact as well (its exact cells), so both see the true depth.  Exact to 1e-12
+    against the analytic box (round-off of the closest-point arithmetic)."""
     from solidshell.contact_augment import raw_penetration
 
     b = MeshBody(BOX_V, BOX_F, spacing=0.23, band=1.6, offset=0.03)  # (0.23: the edge off the lattice)
@@ -339,4 +364,4 @@ def test_updates_measure_against_the_triangles():
     ga, _ = _box_analytic().signed_distance(x)
     np.testing.assert_allclose(p, b.offset - ga, atol=1e-12)
     g_grid, _ = b.signed_distance(x)
-    assert np.max(g_grid - ga) > 0.005  # (the grid's own rounding there, which the updates correct)
+    np.testing.assert_allclose(g_grid, ga, atol=1e-12)  # (the kernels' exact cells there: same depth)

@@ -87,8 +87,30 @@ def picture_rows(repeats: int, tmp: str) -> list[dict]:
     """Issue 41 item 3 (hook, to be filled by the pictures work): the time of a run's two default
     pictures after the solve (target <= 0.5 s together), ``repeats`` times with the load before each.
     Returns rows shaped as ``measure``'s.  The whole-process cases with pictures are
-    ``pedestal-pictures`` and ``strip-pictures``.  Not filled yet: no row."""
-    return []
+    ``pedestal-pictures`` and ``strip-pictures``.  From benchmarks/picture_speed.py: square-pedestal
+    with its pictures' child process (the default), the time its run writes its files minus the same
+    round's --no-pictures run's (what the pictures add after the solve)."""
+    try:
+        import picture_speed  # python benchmarks/targets.py: this folder is on the path
+    except ImportError:
+        from benchmarks import picture_speed
+    res = picture_speed.measure(repeats, scenes=("square-pedestal",))
+    runs = []
+    for rnd in res["rounds"]:
+        child = rnd["runs"]["square-pedestal"]["child"]
+        runs.append({**child, "load": rnd["load_before"], "steal": None, "steps": "n/a (pictures only)"})
+    med = statistics.median(r["pictures_after_solve_s"] for r in runs)
+    return [
+        {
+            "case": "pictures",
+            "command": "solidshell run square-pedestal (minus --no-pictures)",
+            "figure": "pictures_after_solve_s",
+            "limit": 0.5,
+            "median": med,
+            "runs": runs,
+            "met": med <= 0.5,
+        }
+    ]
 
 
 def steal_seconds() -> float | None:

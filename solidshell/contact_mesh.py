@@ -29,10 +29,20 @@ stores nothing.  One function then serves every solver: the explicit loop's kern
 solver, the candidate selection and the start-up checks see the same g, so the static and explicit
 solutions are of the same problem.  Its error against the exact distance is at most the interpolation
 error, <= spacing^2 / (4 rho) near a smooth face of radius rho (the sphere R = 5 cm at spacing 0.1 cm:
-5 um) and ~spacing / 4 at a sharp edge; :meth:`MeshBody.exact_distance` gives libigl's value for checks.
+5 um); on a flat face it is exact.
+
+Sharp edges and corners: the trilinear interpolant would round them off by up to ~spacing / 4 (a
+sheet pressed on a table's rim sank 0.034 cm, 58 % of the wool's h, into the exact table).  A cell
+near the surface where the corners' directions to their closest points spread by more than
+SHARP_DEG is therefore an *exact cell* (:func:`exact_cells`): it lists every triangle that can hold
+the closest point of a point in it, and the kernels take the exact distance to them there
+(contact_kernels.exact_cell).  g is then exact near sharp features, trilinear elsewhere; at the
+faces between the two kinds of cells it jumps by at most the trilinear cell's own error (<= ~spacing
+x SHARP_DEG / 8).  :meth:`MeshBody.exact_distance` gives libigl's value for checks.
 
 The trilinear interpolant is sqrt(3)-Lipschitz, not 1 (contact_kernels.MESH_LIPSCHITZ): the face
-points' skip bound and the explicit solver's candidate selection use that bound.
+points' skip bound and the explicit solver's candidate selection use that bound (the exact cells'
+distance is 1-Lipschitz).
 """
 
 from __future__ import annotations
@@ -352,8 +362,9 @@ def _geometry(V, F, spacing, band, where: str) -> dict:
         spacing = float(np.clip(np.median(e), diag / 400.0, diag / 50.0))
     spacing = _pos(spacing, f"{where}: spacing")
     band = _pos(band, f"{where}: band") if band is not None else 8.0 * spacing
-    grid, params, n_blocks, coarse, n_exact = build_grid(V, F, spacing, band, where)
     V, F = np.ascontiguousarray(V), np.ascontiguousarray(F)
+    built = _cached_grid(V, F, spacing, band, where)
+    grid, params, n_blocks, coarse, n_exact = built
     rho = curvature_radius(V, F)
     return dict(
         V=V,
@@ -367,6 +378,55 @@ def _geometry(V, F, spacing, band, where: str) -> dict:
         coarse=coarse,
         n_exact=n_exact,
     )
+
+
+GRID_FORMAT = 2
+"""The grid layout's version (contact_kernels.grid_distance; 2: with exact cells): part of the disk
+cache's key, so a cached grid of another layout is never read."""
+
+
+def grid_cache_dir() -> Path | None:
+    """Where built grids are kept between runs: $SOLIDSHELL_GRID_CACHE, else
+    $XDG_CACHE_HOME/solidshell/mesh_grids (~/.cache/...); None when $SOLIDSHELL_GRID_CACHE is "off"."""
+    import os
+
+    env = os.environ.get("SOLIDSHELL_GRID_CACHE")
+    if env is not None:
+        return None if env.strip().lower() in ("", "off", "0", "no") else Path(env)
+    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(base) / "solidshell" / "mesh_grids"
+
+
+def _cached_grid(V, F, spacing: float, band: float, where: str):
+    """build_grid's result for the surface (V, F), from the disk cache when it holds one.  The key is
+    the SHA-256 of the final (merged, outward) vertices and triangles and of spacing, band,
+    SHARP_DEG and GRID_FORMAT, so a changed file, transform or parameter builds anew.  The cache is a
+    convenience: an unreadable entry is rebuilt and a failed write is skipped (the run needs neither);
+    entries are written to a temporary name and renamed, so concurrent runs never read half a file."""
+    import hashlib
+    import os
+
+    where_dir = grid_cache_dir()
+    if where_dir is None:
+        return build_grid(V, F, spacing, band, where)
+    h = hashlib.sha256()
+    for a in (V, F, np.array([spacing, band, SHARP_DEG, GRID_FORMAT], float)):
+        h.update(np.ascontiguousarray(a).tobytes())
+    path = where_dir / f"{h.hexdigest()}.npz"
+    try:
+        with np.load(path) as z:
+            return z["grid"], z["params"], int(z["n_blocks"]), z["coarse"], int(z["n_exact"])
+    except (OSError, KeyError, ValueError):
+        pass
+    built = build_grid(V, F, spacing, band, where)
+    try:
+        where_dir.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_name(f".{path.stem}.{os.getpid()}.npz")
+        np.savez(tmp, grid=built[0], params=built[1], n_blocks=built[2], coarse=built[3], n_exact=built[4])
+        os.replace(tmp, path)
+    except OSError:
+        pass
+    return built
 
 
 class MeshBody(RigidBody):

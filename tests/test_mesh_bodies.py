@@ -365,3 +365,34 @@ def test_updates_measure_against_the_triangles():
     np.testing.assert_allclose(p, b.offset - ga, atol=1e-12)
     g_grid, _ = b.signed_distance(x)
     np.testing.assert_allclose(g_grid, ga, atol=1e-12)  # (the kernels' exact cells there: same depth)
+
+
+def test_grid_disk_cache(tmp_path, monkeypatch):
+    """A built grid is kept on disk under the hash of the surface and the grid's parameters: the
+    second build of the same body reads it (the same floats, bit for bit), another spacing or a
+    moved body builds anew, an unreadable entry is rebuilt (and replaced), and
+    SOLIDSHELL_GRID_CACHE=off keeps nothing."""
+    from solidshell import contact_mesh as cm
+
+    monkeypatch.setenv("SOLIDSHELL_GRID_CACHE", str(tmp_path / "grids"))
+    a = MeshBody(BOX_V, BOX_F, spacing=0.23, band=1.0)
+    files = sorted((tmp_path / "grids").glob("*.npz"))
+    assert len(files) == 1
+    calls = []
+    real = cm.build_grid
+    monkeypatch.setattr(cm, "build_grid", lambda *args, **kw: calls.append(1) or real(*args, **kw))
+    b = MeshBody(BOX_V, BOX_F, spacing=0.23, band=1.0)
+    assert not calls
+    np.testing.assert_array_equal(a.grid, b.grid)
+    np.testing.assert_array_equal(a.params, b.params)
+    assert (a.n_blocks, a.n_exact) == (b.n_blocks, b.n_exact)
+    MeshBody(BOX_V, BOX_F, spacing=0.25, band=1.0)
+    MeshBody(BOX_V + 1.0, BOX_F, spacing=0.23, band=1.0)
+    assert len(calls) == 2 and len(list((tmp_path / "grids").glob("*.npz"))) == 3
+    files[0].write_bytes(b"not a grid")
+    c = MeshBody(BOX_V, BOX_F, spacing=0.23, band=1.0)
+    assert len(calls) == 3
+    np.testing.assert_array_equal(a.grid, c.grid)
+    monkeypatch.setenv("SOLIDSHELL_GRID_CACHE", "off")
+    MeshBody(BOX_V, BOX_F, spacing=0.31, band=1.0)
+    assert len(calls) == 4 and len(list((tmp_path / "grids").glob("*.npz"))) == 3

@@ -95,11 +95,12 @@ class AdaptiveRun:
     ):
         self.make_problem, self.cls, self.settings, self.adapt = make_problem, integrator_cls, settings, adapt
         self.relax, self.progress = relax, _monotone(progress or no_progress)
+        if adapt.ramp and not relax:
+            raise InputError("adapt.ramp sequences a relaxation (--solver relax); an explicit run's motion is not")
         self.bg = BackgroundMesh.from_level0(
             level0, adapt.total_levels, curves if adapt.project_boundary else None, adapt.transitions
         )
         self.L = level_side_lengths(self.bg)
-        self._h_fine = float(np.min(self.L[adapt.levels]))  # smallest side of Eq. (25)'s finest level
         self.forest = AdaptiveMesh(self.bg)
         self.segments: list[Segment] = []
         self.history = []  # (t, active nodes, elements) after every mesh change and at the start
@@ -122,6 +123,10 @@ class AdaptiveRun:
         # Integrator.advance, before the driver looks at that step's pass: a restart at a pass step
         # the checkpoint did not look at takes that look first, as the uninterrupted run did
         self.looked = -1
+        # adapt.ramp: the finest level Eq. (25) may split to in this stage (levels: no ramp, or its
+        # last stage), and per stage change (t, step, new cap, active nodes before its pass)
+        self.cap = 1 if adapt.ramp else adapt.levels
+        self.stages: list[tuple[float, int, int, int]] = []
 
     # ------------------------------------------------------------------ start / restart
     def _problem(self, act: ActiveMesh):
@@ -138,7 +143,7 @@ class AdaptiveRun:
 
     def start(self) -> None:
         act = self.forest.active_mesh()
-        integ = self.cls(self._problem(act), self.settings, self.progress, relax=self.relax)
+        integ = self.cls(self._problem(act), self._stage_settings(), self.progress, relax=self.relax)
         self._enter(integ, act)
 
     def restart(self, path) -> None:
@@ -178,11 +183,15 @@ class AdaptiveRun:
         counters = np.asarray(extra.get(_STATE_PREFIX + "counters", np.zeros(3)), dtype=np.int64)
         self.settle_failures, self.new_node_fallbacks, self.pushed_out = map(int, counters)
         self.frozen = (float(frozen[0]), int(frozen[1])) if frozen.size == 2 else None
+        # a checkpoint without the key was written before adapt.ramp: every stage was the last
+        self.cap = int(np.asarray(extra.get(_STATE_PREFIX + "cap", self.adapt.levels)))
+        stages = np.asarray(extra.get(_STATE_PREFIX + "stages", np.zeros((0, 4))), dtype=float).reshape(-1, 4)
+        self.stages = [(float(t), int(n), int(c), int(k)) for t, n, c, k in stages]
         self.forest = AdaptiveMesh.from_state_arrays(self.bg, self.segments[-1].leaves)
         act = self.segments[-1].active
         self._check_same_adapt(extra, path)
         integ = self.cls.resume(
-            self._problem(act), state, self.settings, source=path, progress=self.progress, relax=self.relax
+            self._problem(act), state, self._stage_settings(), source=path, progress=self.progress, relax=self.relax
         )
         self._enter(integ, act, new_segment=False)
 
@@ -233,6 +242,8 @@ class AdaptiveRun:
             _STATE_PREFIX + "frozen": np.array(self.frozen if self.frozen is not None else [], dtype=float),
             _STATE_PREFIX + "counters": np.array(self._counters(), dtype=np.int64),
             _STATE_PREFIX + "looked": np.asarray(self.looked, dtype=np.int64),
+            _STATE_PREFIX + "cap": np.asarray(self.cap, dtype=np.int64),
+            _STATE_PREFIX + "stages": np.array(self.stages, dtype=float).reshape(-1, 4),
             **{f"{_STATE_PREFIX}born_{l}": b.copy() for l, b in enumerate(self.born)},
             **{f"{_STATE_PREFIX}guard_{l}": g.copy() for l, g in enumerate(self.by_guard)},
         }
@@ -260,6 +271,9 @@ class AdaptiveRun:
         while True:
             with self._threads(self.active.mesh):  # 1 thread on small meshes, remeshing included
                 status = self.integ.advance(check - self.integ.state.step % check)
+                if status == "steady" and self.cap < self.adapt.levels:
+                    self._next_stage()  # adapt.ramp: steady on this stage's meshes, one level finer
+                    continue
                 if status != "running":
                     break
                 self._look()
@@ -276,6 +290,57 @@ class AdaptiveRun:
             self._adapt_pass()
             self.remesh_seconds += time.perf_counter() - t0
         self.looked = self.integ.state.step
+
+    def _stage_settings(self):
+        """The relaxation's settings for the current stage of adapt.ramp: the run's own on the last
+        stage (and without a ramp); below it the steady tolerances loosened by ``ramp_factor``
+        (residual x f, kinetic energy x f^2) and no contact update, since the stage's state is only
+        the start of the next, finer one (as the static sequence's COARSE_TOLERANCES)."""
+        s = self.settings
+        if self.cap >= self.adapt.levels:
+            return s
+        f = float(self.adapt.ramp_factor)
+        return s.model_copy(
+            update={"tol_residual": s.tol_residual * f, "tol_kinetic": s.tol_kinetic * f * f, "contact_augment": 0}
+        )
+
+    def _next_stage(self) -> None:
+        """adapt.ramp: the relaxation is steady (loosely) at the current cap: allow one level more and
+        pass at once; when that pass leaves the mesh as it is, the same state continues on the
+        same problem under the next stage's settings (as a restart would: no new ledger segment,
+        the critical step kept)."""
+        st = self.integ.state
+        self.stages.append((float(st.t), int(st.step), self.cap + 1, int(self.active.mesh.n_nodes)))
+        self.cap += 1
+        t0 = time.perf_counter()
+        self._adapt_pass(may_freeze=False)
+        if self.integ.status != "running":  # no new mesh: this integrator stopped at the stage's steady state
+            old = self.integ
+            self.integ = self.cls.from_state(
+                old.problem,
+                st,
+                self._stage_settings(),
+                reestimate_step=False,
+                new_segment=False,
+                progress=self.progress,
+                relax=self.relax,
+            )
+            self._carry(old)
+            self._enter(self.integ, self.active, new_segment=False)
+        self.remesh_seconds += time.perf_counter() - t0
+        self.looked = st.step
+
+    def _carry(self, old) -> None:
+        """The run's counters and warnings from the integrator ``old`` to its successor."""
+        self.integ.restarted_from = old.restarted_from
+        self.integ.steps_done, self.integ.t_loop = old.steps_done, old.t_loop
+        self.integ.wall0 = old.wall0
+        self.integ.warnings = old.warnings
+
+    @property
+    def _h_fine(self) -> float:
+        """Smallest side of the finest level Eq. (25) may split to now (``levels``, or a ramp's cap)."""
+        return float(np.min(self.L[self.cap]))
 
     @property
     def _check(self) -> int:
@@ -325,7 +390,7 @@ class AdaptiveRun:
         eb = model.bending_strain(U)
         leaves, eb_leaf = leaf_bending_strain(eb, self.active.elem_leaf)
         if self.frozen is None:
-            marks = mark(eb_leaf, leaves, self.L, self.adapt.const, self.adapt.eps, max_level=self.adapt.levels)
+            marks = mark(eb_leaf, leaves, self.L, self.adapt.const, self.adapt.eps, max_level=self.cap)
         else:
             marks = Marks(np.zeros(len(leaves), dtype=bool), np.zeros((0, 2), dtype=np.int64))
         if not self._guarded:
@@ -335,9 +400,10 @@ class AdaptiveRun:
         guarded = guard(marks, nd_leaf, leaves, self.adapt.guard_alignment, self.bg.levels)
         return guarded, leaves, guarded.split & ~marks.split
 
-    def _adapt_pass(self) -> None:
+    def _adapt_pass(self, may_freeze: bool = True) -> None:
         """Steps d-f: mark, split/merge, and when the mesh changed continue on the new one (past a
-        freeze: the guard's splits only)."""
+        freeze: the guard's splits only).  ``may_freeze`` False: a ramp's stage change, whose pass
+        brings the next level and is never the one that freezes the mesh."""
         self.looked = self.integ.state.step
         with self._timed("mark"):
             marks, leaves, guard_only = self._marks()
@@ -346,7 +412,7 @@ class AdaptiveRun:
         n_merge = len(merge)
         if not n_split and not n_merge:
             return
-        if self.frozen is None and self._freezes(n_split, len(marks.merge)):
+        if may_freeze and self.frozen is None and self._freezes(n_split, len(marks.merge)):
             st = self.integ.state
             self.frozen = (float(st.t), int(st.step))
             return
@@ -367,8 +433,8 @@ class AdaptiveRun:
         none (``freeze_on = "splits"``), or change 1-K leaves in all (``"changes"``: splits plus
         merges), stops the passes for the rest of the run (instead of being made)."""
         a = self.adapt
-        if a.freeze_leaves <= 0 or self.integ.state.t <= a.freeze_after:
-            return False
+        if a.freeze_leaves <= 0 or self.integ.state.t <= a.freeze_after or self.cap < a.levels:
+            return False  # a ramp's coarse stages do not freeze: the finer levels are still to come
         if a.freeze_on == "changes":
             return n_split + n_merge_marked <= a.freeze_leaves
         return n_merge_marked == 0 and n_split <= a.freeze_leaves
@@ -429,12 +495,9 @@ class AdaptiveRun:
         # stiffer elements (transition patches at a graded level 0's corners; docs/adaptivity.md)
         with self._timed("integrator"):
             self.integ = self.cls.from_state(
-                problem, st, self.settings, reestimate_step=True, progress=self.progress, relax=self.relax
+                problem, st, self._stage_settings(), reestimate_step=True, progress=self.progress, relax=self.relax
             )
-        self.integ.restarted_from = integ.restarted_from
-        self.integ.steps_done, self.integ.t_loop = integ.steps_done, integ.t_loop
-        self.integ.wall0 = integ.wall0
-        self.integ.warnings = integ.warnings
+        self._carry(integ)
         self.remeshes.append(
             dict(
                 t=float(st.t),
@@ -542,6 +605,9 @@ class AdaptiveRun:
             "adapt_guard_alignment": float(self.adapt.guard_alignment),
             "adapt_guard_levels": int(self.adapt.guard_levels),
             "guard_splits": int(self.guard_splits),
+            "adapt_ramp": bool(self.adapt.ramp),
+            "adapt_ramp_factor": float(self.adapt.ramp_factor),
+            "ramp_stages": [dict(t=t, step=n, cap=c, nodes_before=k) for t, n, c, k in self.stages],
             "remesh_frozen_at": None if self.frozen is None else {"t": self.frozen[0], "step": self.frozen[1]},
             "settle_failures": int(self.settle_failures),
             "settle_new_node_fallbacks": int(self.new_node_fallbacks),

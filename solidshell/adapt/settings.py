@@ -80,6 +80,17 @@ class AdaptSettings(SettingsModel):
     guard_levels : levels beyond ``levels`` that only the guard may split into (the background mesh
                 has levels + guard_levels); Eq. (25), the full membrane of ``coarse_membrane`` and
                 the pass schedule's finest side keep to ``levels``
+    ramp      : coarse-to-fine sequencing (nested iteration) in a relaxation: Eq. (25) may split up
+                to level 1 only until the relaxation reaches a loose steady state (its tolerances
+                times ``ramp_factor``), then up to level 2, and so on; only the last stage, up to
+                ``levels``, relaxes to the run's own steady criterion (and pays the finest
+                elements' critical step).  The coarse stages carry the flat sheet to its folded shape
+                on a few hundred elements at a larger step (docs/adaptivity.md, "Coarse to fine").
+                Relaxations only (a dynamic run's motion is not a path to be shortened): refused in
+                explicit dynamics
+    ramp_factor : a stage below ``levels`` is steady at ``ramp_factor`` x tol_residual and
+                ``ramp_factor``**2 x tol_kinetic (kinetic energy goes as the square of the
+                out-of-balance amplitude), with no contact update (contact_augment = 0)
 
     The background mesh itself refuses a level count whose memory estimate exceeds half of the
     available memory (``background.estimate_background_bytes``), with the estimate.
@@ -104,6 +115,8 @@ class AdaptSettings(SettingsModel):
     transitions: Literal[TRANSITION_POLICIES] = DEFAULT_TRANSITIONS
     guard_alignment: Finite = Field(GUARD_OFF, ge=GUARD_OFF, lt=1.0)
     guard_levels: int = Field(0, ge=0, le=MAX_LEVELS)
+    ramp: bool = False
+    ramp_factor: Finite = Field(10.0, ge=1.0)
 
     @model_validator(mode="after")
     def _hysteresis(self):

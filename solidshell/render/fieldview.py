@@ -18,6 +18,8 @@ from pathlib import Path
 import numpy as np
 
 UNITS = {"M": "gf cm/cm", "N": "gf/cm", "Q": "gf/cm", "curvature": "1/cm", "gap": "cm", "contact_pressure": "gf/cm^2"}
+SIDE_ELEVATION_DEG = 20.0
+"""How far the side view looks down on the sheet [deg]: from exactly -y a strip shows edge-on, as nothing."""
 
 
 def _unit(field: str) -> str:
@@ -30,7 +32,8 @@ def _unit(field: str) -> str:
 
 def field_picture(run_dir, fields, out, view: str = "iso", file: str = "deformed.vtu", size=(720, 720)) -> Path:
     """Render ``fields`` (names of point or cell data of ``run_dir/file``) side by side into the
-    PNG ``out``; returns its path.  ``view``: "iso", "top" or "side" (from -y)."""
+    PNG ``out``; returns its path.  ``view``: "iso", "top" or "side" (from -y, raised by
+    SIDE_ELEVATION_DEG)."""
     from .vtk_backend import _windows
 
     win = _windows()[0]
@@ -55,7 +58,8 @@ def field_picture(run_dir, fields, out, view: str = "iso", file: str = "deformed
             m = max(-lo, hi)
             cmap, clim = "coolwarm", (-m, m)
         else:
-            cmap, clim = "viridis", (lo, hi if hi > lo else lo + 1e-30)
+            # a constant field (no contact: pressure 0 everywhere) gets a readable bar, not 0 .. 1e-30
+            cmap, clim = "viridis", (lo, hi if hi > lo else lo + max(1.0, abs(lo)))
         sheet = grid
         if "clamped_part" in grid.cell_data and np.any(grid.cell_data["clamped_part"]):
             # the pedestal patch: one polygon, drawn without the edges of VTK's triangulation of it
@@ -91,9 +95,12 @@ def field_picture(run_dir, fields, out, view: str = "iso", file: str = "deformed
                 fmt="%.3g",
             ),
         )
-        p.add_text(f"{path.parent.name}: {f}", font_size=10, color="black")
+        const = f" (constant {lo:.3g})" if hi == lo else ""
+        p.add_text(f"{path.parent.name}: {f}{const}", font_size=10, color="black")
         p.enable_parallel_projection()  # orthographic, as the run's own pictures: fits predictably
         {"top": p.view_xy, "side": p.view_xz}.get(view, p.view_isometric)()
+        if view == "side":
+            p.camera.elevation = SIDE_ELEVATION_DEG  # a strip seen exactly edge-on has no area to draw
         p.reset_camera(bounds=grid.bounds)
         p.camera.zoom(0.85)  # room for the colour bar below
     out = Path(out)

@@ -74,7 +74,6 @@ def test_write_json_numpy_and_nan(tmp_path):
 
 
 def test_mesh_write_failure_leaves_nothing(tmp_path, monkeypatch):
-    import meshio
 
     from solidshell.mesh import ShellMesh
 
@@ -85,7 +84,7 @@ def test_mesh_write_failure_leaves_nothing(tmp_path, monkeypatch):
             f.write("<Xdmf half")
         raise OSError("disk full")
 
-    monkeypatch.setattr(meshio.xdmf, "write", broken)
+    monkeypatch.setattr(io, "_write_xdmf", broken)
     with pytest.raises(OSError, match="disk full"):
         io.write_mesh_file(tmp_path / "mesh.xdmf", mesh)
     assert _leftovers(tmp_path) == []
@@ -165,6 +164,36 @@ def test_time_series_text_is_meshios_byte_for_byte(tmp_path, small):
             w.write_data(t, point_data={"displacement": Uf[:, :3].copy(), "director_displacement": Uf[:, 3:].copy()})
     assert mesh.n_quads and not mesh.n_tris
     assert filecmp.cmp(ours, ref, shallow=False)
+
+
+@pytest.mark.parametrize("tris", [False, True])
+def test_mesh_file_xdmf_text_is_meshios_byte_for_byte(tmp_path, small, tris):
+    """write_mesh_file's XDMF formats the inline numbers in one join (io._savetxt_text) instead of
+    np.savetxt's loop: the file must be exactly what meshio.xdmf.write writes, for float point
+    data (1-D and 2-D), int32 flags and cell data, on quads and on triangles."""
+    import filecmp
+
+    import meshio
+
+    mesh, U = small
+    if tris:
+        q = mesh.quads
+        mesh = type(mesh)(mesh.nodes, tris=np.concatenate([q[:, [0, 1, 2]], q[:, [0, 2, 3]]]))
+    rng = np.random.default_rng(3)
+    point = {"curvature": rng.normal(size=mesh.n_nodes) * 1e-7, "interpenetrated": np.arange(mesh.n_nodes) % 2}
+    cell = {"N": rng.normal(size=(mesh.n_elements, 3)), "self_intersecting": np.zeros(mesh.n_elements, np.int8)}
+    ours = io.write_mesh_file(tmp_path / "result.xdmf", mesh, U, fields=(point, cell))
+    m = io._with_fields(mesh.to_meshio(point_data=io._fields(mesh, U)), mesh, (point, cell), [])
+    ref = tmp_path / "ref.xdmf"
+    with io._no_h5py_needed():
+        meshio.xdmf.write(str(ref), m, data_format="XML")
+    assert filecmp.cmp(ours, ref, shallow=False)
+    import io as pyio
+
+    for a, fmt in [(np.zeros((0, 3)), "%.16e"), (np.zeros(0, np.int32), "%d"), (rng.normal(size=(4, 2)), "%.16e")]:
+        b = pyio.BytesIO()
+        np.savetxt(b, a, fmt)
+        assert io._savetxt_text(a, fmt) == b.getvalue().decode()
 
 
 def test_versions_and_counts(small):

@@ -3,14 +3,19 @@
 Public face (DESIGN.md; ``__all__``): ShellMesh, Fabric, IsotropicShell, Model, solve_static,
 run_scene (-> RunOutput), build_problem (-> Problem), load_scene (-> Scene), available_scenes,
 SolveResult, the errors (InputError, SolverError, IOFailure) and ``__version__``.
-Model (numba kernels), solvers and scene entry points are imported on first use, so ``import
-solidshell`` -- and ``solidshell scenes`` / ``solidshell mesh`` -- stay light; ``dir(solidshell)``
+Everything but the errors is imported on first use (NumPy included), so ``import solidshell``
+-- and ``solidshell scenes`` / ``solidshell mesh`` -- stay light, and ``solidshell run`` starts
+its pictures' process (solidshell.render.server) before NumPy is loaded; ``dir(solidshell)``
 lists them all the same.
 """
 
+from typing import TYPE_CHECKING
+
 from .errors import InputError, IOFailure, SolverError
-from .material import Fabric, IsotropicShell
-from .mesh import ShellMesh
+
+if TYPE_CHECKING:  # the lazy names below, for type checkers
+    from .material import Fabric, IsotropicShell
+    from .mesh import ShellMesh
 
 __version__ = "0.1.0"
 
@@ -36,6 +41,9 @@ __all__ = [
 
 # name -> (module, attribute there)
 _LAZY = {
+    "ShellMesh": ("solidshell.mesh", "ShellMesh"),
+    "Fabric": ("solidshell.material", "Fabric"),
+    "IsotropicShell": ("solidshell.material", "IsotropicShell"),
     "Model": ("solidshell.model", "Model"),
     "solve_static": ("solidshell.solvers.static", "solve_static"),
     "run_scene": ("solidshell.run.driver", "run_scene"),

@@ -1,7 +1,6 @@
-"""``python -m solidshell ...`` -- the same as the ``solidshell`` command."""
+"""``python -m solidshell ...`` -- the same as the ``solidshell`` command (cli.console: main()'s exit
+status, without the interpreter's slow teardown)."""
 
-import sys
+from .cli import console
 
-from .cli import main
-
-sys.exit(main())
+console()

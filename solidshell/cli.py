@@ -55,7 +55,7 @@ EXIT_TERMINATED = 128 + signal.SIGTERM  # 143, the status a shell gives a proces
 
 class _Terminate:
     """The CLI's SIGTERM handler: SIGTERM is handled as Ctrl-C (KeyboardInterrupt; an explicit or
-    relaxation loop defers it to the end of its step and returns its state, observers.
+    relaxation loop defers it to the end of its step and returns its state, solidshell.interrupts.
     deferred_interrupt), and remembered, for exit status 143 instead of 130."""
 
     def __init__(self):
@@ -578,6 +578,30 @@ def main(argv=None) -> int:
     finally:
         if main_thread:
             signal.signal(signal.SIGTERM, old_term)
+
+
+def console() -> None:
+    """The process's entry point (``python -m solidshell``): :func:`main`'s exit status, and a quick
+    end.  Once main() has returned, Python's exit handlers run (atexit: logging, temporary folders,
+    multiprocessing's children) and the standard streams are flushed; then the process ends without
+    the interpreter's teardown, whose largest part is the C libraries' static destructors -- LLVM's,
+    loaded with numba: 0.15-0.3 s of every ``solidshell run``, measured (issue 41; docs/benchmarks.md
+    section 5c).  With other threads still running (none in a run) it exits the ordinary way,
+    which waits for them."""
+    code = main()
+    others = [t for t in threading.enumerate() if t is not threading.main_thread() and not t.daemon and t.is_alive()]
+    if others:
+        sys.exit(code)
+    import atexit
+    import os
+
+    atexit._run_exitfuncs()
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except (OSError, ValueError):  # a closed pipe (``| head``): nothing more to say
+            pass
+    os._exit(code)
 
 
 def _main(argv) -> int:

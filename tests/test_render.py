@@ -105,6 +105,35 @@ def test_run_picture_is_a_sane_png(tmp_path):
     assert renderer() in ("vtk", "matplotlib")
 
 
+@pytest.mark.parametrize("view", ["top", "side"])
+def test_picture_bytes_are_savefigs_tight_ones(tmp_path, monkeypatch, view):
+    """plotting._save_tight_png measures the layout without the axes' images and saves with that
+    box: the PNG is, byte for byte, what savefig(bbox_inches="tight") writes of the same figure (a
+    picture with its image, title, axis labels and the colour bar beside it)."""
+    import matplotlib.image as mimg
+
+    from solidshell import plotting
+
+    monkeypatch.setenv("SOLIDSHELL_RENDERER", "matplotlib")  # the image below stands in for VTK's
+    mesh = _sheet(4, 20.0)
+    X = mesh.nodes + np.column_stack([0 * mesh.nodes[:, :2], -0.01 * mesh.nodes[:, 0] ** 2])
+    figs = []
+    for _ in range(2):
+        fig = plotting._figure((7.0, 6.0))
+        ax = fig.add_subplot(111)
+        sm = draw_view(ax, mesh, X, view, norm=height_norm(X), warp_deg=0.0)
+        ax.imshow(np.random.default_rng(0).random((90, 160, 3)), extent=ax.get_xlim() + ax.get_ylim(), zorder=0)
+        plotting.colorbar(fig, ax, sm)
+        ax.set_title("a title\nand a subtitle", fontsize=9.5)
+        figs.append(fig)
+    ours, ref = tmp_path / "ours.png", tmp_path / "ref.png"
+    plotting._save_tight_png(figs[0], ours, 130, pad_inches=0.15)
+    figs[1].savefig(ref, dpi=130, format="png", bbox_inches="tight", pad_inches=0.15)
+    assert ours.read_bytes() == ref.read_bytes()
+    assert figs[0].dpi == figs[1].dpi and all(im.get_visible() for im in figs[0].axes[0].get_images())
+    assert mimg.imread(ours).shape[1] > 500  # the whole 7 in wide figure, not a crop
+
+
 def test_figures_cli_refuses_an_unknown_figure(capsys):
     from solidshell.cli import main
 

@@ -19,6 +19,19 @@ compare ratios inside one run (docs/benchmarks.md).
 
 from __future__ import annotations
 
-from .studies import STUDIES
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from .studies import STUDIES
 
 __all__ = ["STUDIES"]
+
+
+def __getattr__(name):
+    # on first use: the CLI's parser imports solidshell.bench.cli, and ``solidshell run`` starts its
+    # pictures' process before NumPy (which the studies import) is loaded
+    if name == "STUDIES":
+        from .studies import STUDIES
+
+        return STUDIES
+    raise AttributeError(f"module 'solidshell.bench' has no attribute {name!r}")

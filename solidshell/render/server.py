@@ -319,4 +319,8 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    code = main()
+    sys.stderr.flush()
+    # every picture is written and answered: leave without the interpreter's teardown (VTK's window
+    # and OpenGL context closed, every module freed), which the run waits for in RenderServer.close
+    os._exit(code)

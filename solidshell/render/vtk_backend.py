@@ -14,10 +14,12 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+from typing import TYPE_CHECKING
 
-import numpy as np
+if TYPE_CHECKING:  # NumPy is loaded where a picture is drawn: the pictures' process is started without it
+    import numpy as np
 
-from .geometry import Camera
+    from .geometry import Camera
 
 _STATE: dict = {}  # {"ok": bool, "why": str}: the probe's answer for this process
 
@@ -113,6 +115,7 @@ def available(timeout: float = 180.0) -> tuple[bool, str]:
 
 
 def _polydata(s):
+    import numpy as np
     import pyvista as pv
 
     parts = []
@@ -129,6 +132,7 @@ def render_image(
 ) -> np.ndarray:
     """RGB image (H,W,3) uint8 of the surfaces seen by ``camera``, framing exactly the screen
     rectangle ``extent`` = (xmin, xmax, ymin, ymax) [cm] (orthographic), white background."""
+    import numpy as np
     import pyvista as pv
 
     pv.OFF_SCREEN = True

@@ -308,13 +308,13 @@ def _state(result, mesh) -> np.ndarray:
 @contextmanager
 def _undisturbed(kind: str):
     """The write phase runs to its end: a Ctrl-C or SIGTERM meanwhile waits for it, as during a
-    solver's step (solvers.explicit.observers.deferred_interrupt), so it cannot leave the results
+    solver's step (solidshell.interrupts.deferred_interrupt), so it cannot leave the results
     half written; the run then ends as it would have.  A mesh-only run writes in a moment (and
     need not import the solvers)."""
     if kind == "none":
         yield
         return
-    from ..solvers.explicit.observers import deferred_interrupt
+    from ..interrupts import deferred_interrupt
 
     with deferred_interrupt():
         yield

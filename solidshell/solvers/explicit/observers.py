@@ -7,12 +7,10 @@ interfaces.RunReadings); a checkpoint the whole state, which it saves."""
 from __future__ import annotations
 
 import math
-import signal
-import threading
 import time
-from contextlib import contextmanager
 
 from ...interfaces import FrameStore, RunReadings
+from ...interrupts import deferred_interrupt  # noqa: F401 - the loop's name for it (integrator.py)
 from . import checkpoint
 from .kernels import dot
 from .state import State
@@ -134,35 +132,3 @@ def steady(st, s, P, vMv, E_floor) -> float | None:
         st.last_ekin = Ek_c
         return rel_ke
     return None
-
-
-# ----------------------------------------------------------------------------- Ctrl-C, SIGTERM
-@contextmanager
-def deferred_interrupt():
-    """During the loop a Ctrl-C (SIGINT) sets ``flag[0]`` instead of raising, so the step in progress
-    completes and the run returns its last completed state; a second Ctrl-C raises as usual.  SIGTERM
-    (what SLURM, Kubernetes and ``timeout`` send) is deferred the same way when the process has a
-    Python handler for it (the CLI installs one; a bare library process keeps the default, which
-    ends it).  A handler with a ``note(signum)`` method hears of the signal it was spared."""
-    flag = [False]
-    if threading.current_thread() is not threading.main_thread():
-        yield flag
-        return
-    old = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}
-    ours = [sig for sig, h in old.items() if sig == signal.SIGINT or callable(h)]
-
-    def handler(signum, frame):
-        flag[0] = True
-        for sig in ours:
-            signal.signal(sig, old[sig])
-        note = getattr(old.get(signum), "note", None)
-        if callable(note):
-            note(signum)
-
-    for sig in ours:
-        signal.signal(sig, handler)
-    try:
-        yield flag
-    finally:
-        for sig in ours:
-            signal.signal(sig, old[sig])

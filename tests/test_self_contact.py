@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from solidshell import layers, run_scene
+from solidshell import contact_self, layers, run_scene
 from solidshell.contact_self import CCD_SAFETY, SelfContact
 from solidshell.errors import InputError
 from solidshell.mesh import ShellMesh
@@ -118,3 +118,40 @@ def test_the_deep_static_drape_no_longer_passes_through_itself(tmp_path):
     assert s["converged"] and s["positive_definite"]
     assert s["fold_count"] == off["fold_count"] == 4
     assert s["drape_coefficient"] == pytest.approx(off["drape_coefficient"], rel=0.01)
+
+
+def _solve(scene, mesh, skip, tmp_path, monkeypatch, **overrides):
+    monkeypatch.setattr(contact_self, "SKIP", skip)
+    ov = {"self_contact.enabled": True, "output.pictures": [], "output.snapshots": [], **overrides}
+    out = run_scene(
+        scene, mesh=mesh, solver="static", out_dir=tmp_path / f"{scene}-{skip}", progress=False, overrides=ov
+    )
+    return out.summary, out.U
+
+
+_COUNTS = ("iterations", "factorizations", "energy_evaluations", "self_contact_evaluations", "self_contact_ccd_cuts")
+
+
+@pytest.mark.parametrize(
+    ("scene", "mesh", "close"), [("square-on-disc", "10x80", True), ("square-pedestal", "12x4x4", False)]
+)
+def test_skipping_the_broad_phase_and_ccd_changes_no_iterate(scene, mesh, close, tmp_path, monkeypatch):
+    """The skip tests of contact_self.py (issue 41) answer exactly what the library would (each
+    skipped call returns the library's own exact zero or 1.0): the whole static solve takes the
+    same path with and without them -- every count equal (iterations, factorisations, energy and
+    barrier evaluations, CCD cuts) and the final U equal to 1e-9 of max|U|, a tolerance for
+    round-off only: ipctk's barrier sums are parallel reductions whose order varies, and two runs
+    of the same code without the skips differ by 2e-13 cm on 10x80 -- on square-on-disc 10x80,
+    whose layers come within the barrier's reach (CCD cuts steps), and on square-pedestal 12x4x4,
+    whose layers never come near; and on both the skips spare broad phases and CCDs."""
+    ref, U_ref = _solve(scene, mesh, False, tmp_path, monkeypatch)
+    new, U_new = _solve(scene, mesh, True, tmp_path, monkeypatch)
+    for k in _COUNTS:
+        assert new[k] == ref[k], k
+    assert np.abs(U_new - U_ref).max() <= 1e-9 * np.abs(U_ref).max()
+    assert new["self_contact_builds"] < ref["self_contact_builds"]
+    assert new["self_contact_ccd_runs"] < ref["self_contact_ccd_runs"]
+    if close:
+        assert ref["self_contact_ccd_cuts"] > 0  # the layers did come near
+    else:
+        assert ref["self_contact_ccd_cuts"] == 0 and ref["min_layer_gap"] is None

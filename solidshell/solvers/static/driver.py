@@ -269,6 +269,8 @@ def _info(sys, o, s, stats, ok, status, rel, warnings) -> dict:
         info["self_contact_stiffness"] = sys.selfc.stiffness
         info["self_contact_evaluations"] = int(sys.selfc.evaluations)
         info["self_contact_ccd_cuts"] = int(sys.selfc.ccd_cuts)
+        info["self_contact_builds"] = int(sys.selfc.builds)  # broad phases run (the rest were skipped)
+        info["self_contact_ccd_runs"] = int(sys.selfc.ccd_runs)  # CCDs run of the steps checked
     if s.method == "newton":
         info["shifted_iterations"] = int(stats["shifted_iterations"])
         info["max_tangent_shift"] = float(stats["max_shift"])

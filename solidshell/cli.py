@@ -302,29 +302,12 @@ def _cmd_run(args) -> int:
         from .render import server
 
         server.start()
-    from .run import run_scene
-    from .scenes import parse_overrides
-
-    out_dir = args.out or _default_out(args.scene)
-    extra = {k: v for k, v in (("checkpoint", args.checkpoint), ("restart", args.restart)) if v}
-    overrides = parse_overrides(args.set)
-    if args.no_pictures:
-        clash = [k for k in ("output.pictures", "output.snapshots") if k in overrides]
-        if clash:
-            raise InputError(f"run: --no-pictures and --set {clash[0]}=... ask for opposite things; give one of them")
-        overrides.update({"output.pictures": [], "output.snapshots": []})
-    res = run_scene(
-        args.scene,
-        mesh=args.mesh,
-        solver=args.solver,
-        out_dir=out_dir,
-        progress=not (args.no_progress or args.quiet),
-        overrides=overrides,
-        force=args.force,
-        allow_large=args.allow_large,
-        adaptive=True if args.adaptive else None,
-        **extra,
-    )
+    try:
+        res = _run_scene_of(args)
+    except BaseException:
+        if not args.no_pictures:  # the child started above draws nothing now
+            server.discard()
+        raise
     s = res.summary
     c = s["counts"]
     status = "INTERRUPTED" if s.get("interrupted") else "converged" if s.get("converged") else "NOT converged"
@@ -360,6 +343,33 @@ def _cmd_run(args) -> int:
             print("  " + ln)
     print(f"  {total:.1f} s; wrote {res.out_dir}/: " + ", ".join(s["files"]))
     return _run_status(s)
+
+
+def _run_scene_of(args):
+    """run_scene with the ``run`` command's arguments."""
+    from .run import run_scene
+    from .scenes import parse_overrides
+
+    out_dir = args.out or _default_out(args.scene)
+    extra = {k: v for k, v in (("checkpoint", args.checkpoint), ("restart", args.restart)) if v}
+    overrides = parse_overrides(args.set)
+    if args.no_pictures:
+        clash = [k for k in ("output.pictures", "output.snapshots") if k in overrides]
+        if clash:
+            raise InputError(f"run: --no-pictures and --set {clash[0]}=... ask for opposite things; give one of them")
+        overrides.update({"output.pictures": [], "output.snapshots": []})
+    return run_scene(
+        args.scene,
+        mesh=args.mesh,
+        solver=args.solver,
+        out_dir=out_dir,
+        progress=not (args.no_progress or args.quiet),
+        overrides=overrides,
+        force=args.force,
+        allow_large=args.allow_large,
+        adaptive=True if args.adaptive else None,
+        **extra,
+    )
 
 
 # ----------------------------------------------------------------------------- each scene's figures

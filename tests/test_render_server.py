@@ -63,3 +63,26 @@ def test_no_child_when_turned_off_or_matplotlib_is_asked_for(monkeypatch):
     monkeypatch.setenv("SOLIDSHELL_RENDER_SERVER", "1")
     monkeypatch.setenv("SOLIDSHELL_RENDERER", "matplotlib")
     assert server.start() is None
+
+
+def test_a_run_that_stops_on_bad_input_ends_its_pictures_child(tmp_path, monkeypatch):
+    """The CLI starts the pictures' child before it reads the scene; a run refused as bad input
+    (exit 2, nothing written) ends that child at once instead of leaving it to finish its imports
+    for nobody."""
+    from solidshell.cli import main
+    from solidshell.render import server
+
+    started = []
+    real = server.RenderServer
+
+    class Recorded(real):
+        def __init__(self):
+            super().__init__()
+            started.append(self)
+
+    monkeypatch.setattr(server, "RenderServer", Recorded)
+    monkeypatch.setattr(server, "enabled", lambda: True)
+    code = main(["run", "strip-warp", "--set", "material.no_such_key=1", "--out", str(tmp_path / "out"), "-q"])
+    assert code == 2 and not (tmp_path / "out").exists()
+    assert len(started) == 1 and started[0].proc.poll() is not None  # ended, not idling
+    assert server.current() is None and "server" not in server._LIVE

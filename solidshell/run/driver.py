@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import json
 import logging
+import sys
 import tempfile
 import time
 import uuid
@@ -176,10 +177,23 @@ def run_scene(
         solvers.kind(kind)  # the registry's one-line error for an unknown kind
     plan = RunPlan(sc, kind, mesh, out_dir, settings, overrides, force, allow_large)
     with reporting(progress, sc.name) as cb:
-        out = _run(plan, cb, t_start)
+        try:
+            out = _run(plan, cb, t_start)
+        except BaseException:
+            _discard_pictures_process()
+            raise
     for w in out.summary["warnings"]:  # after the bar is gone: one clean line each
         log.warning(w)
     return out
+
+
+def _discard_pictures_process() -> None:
+    """A run that raised (bad input found after its folder was checked, a solver error, Ctrl-C
+    with no state): its pictures' child, started with the folder (outputs.prepare_folder) or by
+    the CLI, is ended now instead of idling until this process ends (render.server.discard)."""
+    server = sys.modules.get("solidshell.render.server")
+    if server is not None:
+        server.discard()
 
 
 def _run(plan: RunPlan, cb, t_start: float) -> RunOutput:

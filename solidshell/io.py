@@ -273,33 +273,26 @@ def _write_xdmf(path, m) -> None:
     """meshio's XDMF writer with inline XML data (``meshio.xdmf.write(path, m, data_format="XML")``,
     the same file byte for byte, tests/test_io.py), its numbers formatted by :func:`_savetxt_text`:
     np.savetxt's loop took ~0.2 s of each square-pedestal 48x16x4 state file (issue 41)."""
-    from meshio.xdmf.common import dtype_to_format_string
     from meshio.xdmf.main import XdmfWriter
 
-    class _Writer(XdmfWriter):
-        def numpy_to_xml_string(self, data):
-            if self.data_format != "XML":
-                return super().numpy_to_xml_string(data)
-            return "\n" + _savetxt_text(data, dtype_to_format_string[data.dtype.name])
-
     with _no_h5py_needed():
-        _Writer(str(path), m, data_format="XML")
+        _fast_xml(XdmfWriter, flat=False)(str(path), m, data_format="XML")
 
 
-def _fast_xml_series_writer():
-    """meshio's XDMF TimeSeriesWriter whose inline XML numbers are formatted in one join instead of
-    np.savetxt's Python loop: the same text byte for byte (each value ``fmt % v`` on its own line,
-    tests/test_io.py) in less than half the time -- savetxt took ~6 s of the sphere 100x100
-    relaxation's 23-frame, 34 MB series."""
+def _fast_xml(base, flat: bool):
+    """The meshio XDMF writer class ``base`` whose inline XML numbers are formatted by
+    :func:`_savetxt_text` in one join instead of np.savetxt's Python loop, the text byte for byte
+    meshio's (tests/test_io.py): ``flat`` as meshio's TimeSeriesWriter (the values one per line),
+    else as its XdmfWriter (one row per line, after a newline).  savetxt took ~6 s of the sphere
+    100x100 relaxation's 23-frame, 34 MB series."""
     from meshio.xdmf.common import dtype_to_format_string
-    from meshio.xdmf.time_series import TimeSeriesWriter
 
-    class _Writer(TimeSeriesWriter):
+    class _Writer(base):
         def numpy_to_xml_string(self, data):
             if self.data_format != "XML":
                 return super().numpy_to_xml_string(data)
             fmt = dtype_to_format_string[data.dtype.name]
-            return "\n".join(map(fmt.__mod__, np.ravel(data).tolist())) + "\n"
+            return _savetxt_text(np.ravel(data), fmt) if flat else "\n" + _savetxt_text(data, fmt)
 
     return _Writer
 
@@ -307,15 +300,16 @@ def _fast_xml_series_writer():
 def write_time_series(path, mesh, frames, run_id: str | None = None) -> Path:
     """XDMF time series (meshio TimeSeriesWriter, inline XML data) of ``frames`` = [(t, U (N,6)), ...]
     on the undeformed mesh: fields ``displacement`` and ``director_displacement`` per frame."""
-
     path = Path(path)
     cells = []
     if mesh.n_quads:
         cells.append(("quad", mesh.quads))
     if mesh.n_tris:
         cells.append(("triangle", mesh.tris))
+    from meshio.xdmf.time_series import TimeSeriesWriter
+
     with atomic_path(path) as tmp:
-        with _fast_xml_series_writer()(str(tmp), data_format="XML") as w:
+        with _fast_xml(TimeSeriesWriter, flat=True)(str(tmp), data_format="XML") as w:
             w.write_points_cells(mesh.nodes, cells)
             for t, U in frames:
                 U = np.asarray(U, dtype=float).reshape(mesh.n_nodes, 6)

@@ -25,6 +25,7 @@ from ...contact_kernels import friction_work
 from ...contact_self_penalty import SelfPenalty
 from ...errors import InputError, SolverError
 from ...interfaces import ExplicitModel, SolverProblem
+from ...interrupts import deferred_interrupt
 from ...model import Model
 from ...problem import SolveResult, no_progress
 from . import checkpoint, damping, kernels, ledger, observers, report, stepcontrol
@@ -356,7 +357,7 @@ class Integrator:
         st = self.state
         stop_at = math.inf if n_steps is None else st.step + int(n_steps)  # end_step may move (re-checks)
         t0 = time.perf_counter()
-        with np.errstate(over="ignore", invalid="ignore"), observers.deferred_interrupt() as sigint:
+        with np.errstate(over="ignore", invalid="ignore"), deferred_interrupt() as sigint:
             try:
                 status = self._loop(stop_at, sigint)
             except KeyboardInterrupt:  # raised outside the loop's own handler (e.g. a callback)

@@ -10,7 +10,6 @@ import math
 import time
 
 from ...interfaces import FrameStore, RunReadings
-from ...interrupts import deferred_interrupt  # noqa: F401 - the loop's name for it (integrator.py)
 from . import checkpoint
 from .kernels import dot
 from .state import State

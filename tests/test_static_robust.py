@@ -321,3 +321,38 @@ def test_extended_shifted_steps_reach_the_same_minimum(monkeypatch):
     du = np.abs(ext.U - plain.U).max() / np.abs(plain.U).max()
     assert du <= 1e-6
     assert ext.summary["fold_count"] == plain.summary["fold_count"]
+
+
+def test_load_steps_that_stay_slow_snap_to_the_target_instead_of_stalling(monkeypatch):
+    """Near a critical point of the path every load step needs >= 12 Newton iterations however
+    small it is; the increment halves after each such step, and before the floor on it a geometric
+    series of steps converged to a factor short of the target (sphere 60x60 with self-contact:
+    0.9165, docs/contact.md section 15).  Here each step of the cantilever strip is charged 20
+    iterations more than it took: the increment halves down to ``min_increment``, then one step
+    goes to the target, and the state is the direct solve's (the strip has one equilibrium, so
+    they agree to the Newton tolerance: 1e-6 of max|U|, like the other same-minimum tests)."""
+    from solidshell.solvers.static import driver
+
+    mesh, model, fixed, P, _ = wool_like_strip("gf-cm", 1.0)
+    direct = solve_static(model, fixed, P)
+    real = driver.newton_level
+    calls = []
+
+    def slow(sys, D, lam, o, stats):
+        calls.append(lam)
+        if len(calls) > 200:  # without the snap the factors would converge short of 1 for ever
+            raise RuntimeError("load stepping stalled")
+        out = real(sys, D, lam, o, stats)
+        stats["iterations"] += 20
+        return out
+
+    monkeypatch.setattr(driver, "newton_level", slow)
+    r = solve_static(model, fixed, P, increment=0.1, min_increment=1e-4, check_stability=False)
+    assert r.converged, r.message
+    assert r.info["load_factor"] == 1.0
+    # 0.1 halved to the floor 1e-4 (10 halvings), one step at the floor, then the snap
+    assert 10 <= r.info["load_steps"] <= 14
+    (lam_snap,) = r.info["snapped_from"]
+    assert 0.1 < lam_snap < 0.3  # 0.1 + 0.05 + ... + 1e-4: the series' sum, about 0.2
+    du = np.abs(r.U - direct.U).max() / np.abs(direct.U).max()
+    assert du <= 1e-6

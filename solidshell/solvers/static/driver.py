@@ -279,6 +279,8 @@ def _info(sys, o, s, stats, ok, status, rel, warnings) -> dict:
         # Newton steps found by preconditioned CG instead of a factorisation (pcg_iterations)
         info["cg_steps"] = int(stats.get("cg_steps", 0))
         info["cg_iterations"] = int(stats.get("cg_iterations", 0))
+        # load factors of critical points the path snapped from (_load_stepping)
+        info["snapped_from"] = [float(x) for x in stats.get("snaps", [])]
     if s.method == "arclength":
         # > 1 means the path crossed a bifurcation (a second eigenvalue through zero): there is no
         # branch switching, and the path may turn onto another branch there
@@ -340,9 +342,18 @@ def _load_stepping(sys, D, factors, o, s, stats, progress, path):
     """Reach every load factor in turn.  Method "paper" goes straight to each factor (as the paper
     does).  Method "newton" sub-steps adaptively: the increment starts at ``increment`` times the
     final factor, doubles after a step that converged in <= 4 iterations, halves after one that
-    needed >= 12, and a failed step is retried with a quarter of the increment (at most
-    ``max_cutbacks`` times in a row, never below ``min_increment``).  The start of every step is
-    the lower-potential of two predictions (``_start``)."""
+    needed >= 12 (never below ``min_increment``), and a failed step is retried with a quarter of
+    the increment (at most ``max_cutbacks`` times in a row, never below ``min_increment``).  The
+    start of every step is the lower-potential of two predictions (``_start``).
+
+    A step of the smallest increment that still needs >= 12 iterations marks a critical point of
+    the path (a limit or bifurcation point, where K_t turns singular and no increment is small
+    enough for Newton to be quick): the next step goes to the target factor at once and the
+    energy-minimising Newton snaps to the stable branch beyond it (``stats["snaps"]``, the factors
+    it left from; a failed snap is cut back as any failed step).  Without it the halving shrank the
+    steps geometrically and the path never got past the point: sphere 60x60 with self-contact held
+    at 0.9165 for 700 steps of ~1e-9, ~22 iterations each (docs/contact.md section 15); from that
+    state the full step to 1 took 191 iterations."""
     newton = s.method == "newton"
     level = newton_level if newton else paper_level
     lam = stats["load_factor"]
@@ -381,7 +392,7 @@ def _load_stepping(sys, D, factors, o, s, stats, progress, path):
                 if nit <= 4:
                     dl *= 2.0
                 elif nit >= 12:
-                    dl *= 0.5
+                    dl = _slow_step(dl, lam, final, s.min_increment * scale, stats)
                 if lam == target:
                     break
                 continue
@@ -397,6 +408,16 @@ def _load_stepping(sys, D, factors, o, s, stats, progress, path):
             stats["cutbacks"] += 1
             dl = 0.25 * (trial - lam)
     return D, True, msg, rel
+
+
+def _slow_step(dl, lam, final, floor, stats):
+    """The increment after a step that needed >= 12 iterations: half of ``dl``, not below
+    ``floor``; at the floor already, the rest of the way to ``final`` (a snap past a critical
+    point, recorded in ``stats["snaps"]``)."""
+    if abs(dl) > floor * (1.0 + 1e-12):
+        return math.copysign(max(0.5 * abs(dl), floor), dl)
+    stats.setdefault("snaps", []).append(lam)
+    return final - lam
 
 
 def _start(sys, D, hist, lam, trial, predict):

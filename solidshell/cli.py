@@ -293,7 +293,7 @@ def _cmd_mesh(args) -> int:
         f"{res.summary['scene']}: mesh {res.summary['mesh']}: {size}; node sets: "
         + ", ".join(f"{k} ({v})" for k, v in c["node_sets"].items())
     )
-    print(f"wrote {res.out_dir}/: " + ", ".join(res.summary["files"]))
+    print(f"wrote {res.out_dir}/: " + file_list(res.summary["files"]))
     return EXIT_OK
 
 
@@ -341,7 +341,7 @@ def _cmd_run(args) -> int:
     if args.verbose:
         for ln in _details(s):
             print("  " + ln)
-    print(f"  {total:.1f} s; wrote {res.out_dir}/: " + ", ".join(s["files"]))
+    print(f"  {total:.1f} s; wrote {res.out_dir}/: " + file_list(s["files"]))
     return _run_status(s)
 
 
@@ -373,6 +373,28 @@ def _run_scene_of(args):
 
 
 # ----------------------------------------------------------------------------- each scene's figures
+def file_list(names) -> str:
+    """The written files' names for one line: a numbered series of more than three files (a static
+    run writes one frame per load step, hundreds on a long path) shown as its first and last name
+    and its count, e.g. ``series_00000.vtu ... series_00763.vtu (764 files)``."""
+    import re
+
+    groups: dict = {}
+    order = []
+    for name in names:
+        m = re.fullmatch(r"(.*?)(\d+)(\.[^.]+)", name)
+        key = (m.group(1), len(m.group(2)), m.group(3)) if m else name
+        if key not in groups:
+            groups[key] = []
+            order.append(key)
+        groups[key].append(name)
+    out = []
+    for key in order:
+        g = groups[key]
+        out.append(", ".join(g) if len(g) <= 3 else f"{g[0]} ... {g[-1]} ({len(g)} files)")
+    return ", ".join(out)
+
+
 def _headline(res) -> list[tuple[str, str]]:
     """What the scene's user wants at the end, as (brief for --quiet, full line) pairs: a strip's tip
     against the heavy elastica, a drape's DC with its definition and areas, a hung sheet's corners."""

@@ -245,3 +245,18 @@ def test_hung_sheet_prints_its_corners(tmp_path, capsys):
     assert corners["sw"][0][0] == pytest.approx(-corners["se"][0][0], abs=1e-3)  # a symmetric swing
     code, lines = _run(capsys, "hang-20", "--mesh", "8x8", "--set", "solver.explicit.t_end=0.3", "--out", out, "-q")
     assert len(lines) == 1 and f"; lowest free corner z {corners['sw'][0][2]:.4g} cm; " in lines[0]
+
+
+def test_the_closing_line_counts_a_long_series_instead_of_listing_it():
+    """A static run writes one series frame per load step (764 on the sphere's 60x60 static path):
+    the closing line names the first and last and counts them; short series and other files are
+    listed as they are, in their order."""
+    from solidshell.cli import file_list
+
+    frames = [f"series_{i:05d}.vtu" for i in range(764)]
+    names = ["deformed.vtu", "iso.png", "series.pvd", "series.xdmf", *frames, "summary.json"]
+    assert file_list(names) == (
+        "deformed.vtu, iso.png, series.pvd, series.xdmf, series_00000.vtu ... series_00763.vtu (764 files), summary.json"
+    )
+    short = ["mesh.vtu", "series_00000.vtu", "series_00001.vtu", "top.png"]
+    assert file_list(short) == ", ".join(short)

@@ -11,7 +11,10 @@ lists them all the same.
 
 from typing import TYPE_CHECKING
 
+from . import openmp
 from .errors import InputError, IOFailure, SolverError
+
+openmp.configure()  # before numba or MKL load the OpenMP runtime (solidshell/openmp.py)
 
 if TYPE_CHECKING:  # the lazy names below, for type checkers
     from .material import Fabric, IsotropicShell

@@ -372,7 +372,6 @@ def _run_scene_of(args):
     )
 
 
-# ----------------------------------------------------------------------------- each scene's figures
 def file_list(names) -> str:
     """The written files' names for one line: a numbered series of more than three files (a static
     run writes one frame per load step, hundreds on a long path) shown as its first and last name
@@ -395,6 +394,7 @@ def file_list(names) -> str:
     return ", ".join(out)
 
 
+# ----------------------------------------------------------------------------- each scene's figures
 def _headline(res) -> list[tuple[str, str]]:
     """What the scene's user wants at the end, as (brief for --quiet, full line) pairs: a strip's tip
     against the heavy elastica, a drape's DC with its definition and areas, a hung sheet's corners."""

@@ -77,8 +77,6 @@ CHECKED = ("disc",)
 CHECKS = ("verification.penetration_check", "verification.self_check")
 
 
-ADAPT_SCENES = ("square-pedestal", "large-square-pedestal", "sphere")
-"""Issue 41 item 2's scenes, in the order ``adapt`` runs them (``--adapt-scenes`` picks among them)."""
 ADAPT_UNIFORM = {
     # scene: the uniform mesh the adaptive run replaces.  ``--adaptive`` starts from the scene's
     # mesh.adaptive_level0 and 1-4 splits it adapt.levels times (each halves the side), so its finest
@@ -94,6 +92,8 @@ ADAPT_UNIFORM = {
     # compares with 100x100, coarser than the adaptive run's finest level
     "sphere": "128x128",
 }
+ADAPT_SCENES = tuple(ADAPT_UNIFORM)
+"""Issue 41 item 2's scenes, in the order ``adapt`` runs them (``--adapt-scenes`` picks among them)."""
 ADAPT_LIMIT = 0.5
 """Adaptive / uniform: the wall-time ratio and the node ratio, each at most this (issue 41 item 2)."""
 ADAPT_DC_TOLERANCE = 0.01

@@ -42,6 +42,7 @@ __all__ = [
     "parse_density",
     "build_mesh",
     "from_file",
+    "gmsh_initialize",
     "RECIPES",
     "Recipe",
     "strip",
@@ -84,11 +85,10 @@ def _gmsh_model(name: str, options: dict[str, float] | None = None):
     import gmsh
 
     options = {"General.Terminal": 0, **(options or {})}
-    with _GMSH_LOCK, _signals_kept() as restore:
+    with _GMSH_LOCK:
         owner = not gmsh.isInitialized()
         if owner:
-            gmsh.initialize(readConfigFiles=False, interruptible=False)
-            restore()
+            gmsh_initialize()
         saved = {k: gmsh.option.getNumber(k) for k in options}
         try:
             for k, v in options.items():
@@ -104,27 +104,28 @@ def _gmsh_model(name: str, options: dict[str, float] | None = None):
                     gmsh.option.setNumber(k, v)
 
 
-@contextlib.contextmanager
-def _signals_kept():
-    """gmsh's C++ side sets SIGTERM back to the system default when it initialises, under Python's
-    feet: the CLI's SIGTERM handler (state written, exit 143) then never runs and the process just
-    dies.  Yields ``restore()``, which puts the Python handlers back in place (main thread only);
-    it runs again on leaving."""
+def gmsh_initialize() -> None:
+    """``gmsh.initialize`` (no config files, no SIGINT handler of its own) with the process's signal
+    dispositions kept.  gmsh's C++ side sets SIGTERM, SIGINT and SIGPIPE back to the system default
+    when it initialises, under Python's feet: the CLI's SIGTERM handler (state written, exit 143) then
+    never runs, and SIGPIPE -- which Python ignores, so that a write to a closed pipe or socket raises
+    ``BrokenPipeError`` -- kills the whole process instead (a Dask worker's closed socket, a closed
+    ``| head``; the CI run that died with exit 141).  Every gmsh session of the project starts here."""
     import signal
 
-    handlers = {}
+    import gmsh
+
+    names = (signal.SIGINT, signal.SIGTERM, signal.SIGPIPE)
+    kept = {s: signal.getsignal(s) for s in names}
+    gmsh.initialize(readConfigFiles=False, interruptible=False)
     if threading.current_thread() is threading.main_thread():
-        handlers = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
-        handlers = {s: h for s, h in handlers.items() if callable(h)}
+        for s, h in kept.items():
+            if h is not None:  # None: set outside Python, nothing to put back
+                signal.signal(s, h)
+    elif kept[signal.SIGPIPE] == signal.SIG_IGN:  # signal.signal is main-thread only; libc's is not
+        import ctypes
 
-    def restore():
-        for s, h in handlers.items():
-            signal.signal(s, h)
-
-    try:
-        yield restore
-    finally:
-        restore()
+        ctypes.CDLL(None).signal(int(signal.SIGPIPE), ctypes.c_void_p(1))  # 1 = SIG_IGN
 
 
 def _extract(gmsh) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, np.ndarray]]:

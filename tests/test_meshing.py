@@ -2,13 +2,16 @@
 bad inputs.  Every mesh here is built in well under a second."""
 
 import math
+import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from solidshell.errors import InputError
 from solidshell.mesh import ShellMesh
-from solidshell.meshing import RECIPES, build_mesh, from_file, parse_density
+from solidshell.meshing import RECIPES, build_mesh, from_file, gmsh_initialize, parse_density
 
 # (recipe, density, geometry, quads, nodes): every mesh named in the paper, §3.1-§6.4
 PAPER_MESHES = [
@@ -254,10 +257,42 @@ def test_default_densities_are_the_papers():
     assert build_mesh("square-on-square", "6x2x4").n_quads == 48  # scene-style name
 
 
+_SIGPIPE_PROBE = """
+import signal, sys, threading
+from pathlib import Path
+from solidshell.meshing import build_mesh
+
+def ignored():  # the kernel's disposition: signal.getsignal only echoes what Python last set
+    status = Path("/proc/self/status").read_text()
+    mask = int(next(s for s in status.splitlines() if s.startswith("SigIgn:")).split()[1], 16)
+    return bool(mask & (1 << (signal.SIGPIPE - 1)))
+
+before = ignored()
+if sys.argv[1] == "main":
+    build_mesh("strip", "4x1")
+else:
+    t = threading.Thread(target=build_mesh, args=("strip", "4x1"))
+    t.start()
+    t.join()
+print(before, ignored())
+"""
+
+
+@pytest.mark.skipif(not Path("/proc/self/status").exists(), reason="reads the signal mask from /proc")
+@pytest.mark.parametrize("where", ["main", "thread"])
+def test_meshing_keeps_sigpipe_ignored(where):
+    # gmsh's first initialise in a process sets SIGPIPE to "terminate": a later write to a closed
+    # socket or pipe (Dask, a subprocess, `| head`) then killed the whole process with exit 141
+    # instead of raising BrokenPipeError -- one CI run of the suite died that way.  A fresh
+    # interpreter, since only the process's first gmsh session does it.
+    out = subprocess.run([sys.executable, "-c", _SIGPIPE_PROBE, where], capture_output=True, text=True, check=True)
+    assert out.stdout.split() == ["True", "True"], out.stdout + out.stderr
+
+
 def test_leaves_a_running_gmsh_session_alone():
     import gmsh
 
-    gmsh.initialize(readConfigFiles=False, interruptible=False)
+    gmsh_initialize()
     try:
         gmsh.option.setNumber("General.Terminal", 0)
         gmsh.model.add("users_model")
@@ -360,7 +395,7 @@ def test_from_file_msh(tmp_path):
     import gmsh
 
     (tmp_path / "sheet.geo").write_text(GEO)
-    gmsh.initialize(readConfigFiles=False, interruptible=False)
+    gmsh_initialize()
     try:
         gmsh.option.setNumber("General.Terminal", 0)
         gmsh.open(str(tmp_path / "sheet.geo"))
@@ -393,7 +428,7 @@ def test_from_file_geo_inside_a_users_gmsh_session(tmp_path):
     import gmsh
 
     (tmp_path / "sheet.geo").write_text(GEO)
-    gmsh.initialize(readConfigFiles=False, interruptible=False)
+    gmsh_initialize()
     try:
         gmsh.option.setNumber("General.Terminal", 0)
         _check_geo_mesh(from_file(tmp_path / "sheet.geo"))

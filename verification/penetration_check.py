@@ -40,6 +40,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import threading
 from pathlib import Path
 
 import numpy as np
@@ -90,9 +91,14 @@ _SURFACES: dict = {}
 
 def _gmsh_union(primitives: list, size) -> tuple[np.ndarray, np.ndarray]:
     """Triangles of the union of a mesh body's primitives, meshed by gmsh as the run did."""
+    import signal
+
     import gmsh
 
+    pipe = signal.getsignal(signal.SIGPIPE)
     gmsh.initialize(readConfigFiles=False, interruptible=False)
+    if pipe is not None and threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGPIPE, pipe)  # gmsh resets it to "die"; Python's is "raise BrokenPipeError"
     try:
         gmsh.option.setNumber("General.Terminal", 0)
         gmsh.model.add("check")

@@ -112,7 +112,7 @@ class FacePoints:
     element node indices, ``w`` (P, 4) the shape functions at the points (a triangle's fourth column
     repeats its first node with weight 0), ``elem`` (P,) the element of each point, ``area`` (P,)
     the area each point stands for [length^2]; per element ``conn4`` (E, 4) and ``per_edge`` (E,)
-    its n_e.  ``node_area``: the lumped nodal areas (Model.nodal_areas); ``n``: the least points per
+    its n_e, ``longest_edge`` (E,) and ``elem_area`` (E,) [length, length^2] in the reference state.  ``node_area``: the lumped nodal areas (Model.nodal_areas); ``n``: the least points per
     element edge (0: none at all); ``spacing``: the largest spacing between points [length]
     (:func:`spacing`; inf: n everywhere)."""
 
@@ -129,6 +129,7 @@ class FacePoints:
         A_e = np.concatenate([b[2] for b in blocks])
         xe = X[self.conn4]
         L = np.max(np.linalg.norm(xe - np.roll(xe, -1, axis=1), axis=-1), axis=1)  # the longest edge
+        self.longest_edge, self.elem_area = L, A_e
         per = np.full(len(L), self.n, dtype=np.int64)
         if self.n and math.isfinite(spacing) and spacing > 0.0:
             per = np.clip(np.ceil(L / spacing), self.n, MAX_FACE_POINTS).astype(np.int64)

@@ -90,7 +90,7 @@ def test_relaxed_drape_on_a_sphere_updates_into_the_contract():
     assert 0.5 * rep["deepest_face_point_cm"] <= max(res.info["contact_augment_depth"], 0.5 * TOL) <= 2 * TOL
 
 
-def test_relaxation_restarted_after_an_update_is_bit_for_bit(tmp_path):
+def test_relaxation_restarted_after_an_update_is_bit_for_bit(tmp_path, after_contact_update):
     """The shifts, the update count and the booked jumps are checkpointed: a run stopped after its
     first contact update and restarted from its last checkpoint (written after the update) ends on
     exactly the state and books of the uninterrupted run."""
@@ -99,17 +99,7 @@ def test_relaxation_restarted_after_an_update_is_bit_for_bit(tmp_path):
     assert full.converged and full.info["contact_augment_updates"] >= 1
     ck = str(tmp_path / "aug.npz")
     cks = dict(checkpoint=ck, checkpoint_every=37, progress_every=50)
-    seen = []
-
-    class Stop(Exception):
-        pass
-
-    def stop(frac, text):
-        if "contact update" in text or seen:
-            seen.append(text)
-        if len(seen) >= 3:  # 2 progress reports (>= 50 steps) after the update: a checkpoint after it
-            raise Stop("stopped after a contact update")
-
+    stop, Stop = after_contact_update
     with pytest.raises(Stop):
         explicit.run_relax(prob, {**s, **cks}, progress=stop)
     again = explicit.run_relax(prob, {**s, **cks, "restart": ck})

@@ -13,6 +13,9 @@ from ... import contact_kernels as ck
 from ...contact import contact_forces, frictional_contact
 from ...contact_faces import face_pass, reach
 from ...contact_mesh import pack_grid
+from ...contact_rims import NONE as NO_RIM_SHIFT
+from ...contact_rims import rim_pass
+from ...contact_rims import update as rim_update
 from ...interfaces import QuasiStrainModel, SolverProblem
 from ...model import Model
 
@@ -26,9 +29,10 @@ class Forces:
     nodes at the origin, and Eq. (24)'s books when it is an interfaces.QuasiStrainModel.
     ``faces``: the mesh's contact_faces.FacePoints (None or empty: contact on the nodes only); they
     take part when every body is one of the compiled kinds (a user's own RigidBody: nodes only).
-    ``selfc``: the sheet's self-contact (contact_self_penalty.SelfPenalty), None without."""
+    ``selfc``: the sheet's self-contact (contact_self_penalty.SelfPenalty), None without; ``rims``: the
+    bodies' sharp edges against the faces (contact_rims.Rims; with the face points only), None without."""
 
-    def __init__(self, problem: SolverProblem, k_pen, k_t, fric_of, fused=None, faces=None, selfc=None):
+    def __init__(self, problem: SolverProblem, k_pen, k_t, fric_of, fused=None, faces=None, selfc=None, rims=None):
         self.model = model = problem.model
         self.N = model.n_nodes
         self.shape = (self.N, 6)
@@ -68,6 +72,11 @@ class Forces:
             self._Ff = np.zeros((self.N, 3))  # the face points' forces on the nodes
         else:
             self._fx, self._Ff = np.zeros((0, 0)), np.zeros((0, 3))
+        self.rims = rims if self.faces is not None and rims is not None and len(rims) else None
+        if self.rims is not None:
+            self.kr = self.rims.stiffness(self.kq)
+            self._rim_offsets = self.offsets - self.rims.slack
+        self.shift_r = NO_RIM_SHIFT  # the rim points' augmented-Lagrangian shifts (R,) (contact_rims.update)
 
     @property
     def shift_q(self) -> np.ndarray:
@@ -205,6 +214,14 @@ class Forces:
                 self._reach,
                 self.grid,
             )
+            if self.rims is not None:
+                r = self.rims
+                er, nr, pr = rim_pass(
+                    r.points, r.body, r.keys, r.order, r.lo, r.cell, r.dims, self._rim_offsets, self.X0, D,
+                    els, r.conn4, r.tri, r.side_own, r.node_own, self.kr, r.slack, self.shift_r, NO_RIM_SHIFT,
+                    self._Ff,
+                )  # fmt: skip
+                ef, nf, pf = ef + er, nf + nr, max(pf, pr)
         if C is None:
             C = np.zeros(6 * self.N)
         if friction:
@@ -249,11 +266,15 @@ class Forces:
         return self.compiled
 
     def augment(self, D):
-        """One Uzawa update at D (contact_augment.update): (deepest raw penetration, node shifts
-        (n_bodies, N), face-point shifts (n_bodies, P))."""
+        """One Uzawa update at D (contact_augment.update, contact_rims.update): (deepest raw
+        penetration, node shifts (n_bodies, N), face-point shifts (n_bodies, P), rim shifts (R,))."""
         x = self.X0 + D.reshape(self.shape)[:, :3]
         xq = self.faces.positions(x) if self.faces is not None else np.zeros((0, 3))
-        return augment.update(self.bodies, x, xq, self.shift_n, self.shift_q)
+        depth, s_n, s_q = augment.update(self.bodies, x, xq, self.shift_n, self.shift_q)
+        if self.rims is None:
+            return depth, s_n, s_q, NO_RIM_SHIFT
+        d_r, s_r = rim_update(self.rims, self.bodies, self.X0, D, self.shift_r)
+        return max(depth, d_r), s_n, s_q, s_r
 
     def with_self(self, D, C):
         """(C + the self-contact forces at D (6N,), self-contact energy, pairs in contact); C None:

@@ -22,6 +22,8 @@ import numpy as np
 from ... import contact_augment as augment
 from ...contact_faces import FacePoints, spacing
 from ...contact_kernels import friction_work
+from ...contact_rims import NONE as NO_RIM_SHIFT
+from ...contact_rims import Rims
 from ...contact_self_penalty import SelfPenalty
 from ...errors import InputError, SolverError
 from ...interfaces import ExplicitModel, SolverProblem
@@ -123,6 +125,14 @@ class Integrator:
             if self.bodies and mesh is not None and all(b.code >= 0 for b in self.bodies)
             else None
         )
+        # the bodies' sharp edges against the faces (contact_rims.py): where a scene has any
+        self.rims = (
+            Rims(self.bodies, self.faces, self.model.material.thickness)
+            if self.faces is not None and len(self.faces) and s.contact_rims
+            else None
+        )
+        if self.rims is not None and not len(self.rims):
+            self.rims = None
         self.cand = (
             Candidates(self.bodies, mesh.nodes, default_margin(mesh), self.faces)
             if self.bodies and mesh is not None
@@ -153,7 +163,15 @@ class Integrator:
         self.fused = FusedForces(self.model) if mesh is not None else None
         self.force_fn = self._fused_force if self.fused is not None else self.model.internal_force
         self.dynamics = stepcontrol.Dynamics(
-            self.model, M, self.free_mask, self.bodies, self.n_fric, self.force_fn, self.faces, self.self_contact
+            self.model,
+            M,
+            self.free_mask,
+            self.bodies,
+            self.n_fric,
+            self.force_fn,
+            self.faces,
+            self.self_contact,
+            self.rims,
         )
         shaping = {k: v for k, v in s.as_dict().items() if k not in RESTART_NEUTRAL}
         self.fingerprint = checkpoint.fingerprint(problem, shaping, M)
@@ -166,7 +184,7 @@ class Integrator:
         """Attach a critical-step estimate: penalty stiffness, forces, the energy floor."""
         self.lim = lim
         selfc = SelfPenalty(self.model.mesh, self.model.material.thickness, lim.k_self) if self.self_contact else None
-        self.forces = Forces(self.problem, lim.k_pen, lim.k_t, self.fric_of, self.fused, self.faces, selfc)
+        self.forces = Forces(self.problem, lim.k_pen, lim.k_t, self.fric_of, self.fused, self.faces, selfc, self.rims)
         self.quasi = self.forces.quasi
         self.E_floor = ledger.energy_floor(self.P, self.Mf, self.free_idx, self.forces.X0, lim.omega_el)
 
@@ -248,6 +266,7 @@ class Integrator:
             max_slip=0,
             shift_n=augment.NONE,
             shift_q=augment.NONE,
+            shift_r=NO_RIM_SHIFT,
             augment_updates=0,
             augment_jump=0.0,
             augment_depth=-1.0,
@@ -300,7 +319,7 @@ class Integrator:
             self._keep(0.0, st.D, -1)
         self.frame_next_t = observers.next_frame_time(st)
         self._Dn1, self._R = np.empty_like(st.D), np.empty_like(st.D)
-        self.forces.shift_n, self.forces.shift_q = st.shift_n, st.shift_q
+        self.forces.shift_n, self.forces.shift_q, self.forces.shift_r = st.shift_n, st.shift_q, st.shift_r
         self._widen_candidates()  # a restart after an update selects as the uninterrupted run did
         if st.good_D is None or st.good_D.size != st.D.size:
             st.good_D, st.good_t = st.D.copy(), st.t
@@ -571,13 +590,13 @@ class Integrator:
 
     def _augment(self, D) -> bool:
         """At a steady state: one augmented-Lagrangian update of the contact (contact_augment.py)
-        when a node or face point lies deeper than the target and updates are left; True when it
+        when a node, face point or rim point lies deeper than the target and updates are left; True when it
         updated (the relaxation goes on)."""
         st, forces = self.state, self.forces
         if not (self.relax and self.bodies and forces.augmentable):
             return False
         limit = augment.target(self.model.material.thickness) if isinstance(self.model, Model) else 0.0
-        depth, s_n, s_q = forces.augment(D)
+        depth, s_n, s_q, s_r = forces.augment(D)
         st.augment_depth = depth
         stop, st.augment_best, st.augment_stalls = augment.tally(
             depth, st.augment_best, st.augment_stalls, st.augment_updates, self.s.contact_augment, limit
@@ -586,7 +605,7 @@ class Integrator:
             return False
         anchors = st.anchors
         e_old = forces.contact_energy(D, anchors)[1]
-        st.shift_n, st.shift_q = forces.shift_n, forces.shift_q = s_n, s_q
+        st.shift_n, st.shift_q, st.shift_r = forces.shift_n, forces.shift_q, forces.shift_r = s_n, s_q, s_r
         jump = forces.contact_energy(D, anchors)[1] - e_old  # the potential changed, no work done
         st.augment_jump += jump
         st.Ec0 += jump
@@ -601,8 +620,8 @@ class Integrator:
     def _widen_candidates(self) -> None:
         """A point feels a body while its gap is below its shift: the candidates reach that far."""
         st = self.state
-        if self.cand is not None and (st.shift_n.size or st.shift_q.size):
-            self.cand.widen(max(float(st.shift_n.max(initial=0.0)), float(st.shift_q.max(initial=0.0))))
+        if self.cand is not None and (st.shift_n.size or st.shift_q.size or st.shift_r.size):
+            self.cand.widen(max(float(np.max(a, initial=0.0)) for a in (st.shift_n, st.shift_q, st.shift_r)))
 
     def _friction_work(self, f, Dn1, Dp) -> None:
         """Friction work by the scheme's own central rule f_t,n.(x_n+1 - x_n-1)/2; new anchors."""
@@ -846,9 +865,10 @@ class Integrator:
         if np.asarray(st.mode).size != n6:
             st.mode = np.zeros(n6)
         nb, P = len(self.bodies), (len(self.faces) if self.faces is not None else 0)
-        if np.shape(st.shift_n) != (nb, self.N) or np.shape(st.shift_q) != (nb, P):
+        R = len(self.rims) if self.rims is not None else 0
+        if np.shape(st.shift_n) != (nb, self.N) or np.shape(st.shift_q) != (nb, P) or st.shift_r.size not in (0, R):
             # another mesh: the updates start over
-            st.shift_n, st.shift_q, st.augment_updates = augment.NONE, augment.NONE, 0
+            st.shift_n, st.shift_q, st.shift_r, st.augment_updates = augment.NONE, augment.NONE, NO_RIM_SHIFT, 0
             st.augment_best, st.augment_stalls = math.inf, 0
 
     def _open_segment(self) -> None:

@@ -77,6 +77,7 @@ class _Common(SettingsModel):
     critical_step_tol: Pos = 1e-6
     contact_penalty_factor: Pos = 0.1
     contact_face_points: Annotated[int, Field(ge=0, le=MAX_FACE_POINTS)] = DEFAULT_FACE_POINTS  # per element edge
+    contact_rims: bool = False  # the bodies' sharp edges against the faces (contact_rims.py; opt-in)
     checkpoint: PathStr = None
     checkpoint_every: Optional[PosInt] = None  # steps; default every checkpoint_wall seconds
     checkpoint_wall: Pos = 60.0  # [s] of wall time

@@ -66,6 +66,7 @@ FIELDS = {
     # [length] at the last steady state, the shallowest one so far and the updates since it
     "shift_n": "a",
     "shift_q": "a",
+    "shift_r": "a",  # the rim points' shifts (R,) (contact_rims.update), (0,) before the first update
     "augment_updates": "i",
     "augment_jump": "f",
     "augment_depth": "f",

@@ -36,6 +36,7 @@ class Dynamics:
     force: Callable | None = None  # U (N,6) -> internal force to differentiate (None: model.internal_force)
     faces: Any = None  # contact_faces.FacePoints of the mesh (None: contact on the nodes only)
     self_contact: bool = False  # the sheet against itself (contact_self_penalty.py)
+    rims: Any = None  # contact_rims.Rims: the bodies' sharp edges against the faces (None: none)
 
 
 @dataclass
@@ -102,6 +103,8 @@ def limit(omega_el, method, dyn: Dynamics, s, alpha, n_evals=0, seconds=0.0, mod
         # in step and a load inside the Coulomb cone stays inside it while they ring
         k_n = k_pen if dyn.faces is None else k_pen + dyn.faces.node_stiffness(dyn.faces.stiffness(k_pen))
         k_max = np.maximum(k_n, s.friction_stiffness * k_n) if n_fric else k_n
+        if dyn.rims is not None:  # normal springs only: the stick springs stay the faces' (contact_rims.py)
+            k_max = k_max + dyn.rims.node_stiffness(dyn.rims.stiffness(dyn.faces.stiffness(k_pen)))
         omega = 2.0 / combined_critical_time_step(omega_el, k_max, M[:, 0])
         if n_fric:
             k_t = s.friction_stiffness * k_n

@@ -333,6 +333,7 @@ def _augment(sys, D, o, s, stats, progress, path):
         Dn, ok, msg, rel = newton_level(sys, D, lam, o, stats)
         stats["augment_iterations"].append(stats["iterations"] - it0)
         if not ok:
+            stats["augment_depth"] = depth  # the depth the failed update started from
             return Dn, False, f"after contact update {stats['augment_updates']}: {msg}", rel
         D = Dn
 

@@ -44,10 +44,11 @@ the rim's depth in the faces, read on a 17 x 17 / 33 x 33 lattice per element, f
 of h to 0.65 / 8.1 %, at 2.9 x the wall time (ten updates, each re-relaxed); on large-square-pedestal
 relaxation the updates stall FIRE (its step halved on every uphill reset, down 50 x after five
 updates, though the forces are the energy's gradient there; not understood yet), while the plain
-rims (``contact_augment = 0``) converge but gain little (5.2 -> 4.8 % of h).  The static solver does not take them: with the rims its Newton iterations
-converged linearly, at 0.995 per iteration, where an element's side rests across a rim point -- a
-ridge balanced on a point, whose energy falls as the ridge slides off it sideways (curvature -psi'/d,
-which a Gauss-Newton tangent leaves out and an exact one makes indefinite).
+rims (``contact_augment = 0``) converge but gain little (5.2 -> 4.8 % of h).  The static solver
+does not take them: with the rims its Newton iterations converged linearly, at 0.995 per iteration,
+where an element's side rests across a rim point -- a ridge balanced on a point, whose energy falls
+as the ridge slides off it sideways (curvature -psi'/d, which a Gauss-Newton tangent leaves out and
+an exact one makes indefinite).
 
 Frictionless: friction acts on the nodes (contact_faces.py).
 

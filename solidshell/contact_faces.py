@@ -112,9 +112,10 @@ class FacePoints:
     element node indices, ``w`` (P, 4) the shape functions at the points (a triangle's fourth column
     repeats its first node with weight 0), ``elem`` (P,) the element of each point, ``area`` (P,)
     the area each point stands for [length^2]; per element ``conn4`` (E, 4) and ``per_edge`` (E,)
-    its n_e, ``longest_edge`` (E,) and ``elem_area`` (E,) [length, length^2] in the reference state.  ``node_area``: the lumped nodal areas (Model.nodal_areas); ``n``: the least points per
-    element edge (0: none at all); ``spacing``: the largest spacing between points [length]
-    (:func:`spacing`; inf: n everywhere)."""
+    its n_e, ``longest_edge`` (E,) and ``elem_area`` (E,) [length, length^2] in the reference state.
+    ``node_area``: the lumped nodal areas (Model.nodal_areas); ``n``: the least points per element
+    edge (0: none at all); ``spacing``: the largest spacing between points [length] (:func:`spacing`;
+    inf: n everywhere)."""
 
     def __init__(self, mesh, node_area, n: int = DEFAULT_FACE_POINTS, spacing: float = math.inf):
         self.n = face_points_count(n)

@@ -125,7 +125,7 @@ class Integrator:
             if self.bodies and mesh is not None and all(b.code >= 0 for b in self.bodies)
             else None
         )
-        # the bodies' sharp edges against the faces (contact_rims.py): where a scene has any
+        # the bodies' sharp edges against the faces (contact_rims.py; opt-in): where the bodies have any
         self.rims = (
             Rims(self.bodies, self.faces, self.model.material.thickness)
             if self.faces is not None and len(self.faces) and s.contact_rims
@@ -590,8 +590,8 @@ class Integrator:
 
     def _augment(self, D) -> bool:
         """At a steady state: one augmented-Lagrangian update of the contact (contact_augment.py)
-        when a node, face point or rim point lies deeper than the target and updates are left; True when it
-        updated (the relaxation goes on)."""
+        when a node, face point or rim point lies deeper than the target and updates are left; True
+        when it updated (the relaxation goes on)."""
         st, forces = self.state, self.forces
         if not (self.relax and self.bodies and forces.augmentable):
             return False

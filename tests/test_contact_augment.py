@@ -90,20 +90,9 @@ def test_relaxed_drape_on_a_sphere_updates_into_the_contract():
     assert 0.5 * rep["deepest_face_point_cm"] <= max(res.info["contact_augment_depth"], 0.5 * TOL) <= 2 * TOL
 
 
-def test_relaxation_restarted_after_an_update_is_bit_for_bit(tmp_path, after_contact_update):
+def test_relaxation_restarted_after_an_update_is_bit_for_bit(tmp_path, restart_after_contact_update):
     """The shifts, the update count and the booked jumps are checkpointed: a run stopped after its
     first contact update and restarted from its last checkpoint (written after the update) ends on
     exactly the state and books of the uninterrupted run."""
     prob, s, _, _ = _drop({"sample_every": 7})
-    full = explicit.run_relax(prob, s)
-    assert full.converged and full.info["contact_augment_updates"] >= 1
-    ck = str(tmp_path / "aug.npz")
-    cks = dict(checkpoint=ck, checkpoint_every=37, progress_every=50)
-    stop, Stop = after_contact_update
-    with pytest.raises(Stop):
-        explicit.run_relax(prob, {**s, **cks}, progress=stop)
-    again = explicit.run_relax(prob, {**s, **cks, "restart": ck})
-    assert again.info["restarted_from_step"] > 0
-    assert np.array_equal(again.U, full.U) and again.message == full.message
-    for k in ("steps", "energy_balance_error", "contact_augment_updates", "contact_augment_energy_jump"):
-        assert again.info[k] == full.info[k], k
+    restart_after_contact_update(prob, s, str(tmp_path / "aug.npz"))

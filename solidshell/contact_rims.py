@@ -187,8 +187,9 @@ def owners(conn4: np.ndarray, tri: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 class Rims:
     """The rim points of ``bodies`` against the sheet of ``faces`` (contact_faces.FacePoints), h the
     thickness: ``points`` (R, 3), ``body`` (R,) their body, ``spacing`` (R,) their s_r, a hash grid of
-    them (``keys``/``order``/``lo``/``cell``/``dims``) and per element ``conn4``/``tri`` and the
-    ratio ``k_ratio`` = s_r / s_e that turns one of its face points' stiffness into a rim point's."""
+    them (``keys``/``order``/``lo``/``cell``/``dims``), ``slack`` c and per body ``offsets`` (its
+    contact offset less c), and per element ``conn4``/``tri``, ``side_own``/``node_own``
+    (:func:`owners`) and ``s_e``, its face-point spacing."""
 
     def __init__(self, bodies, faces, h: float):
         per = np.maximum(faces.per_edge, 1).astype(float)
@@ -202,6 +203,7 @@ class Rims:
             owner.append(np.full(len(P), j, np.int64))
             sp.append(np.full(len(P), s))
         self.slack = RIM_SLACK * PENETRATION_TOL * float(h)
+        self.offsets = np.array([b.offset for b in bodies], dtype=float) - self.slack
         self.points = np.ascontiguousarray(np.concatenate(pts))
         self.body = np.concatenate(owner)
         self.spacing = np.concatenate(sp)
@@ -492,27 +494,26 @@ NONE = np.zeros(0)
 """No rim shifts (the plain penalty; contact_augment.NONE's counterpart)."""
 
 
-def _args(rims: Rims, bodies, X0, D, els, kr):
-    offsets = np.array([b.offset for b in bodies], dtype=float) - rims.slack
+def _args(rims: Rims, X0, D, kr):
     return (
-        rims.points, rims.body, rims.keys, rims.order, rims.lo, rims.cell, rims.dims, offsets,
+        rims.points, rims.body, rims.keys, rims.order, rims.lo, rims.cell, rims.dims, rims.offsets,
         np.ascontiguousarray(X0, dtype=float), np.ascontiguousarray(D, dtype=float),
-        np.arange(len(rims.conn4), dtype=np.int64) if els is None else els, rims.conn4, rims.tri, rims.side_own,
+        np.arange(len(rims.conn4), dtype=np.int64), rims.conn4, rims.tri, rims.side_own,
         rims.node_own, kr, rims.slack,
     )  # fmt: skip
 
 
-def rim_terms(rims: Rims, bodies, X0, D, kr, shift=NONE) -> tuple[float, np.ndarray]:
+def rim_terms(rims: Rims, X0, D, kr, shift=NONE) -> tuple[float, np.ndarray]:
     """The rim contact at D (6N,) with the rim points' shifts ``shift`` (R,) or NONE: (energy,
     gradient (N, 3) [force]) -- rim_pass over every element, for numpy callers and the tests."""
     Ff = np.zeros((len(X0), 3))
     if not len(rims):
         return 0.0, Ff
-    en, _, _ = rim_pass(*_args(rims, bodies, X0, D, None, kr), shift, NONE, Ff)
+    en, _, _ = rim_pass(*_args(rims, X0, D, kr), shift, NONE, Ff)
     return en, -Ff
 
 
-def update(rims: Rims, bodies, X0, D, shift=NONE) -> tuple[float, np.ndarray]:
+def update(rims: Rims, X0, D, shift=NONE) -> tuple[float, np.ndarray]:
     """One Uzawa update of the rim points' shifts at D (contact_augment.update's rule s <- max(0,
     s + p) per rim point, p its deepest raw penetration o - c - d over its pairs; a point with no
     pair within reach has s + p < 0 and drops to 0): (deepest penetration of the faces' layer o - d
@@ -521,6 +522,6 @@ def update(rims: Rims, bodies, X0, D, shift=NONE) -> tuple[float, np.ndarray]:
         return 0.0, NONE
     deep = np.empty(len(rims))
     kr = np.zeros(len(rims.conn4))  # the raw depths only: no forces wanted
-    rim_pass(*_args(rims, bodies, X0, D, None, kr), shift, deep, np.zeros((len(X0), 3)))
+    rim_pass(*_args(rims, X0, D, kr), shift, deep, np.zeros((len(X0), 3)))
     new = np.maximum(deep + (shift if shift.size else 0.0), 0.0)
     return max(float(deep.max(initial=-np.inf)) + rims.slack, 0.0), np.ascontiguousarray(new)

@@ -75,7 +75,6 @@ class Forces:
         self.rims = rims if self.faces is not None and rims is not None and len(rims) else None
         if self.rims is not None:
             self.kr = self.rims.stiffness(self.kq)
-            self._rim_offsets = self.offsets - self.rims.slack
         self.shift_r = NO_RIM_SHIFT  # the rim points' augmented-Lagrangian shifts (R,) (contact_rims.update)
 
     @property
@@ -217,7 +216,7 @@ class Forces:
             if self.rims is not None:
                 r = self.rims
                 er, nr, pr = rim_pass(
-                    r.points, r.body, r.keys, r.order, r.lo, r.cell, r.dims, self._rim_offsets, self.X0, D,
+                    r.points, r.body, r.keys, r.order, r.lo, r.cell, r.dims, r.offsets, self.X0, D,
                     els, r.conn4, r.tri, r.side_own, r.node_own, self.kr, r.slack, self.shift_r, NO_RIM_SHIFT,
                     self._Ff,
                 )  # fmt: skip
@@ -273,7 +272,7 @@ class Forces:
         depth, s_n, s_q = augment.update(self.bodies, x, xq, self.shift_n, self.shift_q)
         if self.rims is None:
             return depth, s_n, s_q, NO_RIM_SHIFT
-        d_r, s_r = rim_update(self.rims, self.bodies, self.X0, D, self.shift_r)
+        d_r, s_r = rim_update(self.rims, self.X0, D, self.shift_r)
         return max(depth, d_r), s_n, s_q, s_r
 
     def with_self(self, D, C):

@@ -175,9 +175,30 @@ class FacePoints:
         np.add.at(out, self.nodes.ravel(), (np.asarray(k_points, float)[:, None] * self.w).ravel())
         return out
 
-    def positions(self, x) -> np.ndarray:
-        """(P, 3) mid-surface positions of the points for node positions x (N, 3)."""
-        return np.einsum("pa,pai->pi", self.w, np.asarray(x, dtype=float)[self.nodes])
+    def positions(self, x, points=None) -> np.ndarray:
+        """(P, 3) mid-surface positions of the points (or of the points ``points``) for node positions
+        x (N, 3)."""
+        w, nodes = (self.w, self.nodes) if points is None else (self.w[points], self.nodes[points])
+        return np.einsum("pa,pai->pi", w, np.asarray(x, dtype=float)[nodes])
+
+    def near(self, x, body, reach: float):
+        """Ascending indices of the points that may lie within ``reach`` of ``body``'s offset surface
+        (gap = g - offset < reach) for node positions x (N, 3), or None when the body states no
+        Lipschitz bound (then every point may).  The numpy form of :func:`face_pass`'s skip: an
+        element's points are convex combinations of its nodes, so they lie within r = max_a |x_a - c|
+        of any c, and an L-Lipschitz distance is at least g(c) - L r there; an element whose bound
+        exceeds ``reach`` has none of its points in contact."""
+        L = body.lipschitz
+        if L is None:
+            return None
+        xe = np.asarray(x, dtype=float)[self.conn4]
+        c = xe.mean(axis=1)
+        r = np.sqrt(np.max(np.sum((xe - c[:, None]) ** 2, axis=-1), axis=1))
+        els = np.flatnonzero(body.penetration(c)[0] - L * r <= reach)
+        lo, hi = self.estart[els], self.estart[els + 1]
+        counts = hi - lo
+        start = np.cumsum(counts) - counts
+        return np.repeat(lo - start, counts) + np.arange(int(counts.sum()))
 
 
 # ---------------------------------------------------------------------- compiled pass (explicit solver)
@@ -288,16 +309,21 @@ def contact_terms(faces: FacePoints, bodies, x, k_points, tangent: bool = False,
     entries: tuple = ([], [], [])
     if not len(faces) or not bodies:
         return 0.0, F, entries if tangent else None
-    xq = faces.positions(x)
+    shifted = shift is not None and np.size(shift)
     e = 0.0
     for j, b in enumerate(bodies):
-        gap, nrm = b.penetration(xq)
-        if shift is not None and np.size(shift):
-            gap = gap - shift[j]
+        # only the points of the elements that may reach the body (each point's shift may widen it)
+        pts = faces.near(x, b, float(np.max(shift[j], initial=0.0)) if shifted else 0.0)
+        gap, nrm = b.penetration(faces.positions(x, pts))
+        if shifted:
+            gap = gap - (shift[j] if pts is None else shift[j][pts])
         act = np.flatnonzero(gap < 0.0)
         if not act.size:
             continue
-        p, kq, w, nd, nn = -gap[act], np.asarray(k_points, float)[act], faces.w[act], faces.nodes[act], nrm[act]
+        p, nn = -gap[act], nrm[act]
+        if pts is not None:
+            act = pts[act]  # the points' own numbering
+        kq, w, nd = np.asarray(k_points, float)[act], faces.w[act], faces.nodes[act]
         e += 0.5 * float(np.sum(kq * p * p))
         np.add.at(F, nd.ravel(), -(w[:, :, None] * ((kq * p)[:, None] * nn)[:, None, :]).reshape(-1, 3))
         if tangent:

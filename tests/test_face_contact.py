@@ -160,6 +160,44 @@ def test_the_compiled_pass_skips_far_elements_exactly():
     assert pen == pytest.approx(np.max(np.where(gaps < 0.0, -raw, 0.0)), rel=1e-12)
 
 
+def test_static_terms_skip_far_elements_bit_for_bit():
+    """contact_terms (the static solver's) evaluates only the points of elements that may reach a
+    body (FacePoints.near: the bound g(c) - L r with the body's Lipschitz constant, widened by the
+    largest shift).  Energy, forces and tangent entries must be the same bits as over every point (the
+    same body without a Lipschitz bound): the skipped points are all out of contact, so the same
+    active points are summed in the same order.  The ball under one corner point makes the full
+    bound necessary; the shifts on every 3rd point widen the reach (1 cm: points 0.5-1 cm off
+    a body are in contact only through them)."""
+    import copy
+
+    mesh = _sheet(10, 10.0)
+    rng = np.random.default_rng(5)
+    x = mesh.nodes + 0.02 * rng.standard_normal(mesh.nodes.shape)
+    fp = FacePoints(mesh, np.ones(mesh.n_nodes), 3)
+    q = int(np.argmin(np.linalg.norm(fp.positions(x)[:, :2] - (0.1, 0.1), axis=1)))
+    bodies = [
+        Sphere((3.0, 3.0, -2.0), 2.03, offset=0.02),
+        Pedestal((-4.0, -4.0, -0.01), radius=2.0, height=3.0),
+        Sphere(fp.positions(x)[q] - (0.0, 0.0, 0.09), 0.1),
+    ]
+    unbounded = [copy.copy(b) for b in bodies]
+    for b in unbounded:
+        b.lipschitz = None
+    kq = fp.stiffness(np.full(mesh.n_nodes, 10.0))
+    shift = np.zeros((3, len(fp)))
+    shift[:, ::3] = 1.0
+    gaps = np.array([b.penetration(fp.positions(x))[0] for b in bodies])
+    assert np.any((gaps > 0.5) & (gaps < shift))  # points only a shift brings into contact
+    assert len(fp.near(x, bodies[0], 1.0)) < len(fp) / 2  # the skip is exercised
+    for sh in (None, shift):
+        e, F, (r, c, v) = contact_terms(fp, bodies, x, kq, tangent=True, shift=sh)
+        e0, F0, (r0, c0, v0) = contact_terms(fp, unbounded, x, kq, tangent=True, shift=sh)
+        assert e == e0 > 0.0
+        assert np.array_equal(F, F0)
+        for a, a0 in zip((r, c, v), (r0, c0, v0)):
+            assert len(a) == len(a0) == 3 and all(np.array_equal(u, u0) for u, u0 in zip(a, a0))
+
+
 def _drop_on_sphere(n_face, n=8, size=8.0):
     """An n x n wool sheet lying on the top of a R = 2 cm sphere (its lower face touching), relaxed
     under its weight with friction 0.3: it drapes round the sphere."""

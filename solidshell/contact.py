@@ -416,6 +416,28 @@ def frictional_contact(body: ContactBody, x, k, k_t, anchor):
 
 
 # ---------------------------------------------------------------------- stiffness and time step
+NORMAL_FD_STEP = 1e-6
+"""Central-difference step of :func:`normal_gradient`, relative to max(1, |x|) [length]."""
+
+
+def normal_gradient(body: ContactBody, x) -> np.ndarray:
+    """(A, 3, 3) the gradient of the outward normal, grad n = grad^2 g (symmetric), at the points x
+    (A, 3), by central differences of ``signed_distance``'s normal (6 A distances; symmetrised).
+    The penalty energy 1/2 k p^2 with p = offset - g has the Hessian k (n n^T - p grad n): the second
+    term, which a Gauss-Newton tangent leaves out, turns the contact force as the normal turns under
+    a point sliding round a curved face or a rim ((I - n n^T - t t^T) / d at distance d from a sharp
+    edge of tangent t)."""
+    x = np.asarray(x, dtype=float).reshape(-1, 3)
+    if not len(x):
+        return np.zeros((0, 3, 3))
+    eps = NORMAL_FD_STEP * max(1.0, float(np.abs(x).max()))
+    dx = eps * np.eye(3)
+    probes = np.concatenate([(x[:, None, :] + dx[None]).reshape(-1, 3), (x[:, None, :] - dx[None]).reshape(-1, 3)])
+    n = np.asarray(body.signed_distance(probes)[1], dtype=float).reshape(2, len(x), 3, 3)  # (+-, A, i, comp)
+    J = np.swapaxes((n[0] - n[1]) / (2.0 * eps), 1, 2)  # J[a, comp, i] = d n_comp / d x_i
+    return 0.5 * (J + np.swapaxes(J, 1, 2))
+
+
 def penalty_stiffness(node_mass, omega_max, factor=DEFAULT_PENALTY_FACTOR):
     """Per-node penalty stiffness k_i = factor * m_i * omega_max^2 [force/length].
 

@@ -56,7 +56,7 @@ import math
 import numpy as np
 from numba import njit
 
-from .contact import PENETRATION_TOL
+from .contact import PENETRATION_TOL, normal_gradient
 from .contact_kernels import MESH, MESH_LIPSCHITZ, far_bound, signed_distance
 from .errors import InputError
 
@@ -299,12 +299,14 @@ def reach(bodies, shift) -> np.ndarray:
 
 # ---------------------------------------------------------------------- numpy (static solver, reports)
 def contact_terms(faces: FacePoints, bodies, x, k_points, tangent: bool = False, shift=None):
-    """Energy, node forces and (optionally) Gauss-Newton tangent of the face points for node positions
+    """Energy, node forces and (optionally) the Hessian of the face points' energy for node positions
     x (N, 3): (energy, F (N, 3) = gradient of the energy [force], entries or None).  ``shift``
     (n_bodies, P): the points' augmented-Lagrangian shifts (contact_augment.py; None or empty: none).  ``entries``:
     (rows, cols, vals) over the translation dofs 6 a + i of the full 6N x 6N matrix, the blocks
-    sum_q k_q N_a N_b n n^T of the points in contact (the curvature term k p grad n is of relative
-    size p / R and left out, as for the nodes)."""
+    sum_q k_q N_a N_b (n n^T - p_q grad n) of the points in contact (grad n = grad^2 g by central
+    differences, contact.normal_gradient: the force turning with the normal as a point slides round
+    a curved face or a rim, which the Gauss-Newton tangent k n n^T left out; with it Newton converges
+    quadratically to the end on square-on-disc, docs/contact.md section 8)."""
     F = np.zeros((faces.n_nodes, 3))
     entries: tuple = ([], [], [])
     if not len(faces) or not bodies:
@@ -327,7 +329,9 @@ def contact_terms(faces: FacePoints, bodies, x, k_points, tangent: bool = False,
         e += 0.5 * float(np.sum(kq * p * p))
         np.add.at(F, nd.ravel(), -(w[:, :, None] * ((kq * p)[:, None] * nn)[:, None, :]).reshape(-1, 3))
         if tangent:
-            blk = kq[:, None, None] * nn[:, :, None] * nn[:, None, :]  # (A,3,3)
+            # k (n n^T - p grad n): the exact Hessian (contact.normal_gradient), (A,3,3)
+            J = normal_gradient(b, faces.positions(x, act))
+            blk = kq[:, None, None] * (nn[:, :, None] * nn[:, None, :] - p[:, None, None] * J)
             v = w[:, :, None, None, None] * w[:, None, :, None, None] * blk[:, None, None]  # (A,4,4,3,3)
             ii = np.arange(3)
             r = 6 * nd[:, :, None, None, None] + ii[None, None, None, :, None]

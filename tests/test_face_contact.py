@@ -198,6 +198,56 @@ def test_static_terms_skip_far_elements_bit_for_bit():
             assert len(a) == len(a0) == 3 and all(np.array_equal(u, u0) for u, u0 in zip(a, a0))
 
 
+@pytest.mark.parametrize("body", ["rim", "sphere"])
+def test_static_contact_tangent_is_the_hessian(body, monkeypatch):
+    """The static solver's contact tangent (nodes and face points) is the Hessian of its penalty
+    energy: k (n n^T - p grad n) per point, grad n by central differences of the normals
+    (contact.normal_gradient).  Against central differences of the contact gradient on a sheet
+    pressed over a sharp pedestal rim (grad n = (I - n n^T - t t^T) / d at distance d ~ h / 2 from
+    the edge) and into a sphere: within 1e-6 of the largest entry (measured 2e-11 and 9e-11: the
+    difference quotients' round-off and truncation).  The Gauss-Newton tangent k n n^T it replaced is
+    off by 5e-3 and 1.3e-2 of it there (asserted > 1e-4, so that the check tells the two apart)."""
+    from solidshell.solvers.static.system import System
+
+    mesh = _sheet(5, 3.0)
+    x0 = mesh.nodes.copy()
+    if body == "rim":
+        x0[:, 0] += 1.8  # the sheet's middle over the edge of an r = 2 cm cylinder, sloping down past it
+        x0[:, 2] += 0.025 - 0.1 * np.maximum(x0[:, 0] - 2.0, 0.0)
+        b = Pedestal((0.0, 0.0, 0.0), radius=2.0, height=3.0, offset=H / 2)
+    else:
+        b = Sphere((0.0, 0.0, -2.0), 2.0 + H / 2 + 0.01, offset=H / 2)
+    model = Model(mesh, Fabric.wool())
+    prob = Problem(model, np.zeros((mesh.n_nodes, 6), bool), np.zeros((mesh.n_nodes, 6)), contact=[b])
+    sys_ = System(prob.model, prob.fixed, prob.loads, prob.prescribed, prob.contact, 1.0, "cholmod")
+    D = np.zeros(6 * mesh.n_nodes)
+    D.reshape(-1, 6)[:, :3] = x0 - mesh.nodes
+    _, _, blocks, entries = sys_._contact(D, want_tangent=True)
+    assert blocks and entries[0]  # nodes and face points in contact
+    K = sys_._contact_matrix(blocks, entries).toarray()
+    t = np.flatnonzero(np.arange(6 * mesh.n_nodes) % 6 < 3)  # the translations
+    G = np.zeros((len(t), len(t)))
+    eps = 1e-6
+    for j, d in enumerate(t):
+        Dp, Dm = D.copy(), D.copy()
+        Dp[d] += eps
+        Dm[d] -= eps
+        G[:, j] = (sys_._contact(Dp)[1][t] - sys_._contact(Dm)[1][t]) / (2 * eps)
+    scale = np.abs(G).max()
+    assert np.abs(K[np.ix_(t, t)] - G).max() < 1e-6 * scale
+    assert np.abs(K - K.T).max() < 1e-12 * scale
+    # the Gauss-Newton tangent (grad n taken as 0) is measurably not the Hessian here
+    import solidshell.contact_faces as cf
+    import solidshell.solvers.static.system as ss
+
+    flat = lambda body, x: np.zeros((len(np.reshape(x, (-1, 3))), 3, 3))  # noqa: E731
+    monkeypatch.setattr(cf, "normal_gradient", flat)
+    monkeypatch.setattr(ss, "normal_gradient", flat)
+    _, _, blocks, entries = sys_._contact(D, want_tangent=True)
+    K_gn = sys_._contact_matrix(blocks, entries).toarray()
+    assert np.abs(K_gn[np.ix_(t, t)] - G).max() > 1e-4 * scale
+
+
 def _drop_on_sphere(n_face, n=8, size=8.0):
     """An n x n wool sheet lying on the top of a R = 2 cm sphere (its lower face touching), relaxed
     under its weight with friction 0.3: it drapes round the sphere."""

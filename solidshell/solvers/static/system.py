@@ -32,7 +32,8 @@ non-proportional paths (e.g. a director rotated by an angle proportional to the 
 U_n = R(lambda phi) X_n - X_n, which a linear scaling of one array would shrink).
 
 Rigid contact bodies (``contact=`` or ``Problem.contact``) enter as the penalty energy
-1/2 k p^2 on the mid-surface nodes and face points (frictionless, Gauss-Newton tangent k n n^T); k
+1/2 k p^2 on the mid-surface nodes and face points (frictionless; tangent its exact Hessian
+k (n n^T - p grad n), contact.normal_gradient); k
 defaults to ``contact_stiffness`` = CONTACT_STIFFNESS_FACTOR * (heaviest nodal dead load) / h, and
 the driver's augmented-Lagrangian updates (contact_augment.py) take the rest of the penetration.
 """
@@ -44,6 +45,7 @@ import math
 import numpy as np
 
 from ... import contact_augment as augment
+from ...contact import normal_gradient
 from ...contact_faces import DEFAULT_FACE_POINTS, FacePoints, contact_terms, spacing
 from ...errors import InputError
 from ...model import Model
@@ -175,7 +177,7 @@ class System:
     # -- contact (mid-surface nodes and face points; forces on U_o only)
     def _contact(self, D, want_tangent=False):
         """(penalty energy, its gradient (6N,), tangent blocks, face entries): the blocks are a list
-        of (active nodes (A,), k n n^T (A,3,3)) per body, the face entries (rows, cols, vals) of the
+        of (active nodes (A,), k (n n^T - p grad n) (A,3,3)) per body, the face entries (rows, cols, vals) of the
         face points' tangent in the full 6N x 6N numbering (contact_faces.contact_terms); both None
         without ``want_tangent``.  Penetrations count from each body's offset raised by the
         augmented-Lagrangian shifts (contact_augment.py)."""
@@ -193,7 +195,9 @@ class System:
             e += 0.5 * k * float(np.sum(p[act] ** 2))  # penalty energy k p^2 / 2, force k p n
             f[act, :3] -= (k * p[act])[:, None] * nrm[act]  # its gradient is -k p n
             if want_tangent:
-                blocks.append((act, k * nrm[act][:, :, None] * nrm[act][:, None, :]))
+                # the exact Hessian k (n n^T - p grad n) (contact.normal_gradient)
+                J = normal_gradient(b, x[act])
+                blocks.append((act, k * (nrm[act][:, :, None] * nrm[act][:, None, :] - p[act][:, None, None] * J)))
         entries = None
         if self.faces is not None:
             ef, Ff, entries = contact_terms(self.faces, self.contact, x, self.k_faces, want_tangent, self.shift_q)
@@ -492,6 +496,11 @@ def stability(sys, D, eig_max_dofs, known=None):
     return pd, lmin
 
 
+SINGULAR_EIGENVALUE = 1e-13
+"""A smallest tangent eigenvalue above -SINGULAR_EIGENVALUE x the largest diagonal entry is zero to
+round-off (``_leave_saddle``): the state is singular, not a saddle."""
+
+
 def _lowest_mode(A, k_max=6):
     """(eigenvalue, eigenvector) of the most negative eigenvalue found of the symmetric CSC ``A``,
     or (None, None).  ARPACK in shift-invert mode about -s (s = 1e-10 of the mean |diagonal|; the
@@ -508,8 +517,9 @@ def _lowest_mode(A, k_max=6):
     try:
         w, V = eigsh(A, k=min(k_max, n - 2), sigma=-s, which="LM", tol=1e-8, maxiter=5000, v0=arpack_start(n))
         i = int(np.argmin(w))
-        if w[i] < 0.0:
-            return float(w[i]), V[:, i]
+        # ARPACK's answer stands whatever its sign: a zero eigenvalue (a free mode) is one, and
+        # LOBPCG, asked instead, does not converge on it and returns an eigenvalue of any sign
+        return float(w[i]), V[:, i]
     except Exception:  # noqa: BLE001 - fall through to LOBPCG
         pass
     try:
@@ -529,15 +539,19 @@ def _leave_saddle(sys, D, lam, L_f, step_frac):
     Finds the eigenvector v of the most negative eigenvalue, scales it to max|v| = 1 and evaluates
     the potential at D +- t v for t = step_frac L_f x (1, 1/4, 1/16, 1/64, 1/256): along v the
     energy falls as lam_min t^2 / 2 near D and the quartic terms turn it up again further out, so
-    the lowest of these ten candidates (below Pi(D)) is kept.  Returns (D_new or None, lam_min)."""
+    the lowest of these ten candidates (below Pi(D)) is kept.  Returns (D_new or None, lam_min,
+    indefinite): ``indefinite`` is False when lam_min is zero to round-off (above -SINGULAR_EIGENVALUE
+    times the largest diagonal entry): a free mode, nothing to leave along -- such as the turn of a
+    sheet held at one node over an axisymmetric body, which the exact contact Hessian has as a zero
+    eigenvalue."""
     f = sys.free
     _, A = sys.free_tangent(D)
     lmin, v = _lowest_mode(A)
     if lmin is None:
-        return None, None
+        return None, None, True
     diag = float(np.abs(A.diagonal()).max())
-    if lmin >= -1e-13 * diag:
-        return None, lmin  # singular, not indefinite: nothing to leave along
+    if lmin >= -SINGULAR_EIGENVALUE * diag:
+        return None, lmin, False  # singular, not indefinite: nothing to leave along
     v = v / sys.maxnorm(v, free=True)
     Pi0, _ = sys.potential_and_gradient(D, lam)
     best, Dbest = Pi0, None
@@ -550,7 +564,7 @@ def _leave_saddle(sys, D, lam, L_f, step_frac):
             Pit, _ = sys.potential_and_gradient(Dt, lam)
             if np.isfinite(Pit) and Pit < best - ROUNDOFF * energy_scale(sys, D, lam, Pi0):
                 best, Dbest = Pit, Dt
-    return Dbest, lmin
+    return Dbest, lmin, True
 
 
 def seek_minimum(sys, D, lam, o, stats, settle, max_escapes, step_frac, warnings):
@@ -568,9 +582,9 @@ def seek_minimum(sys, D, lam, o, stats, settle, max_escapes, step_frac, warnings
             return D, True, ""
         if len(stats["saddle_eigenvalues"]) >= max_escapes:
             break
-        Dn, lmin = _leave_saddle(sys, D, lam, o.L_f, step_frac)
+        Dn, lmin, indefinite = _leave_saddle(sys, D, lam, o.L_f, step_frac)
         if Dn is None:
-            if lmin is not None and lmin >= 0.0:
+            if not indefinite:
                 return D, True, ""  # singular but not indefinite (a free mode): not a saddle
             return (
                 D,

@@ -418,6 +418,9 @@ def frictional_contact(body: ContactBody, x, k, k_t, anchor):
 # ---------------------------------------------------------------------- stiffness and time step
 NORMAL_FD_STEP = 1e-6
 """Central-difference step of :func:`normal_gradient`, relative to max(1, |x|) [length]."""
+NORMAL_FD_JUMP = 0.1
+"""A change of the normal between two probes 2 eps apart beyond this is a jump, not a curvature (it
+would be a radius of curvature below 20 eps, ~1e-4 cm): :func:`normal_gradient` gives 0 there."""
 
 
 def normal_gradient(body: ContactBody, x) -> np.ndarray:
@@ -426,7 +429,13 @@ def normal_gradient(body: ContactBody, x) -> np.ndarray:
     The penalty energy 1/2 k p^2 with p = offset - g has the Hessian k (n n^T - p grad n): the second
     term, which a Gauss-Newton tangent leaves out, turns the contact force as the normal turns under
     a point sliding round a curved face or a rim ((I - n n^T - t t^T) / d at distance d from a sharp
-    edge of tangent t)."""
+    edge of tangent t).
+
+    Outside a convex body the normal is Lipschitz with constant 1 / g, so the differences (step eps
+    = NORMAL_FD_STEP max(1, |x|)) are exact to O(eps^2 / g^3).  Where the normal jumps between the
+    two probes of a direction (by more than NORMAL_FD_JUMP: the medial planes inside a box, a point
+    pushed through the whole offset onto a sharp edge) 0 is returned for that point (the
+    Gauss-Newton term alone) rather than a quotient of order 1 / eps."""
     x = np.asarray(x, dtype=float).reshape(-1, 3)
     if not len(x):
         return np.zeros((0, 3, 3))
@@ -435,7 +444,9 @@ def normal_gradient(body: ContactBody, x) -> np.ndarray:
     probes = np.concatenate([(x[:, None, :] + dx[None]).reshape(-1, 3), (x[:, None, :] - dx[None]).reshape(-1, 3)])
     n = np.asarray(body.signed_distance(probes)[1], dtype=float).reshape(2, len(x), 3, 3)  # (+-, A, i, comp)
     J = np.swapaxes((n[0] - n[1]) / (2.0 * eps), 1, 2)  # J[a, comp, i] = d n_comp / d x_i
-    return 0.5 * (J + np.swapaxes(J, 1, 2))
+    J = 0.5 * (J + np.swapaxes(J, 1, 2))
+    J[np.abs(n[0] - n[1]).max(axis=(1, 2)) > NORMAL_FD_JUMP] = 0.0
+    return J
 
 
 def penalty_stiffness(node_mass, omega_max, factor=DEFAULT_PENALTY_FACTOR):

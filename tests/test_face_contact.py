@@ -248,6 +248,22 @@ def test_static_contact_tangent_is_the_hessian(body, monkeypatch):
     assert np.abs(K_gn[np.ix_(t, t)] - G).max() > 1e-4 * scale
 
 
+def test_normal_gradient_curvature_and_jumps():
+    """contact.normal_gradient: on a sphere of radius R at distance g its eigenvalues are 0 (along n)
+    and 1 / (R + g) twice (1e-8 relative: central differences); on a box's medial plane, where the
+    normal jumps from one face's to another's, it is 0, not a quotient of order 1 / eps."""
+    from solidshell.contact import normal_gradient
+
+    sph = Sphere((0.1, -0.2, 0.3), 2.0)
+    x = np.array([[0.1, -0.2, 2.8], [1.5, 1.2, 0.3], [-1.0, 0.5, -1.4]])
+    r = np.linalg.norm(x - sph.center, axis=1)
+    for J, ri in zip(normal_gradient(sph, x), r):
+        np.testing.assert_allclose(np.linalg.eigvalsh(J), [0.0, 1 / ri, 1 / ri], atol=1e-8 / ri)
+    box = Pedestal((0.0, 0.0, 0.0), half_widths=(1.0, 2.0), height=3.0)
+    J = normal_gradient(box, [[0.5, 1.5, -0.5], [0.5, 0.3, -0.2]])  # on the x = y - 1 medial plane; inside
+    assert np.all(J == 0.0)
+
+
 def _drop_on_sphere(n_face, n=8, size=8.0):
     """An n x n wool sheet lying on the top of a R = 2 cm sphere (its lower face touching), relaxed
     under its weight with friction 0.3: it drapes round the sphere."""

@@ -177,9 +177,9 @@ class System:
     # -- contact (mid-surface nodes and face points; forces on U_o only)
     def _contact(self, D, want_tangent=False):
         """(penalty energy, its gradient (6N,), tangent blocks, face entries): the blocks are a list
-        of (active nodes (A,), k (n n^T - p grad n) (A,3,3)) per body, the face entries (rows, cols, vals) of the
-        face points' tangent in the full 6N x 6N numbering (contact_faces.contact_terms); both None
-        without ``want_tangent``.  Penetrations count from each body's offset raised by the
+        of (active nodes (A,), k (n n^T - p grad n) (A,3,3)) per body, the face entries (rows, cols,
+        vals) of the face points' tangent in the full 6N x 6N numbering (contact_faces.contact_terms);
+        both None without ``want_tangent``.  Penetrations count from each body's offset raised by the
         augmented-Lagrangian shifts (contact_augment.py)."""
         x = self.model.mesh.nodes + D.reshape(self.n, 6)[:, :3]
         f = np.zeros((self.n, 6))

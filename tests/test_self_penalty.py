@@ -140,18 +140,62 @@ def _box_gap(x, e, f):
 
 
 def _seg(x, e, f):
-    """Segment distance by an 11 x 11 sampling refined by scipy's bounded minimiser: independent of
-    the kernel's closed form."""
+    """Segment distance as the minimum of the convex quadratic |p(s) - q(t)|^2 over the unit square:
+    the smallest of its interior stationary point (when it lies inside) and its minima along the
+    square's four sides (each a clamped 1-D projection) -- an enumeration of the candidates,
+    independent of the kernel's closed form (checked against scipy's bounded minimiser in
+    test_the_reference_segment_distance_is_the_minimisers)."""
+    p0, p1, q0, q1 = x[e[0]], x[e[1]], x[f[0]], x[f[1]]
+    u, v, w = p1 - p0, q1 - q0, p0 - q0
+
+    def d2(s_, t_):
+        return float(np.sum((w + s_ * u - t_ * v) ** 2))
+
+    uu, vv, uv, uw, vw = float(u @ u), float(v @ v), float(u @ v), float(u @ w), float(v @ w)
+    best = math.inf
+    det = uu * vv - uv * uv
+    if det > 1e-14 * uu * vv:  # the interior stationary point: uu s - uv t = -uw, uv s - vv t = -vw
+        s_, t_ = (uv * vw - vv * uw) / det, (uu * vw - uv * uw) / det
+        if 0.0 <= s_ <= 1.0 and 0.0 <= t_ <= 1.0:
+            best = d2(s_, t_)
+    for t_ in (0.0, 1.0):  # sides t = 0, 1: s minimises |w + s u - t v|^2
+        s_ = min(max((t_ * uv - uw) / uu, 0.0), 1.0) if uu > 0.0 else 0.0
+        best = min(best, d2(s_, t_))
+    for s_ in (0.0, 1.0):  # sides s = 0, 1
+        t_ = min(max((vw + s_ * uv) / vv, 0.0), 1.0) if vv > 0.0 else 0.0
+        best = min(best, d2(s_, t_))
+    return math.sqrt(best)
+
+
+def test_the_reference_segment_distance_is_the_minimisers():
+    """_seg (the brute-force reference of the edge-pair search) on random segment pairs, parallel ones
+    and touching ones: never above a 401 x 401 sampling of the unit square nor scipy's bounded
+    minimiser (1e-12: _seg's value is attained, so it is never below the true minimum either), and
+    within the sampling's bound (|u| + |v|) spacing / 2 of the sampled minimum.  (scipy's L-BFGS-B,
+    the reference before from an 11 x 11 sampling, stops up to 3.9e-4 above the minimum on these
+    pairs, 2.1e-2 from the square's centre.)"""
     from scipy.optimize import minimize
 
-    def d2(st):
-        s, t = np.clip(st, 0.0, 1.0)
-        return float(np.sum((x[e[0]] + s * (x[e[1]] - x[e[0]]) - x[f[0]] - t * (x[f[1]] - x[f[0]])) ** 2))
+    rng = np.random.default_rng(11)
+    pts = rng.normal(size=(200, 4, 3))
+    pts[::7, 3] = pts[::7, 2] + (pts[::7, 1] - pts[::7, 0])  # parallel pairs
+    pts[::11, 2] = pts[::11, 0] + 0.5 * (pts[::11, 1] - pts[::11, 0])  # one end on the other segment
+    g = np.linspace(0.0, 1.0, 401)
+    S, T = np.meshgrid(g, g, indexing="ij")
+    for P in pts:
+        u, v, w = P[1] - P[0], P[3] - P[2], P[0] - P[2]
+        grid = np.sqrt(np.min(np.sum((w + S[..., None] * u - T[..., None] * v) ** 2, axis=-1)))
 
-    g = np.linspace(0.0, 1.0, 11)
-    s0, t0 = min(((a, b) for a in g for b in g), key=d2)
-    res = minimize(d2, [s0, t0], bounds=[(0, 1), (0, 1)], method="L-BFGS-B", options={"ftol": 1e-15, "gtol": 1e-12})
-    return math.sqrt(min(res.fun, d2([s0, t0])))
+        def d2(st_, u=u, v=v, w=w):
+            s_, t_ = np.clip(st_, 0.0, 1.0)
+            return float(np.sum((w + s_ * u - t_ * v) ** 2))
+
+        res = minimize(
+            d2, [0.5, 0.5], bounds=[(0, 1), (0, 1)], method="L-BFGS-B", options={"ftol": 1e-15, "gtol": 1e-12}
+        )
+        d = _seg(P, (0, 1), (2, 3))
+        assert d <= min(grid, math.sqrt(res.fun)) + 1e-12
+        assert d >= grid - 0.5 * (g[1] - g[0]) * (np.linalg.norm(u) + np.linalg.norm(v))
 
 
 def _dist(x, v, a, b, c):
@@ -163,8 +207,9 @@ def _dist(x, v, a, b, c):
 @given(seed=st.integers(0, 2**31 - 1), fold=st.floats(0.2, 3.0), noise=st.floats(0.0, 0.5))
 def test_the_grid_search_finds_every_pair_brute_force_does(seed, fold, noise):
     """The compiled grids' candidates are exactly the pairs within h + margin (and not neighbours)
-    of a brute-force loop over every vertex and triangle and every two edges (their distance by
-    scipy's bounded minimiser, not the kernel's closed form), on a sheet folded over at random."""
+    of a brute-force loop over every vertex and triangle and every two edges (their distance by an
+    enumeration of the minimiser's candidates, _seg, not the kernel's closed form), on a sheet folded
+    over at random."""
     mesh = square((6, 6), size=2.0)
     X0 = np.ascontiguousarray(mesh.nodes)
     rng = np.random.default_rng(seed)

@@ -316,13 +316,14 @@ def contact_terms(faces: FacePoints, bodies, x, k_points, tangent: bool = False,
     for j, b in enumerate(bodies):
         # only the points of the elements that may reach the body (each point's shift may widen it)
         pts = faces.near(x, b, float(np.max(shift[j], initial=0.0)) if shifted else 0.0)
-        gap, nrm = b.penetration(faces.positions(x, pts))
+        xq = faces.positions(x, pts)
+        gap, nrm = b.penetration(xq)
         if shifted:
             gap = gap - (shift[j] if pts is None else shift[j][pts])
         act = np.flatnonzero(gap < 0.0)
         if not act.size:
             continue
-        p, nn = -gap[act], nrm[act]
+        p, nn, xp = -gap[act], nrm[act], xq[act]  # xp: the points in contact
         if pts is not None:
             act = pts[act]  # the points' own numbering
         kq, w, nd = np.asarray(k_points, float)[act], faces.w[act], faces.nodes[act]
@@ -330,7 +331,7 @@ def contact_terms(faces: FacePoints, bodies, x, k_points, tangent: bool = False,
         np.add.at(F, nd.ravel(), -(w[:, :, None] * ((kq * p)[:, None] * nn)[:, None, :]).reshape(-1, 3))
         if tangent:
             # k (n n^T - p grad n): the exact Hessian (contact.normal_gradient), (A,3,3)
-            J = normal_gradient(b, faces.positions(x, act))
+            J = normal_gradient(b, xp)
             blk = kq[:, None, None] * (nn[:, :, None] * nn[:, None, :] - p[:, None, None] * J)
             v = w[:, :, None, None, None] * w[:, None, :, None, None] * blk[:, None, None]  # (A,4,4,3,3)
             ii = np.arange(3)

@@ -494,12 +494,14 @@ NONE = np.zeros(0)
 """No rim shifts (the plain penalty; contact_augment.NONE's counterpart)."""
 
 
-def _args(rims: Rims, X0, D, kr):
+def pass_args(rims: Rims, X0, D, kr, els=None) -> tuple:
+    """rim_pass's arguments up to ``shift`` for the elements ``els`` (ascending; None: every one)."""
+    if els is None:
+        els = np.arange(len(rims.conn4), dtype=np.int64)
     return (
         rims.points, rims.body, rims.keys, rims.order, rims.lo, rims.cell, rims.dims, rims.offsets,
         np.ascontiguousarray(X0, dtype=float), np.ascontiguousarray(D, dtype=float),
-        np.arange(len(rims.conn4), dtype=np.int64), rims.conn4, rims.tri, rims.side_own,
-        rims.node_own, kr, rims.slack,
+        els, rims.conn4, rims.tri, rims.side_own, rims.node_own, kr, rims.slack,
     )  # fmt: skip
 
 
@@ -509,7 +511,7 @@ def rim_terms(rims: Rims, X0, D, kr, shift=NONE) -> tuple[float, np.ndarray]:
     Ff = np.zeros((len(X0), 3))
     if not len(rims):
         return 0.0, Ff
-    en, _, _ = rim_pass(*_args(rims, X0, D, kr), shift, NONE, Ff)
+    en, _, _ = rim_pass(*pass_args(rims, X0, D, kr), shift, NONE, Ff)
     return en, -Ff
 
 
@@ -522,6 +524,6 @@ def update(rims: Rims, X0, D, shift=NONE) -> tuple[float, np.ndarray]:
         return 0.0, NONE
     deep = np.empty(len(rims))
     kr = np.zeros(len(rims.conn4))  # the raw depths only: no forces wanted
-    rim_pass(*_args(rims, X0, D, kr), shift, deep, np.zeros((len(X0), 3)))
+    rim_pass(*pass_args(rims, X0, D, kr), shift, deep, np.zeros((len(X0), 3)))
     new = np.maximum(deep + (shift if shift.size else 0.0), 0.0)
     return max(float(deep.max(initial=-np.inf)) + rims.slack, 0.0), np.ascontiguousarray(new)

@@ -14,7 +14,7 @@ from ...contact import contact_forces, frictional_contact
 from ...contact_faces import face_pass, reach
 from ...contact_mesh import pack_grid
 from ...contact_rims import NONE as NO_RIM_SHIFT
-from ...contact_rims import rim_pass
+from ...contact_rims import pass_args, rim_pass
 from ...contact_rims import update as rim_update
 from ...interfaces import QuasiStrainModel, SolverProblem
 from ...model import Model
@@ -214,12 +214,8 @@ class Forces:
                 self.grid,
             )
             if self.rims is not None:
-                r = self.rims
-                er, nr, pr = rim_pass(
-                    r.points, r.body, r.keys, r.order, r.lo, r.cell, r.dims, r.offsets, self.X0, D,
-                    els, r.conn4, r.tri, r.side_own, r.node_own, self.kr, r.slack, self.shift_r, NO_RIM_SHIFT,
-                    self._Ff,
-                )  # fmt: skip
+                args = pass_args(self.rims, self.X0, D, self.kr, els)
+                er, nr, pr = rim_pass(*args, self.shift_r, NO_RIM_SHIFT, self._Ff)
                 ef, nf, pf = ef + er, nf + nr, max(pf, pr)
         if C is None:
             C = np.zeros(6 * self.N)

@@ -105,33 +105,69 @@ def test_run_picture_is_a_sane_png(tmp_path):
     assert renderer() in ("vtk", "matplotlib")
 
 
-@pytest.mark.parametrize("view", ["top", "side"])
-def test_picture_bytes_are_savefigs_tight_ones(tmp_path, monkeypatch, view):
-    """plotting._save_tight_png measures the layout without the axes' images and saves with that
-    box: the PNG is, byte for byte, what savefig(bbox_inches="tight") writes of the same figure (a
-    picture with its image, title, axis labels and the colour bar beside it)."""
+def _tight_figure(view: str, title: str = "a title\nand a subtitle"):
+    """A picture's figure: its image (random pixels standing in for VTK's), title, axis labels
+    and the colour bar beside it."""
+    from solidshell import plotting
+
+    mesh = _sheet(4, 20.0)
+    X = mesh.nodes + np.column_stack([0 * mesh.nodes[:, :2], -0.01 * mesh.nodes[:, 0] ** 2])
+    fig = plotting._figure((7.0, 6.0))
+    ax = fig.add_subplot(111)
+    sm = draw_view(ax, mesh, X, view, norm=height_norm(X), warp_deg=0.0)
+    ax.imshow(np.random.default_rng(0).random((90, 160, 3)), extent=ax.get_xlim() + ax.get_ylim(), zorder=0)
+    plotting.colorbar(fig, ax, sm)
+    ax.set_title(title, fontsize=9.5)
+    return fig
+
+
+def _aligned_difference(a, b, shifts=(0, 1)) -> float:
+    """The smallest mean |a - b| over the offsets ``shifts`` (px) of either picture in x and y."""
+    h, w = min(a.shape[0], b.shape[0]) - max(shifts), min(a.shape[1], b.shape[1]) - max(shifts)
+    return min(
+        float(np.abs(a[dy : dy + h, dx : dx + w] - b[ey : ey + h, ex : ex + w]).mean())
+        for dy in shifts
+        for dx in shifts
+        for ey in shifts
+        for ex in shifts
+    )
+
+
+@pytest.mark.parametrize("view", ["top", "side", "iso"])
+def test_picture_is_savefigs_tight_one(tmp_path, monkeypatch, view):
+    """plotting._save_tight_png draws the figure once and cuts it to the padded box of its artists:
+    the picture is savefig(bbox_inches="tight")'s of the same figure, the same size, up to the
+    sub-pixel offset of the box (savefig shifts the drawing by it, the cut snaps to whole pixels).
+    Tolerance: mean |difference| <= 0.02 of full scale at the best 0/1 px alignment; measured
+    0.006-0.010 (antialiased text and the resampled random image moved by < 1 px); a cut 3 px off
+    gives more (asserted, so the comparison can fail)."""
     import matplotlib.image as mimg
 
     from solidshell import plotting
 
-    monkeypatch.setenv("SOLIDSHELL_RENDERER", "matplotlib")  # the image below stands in for VTK's
-    mesh = _sheet(4, 20.0)
-    X = mesh.nodes + np.column_stack([0 * mesh.nodes[:, :2], -0.01 * mesh.nodes[:, 0] ** 2])
-    figs = []
-    for _ in range(2):
-        fig = plotting._figure((7.0, 6.0))
-        ax = fig.add_subplot(111)
-        sm = draw_view(ax, mesh, X, view, norm=height_norm(X), warp_deg=0.0)
-        ax.imshow(np.random.default_rng(0).random((90, 160, 3)), extent=ax.get_xlim() + ax.get_ylim(), zorder=0)
-        plotting.colorbar(fig, ax, sm)
-        ax.set_title("a title\nand a subtitle", fontsize=9.5)
-        figs.append(fig)
+    monkeypatch.setenv("SOLIDSHELL_RENDERER", "matplotlib")
     ours, ref = tmp_path / "ours.png", tmp_path / "ref.png"
-    plotting._save_tight_png(figs[0], ours, 130, pad_inches=0.15)
-    figs[1].savefig(ref, dpi=130, format="png", bbox_inches="tight", pad_inches=0.15)
+    fig = _tight_figure(view)
+    plotting._save_tight_png(fig, ours, 130, pad_inches=0.15)
+    _tight_figure(view).savefig(ref, dpi=130, format="png", bbox_inches="tight", pad_inches=0.15)
+    a, b = (mimg.imread(p)[..., :3] for p in (ours, ref))
+    assert a.shape == b.shape and a.shape[1] > 500  # the whole 7 in wide figure, not a crop of it
+    assert _aligned_difference(a, b) <= 0.02
+    assert _aligned_difference(a[3:], b[:-3]) > 0.02  # 3 px off: the comparison tells
+    assert fig.dpi == _tight_figure(view).dpi and all(im.get_visible() for im in fig.axes[0].get_images())
+
+
+def test_picture_wider_than_its_figure_is_savefigs(tmp_path, monkeypatch):
+    """A title wider than the figure puts the tight box outside the figure's pixels: then the
+    picture is savefig's own, byte for byte (its canvas widened to the box)."""
+    from solidshell import plotting
+
+    monkeypatch.setenv("SOLIDSHELL_RENDERER", "matplotlib")
+    wide = "a title much wider than the seven inches of its figure " * 3
+    ours, ref = tmp_path / "ours.png", tmp_path / "ref.png"
+    plotting._save_tight_png(_tight_figure("top", wide), ours, 130, pad_inches=0.15)
+    _tight_figure("top", wide).savefig(ref, dpi=130, format="png", bbox_inches="tight", pad_inches=0.15)
     assert ours.read_bytes() == ref.read_bytes()
-    assert figs[0].dpi == figs[1].dpi and all(im.get_visible() for im in figs[0].axes[0].get_images())
-    assert mimg.imread(ours).shape[1] > 500  # the whole 7 in wide figure, not a crop
 
 
 def test_figures_cli_refuses_an_unknown_figure(capsys):

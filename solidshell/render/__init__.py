@@ -1,5 +1,4 @@
-"""Pictures of draped sheets: geometry (surfaces, cameras), two renderers (VTK through PyVista,
-off-screen; a depth-sorting matplotlib painter as the fallback) and the panel that draws one view
+"""Pictures of draped sheets: geometry (surfaces, cameras), two renderers (VTK, off-screen; a depth-sorting matplotlib painter as the fallback) and the panel that draws one view
 into a matplotlib axes.  solidshell.plotting.render writes a run's pictures with it;
 paper_figures/ composes the paper's figures from panels.
 
@@ -10,11 +9,12 @@ from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from .geometry import CAMERAS, Camera, Surface, bodies_of, scene_surfaces
-    from .panel import ViewStyle, axis_labels, colorbar, draw_view, height_norm, renderer, scene_warp_deg
+    from .panel import SceneLook, ViewStyle, axis_labels, colorbar, draw_view, height_norm, renderer, scene_warp_deg
 
 __all__ = [
     "CAMERAS",
     "Camera",
+    "SceneLook",
     "Surface",
     "ViewStyle",
     "axis_labels",

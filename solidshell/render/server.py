@@ -36,7 +36,7 @@ _LIVE: dict = {}  # {"server": RenderServer}: the one started for the current ru
 
 def enabled() -> bool:
     """Whether a run's pictures go to a child process: VTK asked for (not SOLIDSHELL_RENDERER=
-    matplotlib), PyVista installed, SOLIDSHELL_RENDER_SERVER not 0, and VTK not already known to
+    matplotlib), VTK installed, SOLIDSHELL_RENDER_SERVER not 0, and VTK not already known to
     fail here (solidshell.render.vtk_backend's answer)."""
     from . import vtk_backend
 
@@ -44,7 +44,7 @@ def enabled() -> bool:
         return False
     if os.environ.get("SOLIDSHELL_RENDERER", "auto").strip().lower() in ("matplotlib", "mpl"):
         return False
-    if vtk_backend._STATE.get("ok") is False or vtk_backend._pyvista_missing():
+    if vtk_backend._STATE.get("ok") is False or vtk_backend._vtk_missing():
         return False
     return True
 
@@ -259,19 +259,26 @@ def _probe() -> None:
         raise RuntimeError("rendered nothing")
 
 
-def _warm(plotting) -> None:
-    """One small picture drawn and thrown away: matplotlib's fonts and the renderers' first calls
-    are paid before the run's pictures are asked for."""
+def _warm(plotting, stop=lambda: False) -> None:
+    """Two small pictures drawn and thrown away, a top view (ticks, axis labels, colour bar) and an
+    oblique one (the orientation triad) at the runs' resolution: matplotlib's fonts at the
+    pictures' sizes and the renderers' first calls are paid before the run's pictures are asked
+    for.  ``stop()`` true before a picture: the rest is left (a job waits)."""
     import numpy as np
 
     from ..mesh import ShellMesh
+    from .panel import SceneLook
 
-    s = np.linspace(0.0, 1.0, 3)
+    s = np.linspace(-6.0, 6.0, 3)
     X, Y = np.meshgrid(s, s)
-    nodes = np.column_stack([X.ravel(), Y.ravel(), 0.1 * X.ravel() ** 2])
+    nodes = np.column_stack([X.ravel(), Y.ravel(), -0.05 * X.ravel() ** 2])
     q = np.array([[0, 1, 4, 3], [1, 2, 5, 4], [3, 4, 7, 6], [4, 5, 8, 7]])
+    mesh, scene = ShellMesh(nodes, quads=q), SceneLook((), 0.0)
     with tempfile.TemporaryDirectory() as d:
-        plotting.render(Path(d) / "warm.png", ShellMesh(nodes, quads=q), None, view="iso", title="warm", dpi=40)
+        for view in ("top", "iso"):
+            if stop():
+                return
+            plotting.render(Path(d) / f"{view}.png", mesh, None, view=view, title="warm", scene=scene)
 
 
 def _jobs_waiting(stream) -> bool:
@@ -313,7 +320,7 @@ def main() -> int:
 
     if not _jobs_waiting(sys.stdin):
         try:
-            _warm(plotting)
+            _warm(plotting, lambda: _jobs_waiting(sys.stdin))
         except Exception:  # noqa: BLE001, S110 - warming is an optimisation only
             pass
     _say("warm")

@@ -154,11 +154,15 @@ class _Pictures:
 def _picture_files(pictures, sc, kind, mesh_name, solved, summary, snaps, finite) -> list:
     """The run's pictures (the scene's views of the final state, with its crossings marked, and
     the snapshots), handed to ``pictures``; returns their paths."""
+    from ..render.panel import SceneLook
+
     mesh, U, result, series = solved.mesh, solved.U, solved.result, solved.series
     files = []
     state = U if finite else None
     sub = _subtitle(sc, mesh_name, mesh, kind, summary)
     views = sc.output["pictures"]
+    # the bodies and the warp as plain data: the pictures' process need not import the scenes' module
+    look = SceneLook.of(sc) if views or any(j is not None for _, j, _ in snaps) else None
     ref = _strip_curve(summary) if state is not None else None
     marks = _marks(solved, summary) if state is not None and views else None
     for i, view in enumerate(views):
@@ -170,7 +174,7 @@ def _picture_files(pictures, sc, kind, mesh_name, solved, summary, snaps, finite
                 state,
                 view=view,
                 title=sc.title,
-                scene=sc,
+                scene=look,
                 subtitle=sub,
                 reference=ref,
                 marks=marks,
@@ -189,7 +193,7 @@ def _picture_files(pictures, sc, kind, mesh_name, solved, summary, snaps, finite
                         result.frames[j][1],
                         view=view,
                         title=sc.title,
-                        scene=sc,
+                        scene=look,
                         subtitle=sub_j,
                     )
                 )

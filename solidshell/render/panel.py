@@ -206,7 +206,11 @@ def _opaque_rgba(rgb) -> np.ndarray:
 
 
 def triad(ax, cam: Camera, lab: dict, at=(0.1, 0.12), size=0.08):
-    """Small x/y/z arrows (axes fraction) showing the orientation of an oblique view."""
+    """Small x/y/z arrows (axes fraction) showing the orientation of an oblique view; their labels
+    have a white halo, so that one lying over the dark part of a sheet still reads."""
+    from matplotlib import patheffects
+
+    halo = [patheffects.withStroke(linewidth=2.0, foreground="white")]
     r, u, _ = cam.frame()
     names = {"x": lab["x"].replace(" [cm]", ""), "y": lab["y"].replace(" [cm]", ""), "z": "z"}
     for k, e in zip("xyz", np.eye(3)):
@@ -230,6 +234,7 @@ def triad(ax, cam: Camera, lab: dict, at=(0.1, 0.12), size=0.08):
             ha=ha,
             va=va,
             color="0.15",
+            path_effects=halo,
         )
 
 

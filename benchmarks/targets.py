@@ -37,6 +37,7 @@ element-steps/s) has its own script: ``benchmarks/explicit_throughput.py --sizes
 running; the load these runs report includes their own two threads).
 
     python benchmarks/targets.py [--cases disc,static,...] [--repeats 2] [--adapt-scenes square-pedestal,...]
+        [--adapt-set adapt.ramp=true ...]
         [--out PATH]
 
 Writes PATH.{md,json} (default benchmarks/out/targets_issue41); the runs' folders go to a temporary
@@ -100,7 +101,9 @@ ADAPT_DC_TOLERANCE = 0.01
 """|DC adaptive - DC uniform| / DC uniform at most this: the uniform mesh "of equal DC"."""
 
 
-def adaptivity_rows(repeats: int, tmp: str, scenes: tuple[str, ...] | list[str] = ADAPT_SCENES) -> list[dict]:
+def adaptivity_rows(
+    repeats: int, tmp: str, scenes: tuple[str, ...] | list[str] = ADAPT_SCENES, adapt_set: tuple[str, ...] = ()
+) -> list[dict]:
     """Issue 41 item 2: per scene, ``--adaptive`` on the scene's default relaxation against the uniform
     mesh the adaptive run replaces (``ADAPT_UNIFORM``), each a new CLI process (``run_once``: wall
     time, load before it, stolen share), interleaved (uniform, adaptive, uniform, adaptive, ...
@@ -114,13 +117,15 @@ def adaptivity_rows(repeats: int, tmp: str, scenes: tuple[str, ...] | list[str] 
     and the two medians' drape coefficients within 1 %.  Cost at 2 numba threads on the 2 shared
     cores: square-pedestal 1.7-2.5 min a round at load 4-6; large-square-pedestal's adaptive run
     ~16 min (plus its uniform 96x32x4 run); the sphere's runs ~10-15 min each.  ``--adapt-scenes``
-    restricts them."""
+    restricts them.  ``adapt_set``: scene settings ``KEY=VALUE`` given to the adaptive runs only
+    (``--set``; e.g. ``adapt.ramp=true``, docs/adaptivity.md "Coarse to fine")."""
     rows = []
+    sets = [a for kv in adapt_set for a in ("--set", kv)]
     for scene in scenes:
         mesh = ADAPT_UNIFORM[scene]
         variants = (
             ("uniform", [scene, "--solver", "relax", "--mesh", mesh]),
-            ("adaptive", [scene, "--solver", "relax", "--adaptive"]),
+            ("adaptive", [scene, "--solver", "relax", "--adaptive", *sets]),
         )
         runs = {"uniform": [], "adaptive": []}
         for k in range(repeats):
@@ -134,7 +139,7 @@ def adaptivity_rows(repeats: int, tmp: str, scenes: tuple[str, ...] | list[str] 
                     f"{_nodes(r)} nodes; {state(r)}",
                     flush=True,
                 )
-        rows.append(adapt_row(scene, mesh, runs["uniform"], runs["adaptive"]))
+        rows.append(adapt_row(scene, mesh, runs["uniform"], runs["adaptive"], sets))
     return rows
 
 
@@ -143,7 +148,7 @@ def _nodes(r: dict) -> int | None:
     return r.get("max_active_nodes") or r.get("nodes")
 
 
-def adapt_row(scene: str, mesh: str, uniform: list[dict], adaptive: list[dict]) -> dict:
+def adapt_row(scene: str, mesh: str, uniform: list[dict], adaptive: list[dict], sets: list[str] = ()) -> dict:
     """The ``adapt:SCENE`` row from the uniform and adaptive runs' dicts (``run_once``'s, in round
     order): ``median`` the ratio of the ``wall_time_s`` medians, adaptive / uniform; beside it the
     two medians, both drape coefficients (medians) and their relative difference, the node ratio
@@ -165,13 +170,14 @@ def adapt_row(scene: str, mesh: str, uniform: list[dict], adaptive: list[dict]) 
     ratio = wall_a / wall_u
     node_ratio = nodes_a / nodes_u
     runs = [r for pair in zip(uniform, adaptive) for r in pair]
+    more = "".join(f" {a}" for a in sets)
     return {
         "case": f"adapt:{scene}",
-        "command": f"solidshell run {scene} --solver relax --mesh {mesh} --no-pictures; the same with --adaptive "
+        "command": f"solidshell run {scene} --solver relax --mesh {mesh} --no-pictures; the same with --adaptive{more} "
         f"for --mesh {mesh}",
         "commands": [
             f"solidshell run {scene} --solver relax --mesh {mesh} --no-pictures",
-            f"solidshell run {scene} --solver relax --adaptive --no-pictures",
+            f"solidshell run {scene} --solver relax --adaptive{more} --no-pictures",
         ],
         "figure": "wall_time_ratio",
         "limit": ADAPT_LIMIT,
@@ -415,8 +421,8 @@ def table(rows: list[dict]) -> str:
     return "\n".join(lines)
 
 
-def _hook(name: str, repeats: int, tmp: str, adapt_scenes=ADAPT_SCENES) -> list[dict]:
-    rows = adaptivity_rows(repeats, tmp, adapt_scenes) if name == "adapt" else picture_rows(repeats, tmp)
+def _hook(name: str, repeats: int, tmp: str, adapt_scenes=ADAPT_SCENES, adapt_set=()) -> list[dict]:
+    rows = adaptivity_rows(repeats, tmp, adapt_scenes, adapt_set) if name == "adapt" else picture_rows(repeats, tmp)
     if not rows:
         item = "item 2: adaptivity_rows" if name == "adapt" else "item 3: picture_rows"
         print(f"  {name}: hook not filled yet (issue 41 {item})", flush=True)
@@ -434,6 +440,13 @@ def main(argv=None) -> int:
         help=f"the adapt case's scenes, of {', '.join(ADAPT_SCENES)} (large-square-pedestal and sphere take "
         "15-30 min a round)",
     )
+    ap.add_argument(
+        "--adapt-set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="a scene setting for the adapt case's adaptive runs only (repeatable), e.g. adapt.ramp=true",
+    )
     ap.add_argument("--out", default=str(ROOT / "benchmarks" / "out" / "targets_issue41"))
     a = ap.parse_args(argv)
     names = [c.strip() for c in a.cases.split(",") if c.strip()]
@@ -449,7 +462,11 @@ def main(argv=None) -> int:
     with tempfile.TemporaryDirectory(prefix="targets_") as tmp:
         for name in names:
             print(f"{name}: (load average {' '.join(f'{x:.2f}' for x in os.getloadavg())})", flush=True)
-            rows += _hook(name, a.repeats, tmp, adapt_scenes) if name in HOOKS else [measure(name, a.repeats, tmp)]
+            rows += (
+                _hook(name, a.repeats, tmp, adapt_scenes, tuple(a.adapt_set))
+                if name in HOOKS
+                else [measure(name, a.repeats, tmp)]
+            )
     md = (
         f"Targets (issues 13, 41), {started}, {a.repeats} runs each, numba threads "
         f"{os.environ.get('NUMBA_NUM_THREADS', 'default')}\n\n{table(rows)}\n"

@@ -66,3 +66,21 @@ def test_adapt_row_met_and_not():
 def test_adapt_scenes_option_checked():
     assert set(T.ADAPT_SCENES) <= set(T.ADAPT_UNIFORM)
     assert T.main(["--cases", "adapt", "--adapt-scenes", "no-such-scene"]) == 2
+
+
+def test_adapt_set_reaches_the_adaptive_command_only(monkeypatch, tmp_path):
+    """``--adapt-set KEY=VALUE`` is given to the adaptive runs (``--set``), not to the uniform ones,
+    and the row's commands say so."""
+    calls = []
+
+    def fake(args, out, pictures=False):
+        calls.append(args)
+        adaptive = "--adaptive" in args
+        return _run("adaptive" if adaptive else "uniform", 1.0, 2.0, 0.596, 3264, 1400 if adaptive else None)
+
+    monkeypatch.setattr(T, "run_once", fake)
+    (row,) = T.adaptivity_rows(1, str(tmp_path), ["square-pedestal"], ("adapt.ramp=true", "adapt.freeze_after=0"))
+    uniform, adaptive = calls
+    assert "--set" not in uniform
+    assert adaptive[-4:] == ["--set", "adapt.ramp=true", "--set", "adapt.freeze_after=0"]
+    assert row["commands"][1].endswith("--adaptive --set adapt.ramp=true --set adapt.freeze_after=0 --no-pictures")

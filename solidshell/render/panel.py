@@ -198,8 +198,9 @@ def draw_view(
 
 
 def _opaque_rgba(rgb) -> np.ndarray:
-    """An RGB uint8 picture as the opaque float32 RGBA matplotlib resamples: given uint8 RGB, it
-    converts to float and appends an alpha of float64 ones at each draw (0.05 s for 1500x900 px)."""
+    """An RGB uint8 picture as opaque float32 RGBA, the form matplotlib resamples: handed uint8 RGB,
+    matplotlib converts it to float and appends an alpha channel at each draw (0.05 s for
+    1500x900 px)."""
     out = np.ones(rgb.shape[:2] + (4,), np.float32)
     np.multiply(rgb, np.float32(1.0 / 255.0), out=out[..., :3], casting="unsafe")
     return out

@@ -106,8 +106,8 @@ def render(
 
 
 PNG_COMPRESS_LEVEL = 3
-"""zlib level of the pictures' PNGs: 3 encodes a 900x700 px picture in about half the time of
-PIL's default 6, for files ~8 % larger (the pixels are the same)."""
+"""zlib level of the pictures' PNGs: 3 encodes a run's pictures in 45-75 % of the time of PIL's
+default 6, for files 8-17 % larger (the pixels are the same)."""
 
 
 def _save_tight_png(fig, path, dpi: int, pad_inches: float) -> None:

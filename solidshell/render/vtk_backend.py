@@ -211,7 +211,12 @@ def _add_surface(ren, s, cmap, norm, edge_width: float) -> None:
     lines and, for the sheet, its rim."""
     import numpy as np
     from vtkmodules.util.numpy_support import numpy_to_vtk
-    from vtkmodules.vtkFiltersCore import vtkExtractEdges, vtkFeatureEdges, vtkPolyDataNormals
+    from vtkmodules.vtkFiltersCore import vtkFeatureEdges, vtkPolyDataNormals
+
+    try:
+        from vtkmodules.vtkFiltersCore import vtkExtractEdges
+    except ImportError:  # older VTK releases kept it with the extraction filters
+        from vtkmodules.vtkFiltersExtraction import vtkExtractEdges
 
     poly = _polydata(s)
     # per-node normals: flat shading lit each warped quad's two render triangles differently, a

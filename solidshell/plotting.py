@@ -119,7 +119,6 @@ def _save_tight_png(fig, path, dpi: int, pad_inches: float) -> None:
     sub-pixel offset of that box (savefig shifts the drawing by it, the cut snaps to whole pixels)
     and is the same size +-1 px.  A box reaching outside the figure (a title wider than it) is
     saved by savefig, which widens the canvas to it."""
-    import numpy as np
     from matplotlib import __version__ as mpl_version
     from PIL import Image, PngImagePlugin
 

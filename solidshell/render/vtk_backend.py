@@ -173,11 +173,8 @@ def _lookup_table(cmap, norm):
     from vtkmodules.util.numpy_support import numpy_to_vtk
     from vtkmodules.vtkCommonCore import vtkLookupTable
 
-    rgba = (
-        matplotlib.colormaps[cmap](np.linspace(0.0, 1.0, 256))
-        if isinstance(cmap, str)
-        else cmap(np.linspace(0, 1, 256))
-    )
+    cmap = matplotlib.colormaps[cmap] if isinstance(cmap, str) else cmap
+    rgba = cmap(np.linspace(0.0, 1.0, 256))
     lut = vtkLookupTable()
     lut.SetNumberOfTableValues(256)
     lut.SetTable(numpy_to_vtk(np.ascontiguousarray(np.round(rgba * 255.0), dtype=np.uint8)))
@@ -322,8 +319,9 @@ _WINDOW: dict = {}  # {"rw": vtkRenderWindow, "ren": vtkRenderer}: the one this 
 
 def _window(W: int, H: int):
     """The process's one off-screen render window (and its renderer, lit by VTK's light kit),
-    resized to W x H px and emptied: one OpenGL context for all its pictures, so the shaders are
-    compiled once (a new window per picture took ~0.4 s of compiling with Mesa's software GL)."""
+    resized to W x H px (render_image empties it after each picture): one OpenGL context for all
+    its pictures, so the shaders are compiled once (a new window per picture took ~0.4 s of
+    compiling with Mesa's software GL)."""
     rw, ren = _WINDOW.get("rw"), _WINDOW.get("ren")
     if rw is None:
         import vtkmodules.vtkRenderingOpenGL2  # noqa: F401 - registers the OpenGL classes
@@ -341,8 +339,6 @@ def _window(W: int, H: int):
         import atexit
 
         atexit.register(_drop_window)
-    else:
-        ren.RemoveAllViewProps()
     rw.SetSize(W, H)
     return rw, ren
 

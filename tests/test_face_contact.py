@@ -325,23 +325,56 @@ def test_sheet_over_a_pedestal_edge_face_points_cut_the_edge_through(shape, edge
     assert deep[3] < deep[0] / 3 and deep[3] < 0.4 * H, deep
 
 
+def _sheet_on_sphere():
+    """The 8 x 8 cm sheet (1 cm quads) on a 2 cm sphere, as the sphere scene's static run holds it:
+    the centre node in-plane, and the next node along +X in y (a frictionless drape may turn about
+    the vertical axis, a zero mode of the tangent otherwise).  Returns (mesh, model, fixed, loads,
+    sphere)."""
+    mesh = _sheet(8, 8.0)
+    model = Model(mesh, Fabric.wool())
+    fixed = np.zeros((mesh.n_nodes, 6), bool)
+    fixed[np.linalg.norm(mesh.nodes[:, :2], axis=1) < 1e-9, :2] = True
+    east = np.flatnonzero((np.abs(mesh.nodes[:, 1]) < 1e-9) & (mesh.nodes[:, 0] > 0.0))
+    fixed[east[np.argmin(mesh.nodes[east, 0])], 1] = True
+    loads = np.zeros((mesh.n_nodes, 6))
+    loads[:, 2] = -model.lumped_mass()[:, 0] * G0
+    return mesh, model, fixed, loads, Sphere((0.0, 0.0, -2.0 - H / 2), 2.0, offset=H / 2)
+
+
+def test_a_sheet_resting_on_a_sphere_is_not_predicted_through_it():
+    """The flat sheet on the top of a sphere, its centre node held in-plane only: nothing holds it
+    vertically but the contact, which is not pressed yet (gap 0: no stiffness), so the tangent at the
+    start is singular in the vertical translation.  A linearised load predictor from that tangent
+    (shifted to factorise) dropped the whole sheet 1821 cm, through the sphere to where the penalty
+    sees no penetration, and each of five attempts then fell for 1000 iterations before a cut-back
+    (5908 iterations in all).  No prediction is made from a tangent that is not positive definite:
+    the trust region holds the first steps and the sheet lands on the sphere in one load step
+    (measured 153 iterations, the same state: smallest tangent eigenvalue 4.2646e-3 before and after).
+    Asserted: no cut-back, one load step, fewer than 500 iterations (3x the measured count: the
+    trust-region path moves with round-off across BLAS builds), nodes outside the sphere."""
+    from solidshell.solvers.static import solve_static
+
+    mesh, model, fixed, loads, sph = _sheet_on_sphere()
+    r = solve_static(model, fixed, loads, contact=[sph], contact_face_points=0, contact_augment=0)
+    assert r.converged, r.message
+    assert r.info["cutbacks"] == 0 and r.info["load_steps"] == 1, r.info
+    assert r.info["iterations"] < 500, r.info["iterations"]
+    assert r.info["positive_definite"]
+    assert check(mesh, r.U, [sph], H)[0]["nodes_beyond"] == 0
+    assert (mesh.nodes + r.U[:, :3])[:, 2].min() > -4.0  # hangs on the sphere (R = 2 cm), not below it
+
+
 def test_static_drape_on_a_sphere_stable_and_faces_out_further():
-    """Static solve of a sheet on a sphere, its centre node held in-plane (frictionless: a centred
-    drape slides off otherwise): a converged stable minimum (positive-definite tangent) with contact
-    on the nodes only, on the face points with the plain penalty, and with the augmented-Lagrangian
-    updates (the default).  Measured deepest face point (5 x 5 lattice) in units of h: 1.75 (nodes
+    """Static solve of a sheet on a sphere, held as the sphere scene holds it (``_sheet_on_sphere``;
+    frictionless: a centred drape slides off or turns otherwise): a converged stable minimum
+    (positive-definite tangent) with contact on the nodes only, on the face points with the plain
+    penalty, and with the augmented-Lagrangian updates (the default).  Measured deepest face point (5 x 5 lattice) in units of h: 1.75 (nodes
     only; chord sag L^2 / (8 R) of the 1 cm elements) -> 0.055 (face points, penalty k = 1e4
     K_sheet) -> 0.027 (4 updates).  Asserted: faces a third as deep as nodes only, the updates 1.5 x
     shallower again and within 2 x the contract (1 cm faces over R = 2 cm; the drape above)."""
     from solidshell.solvers.static import solve_static
 
-    mesh = _sheet(8, 8.0)
-    model = Model(mesh, Fabric.wool())
-    fixed = np.zeros((mesh.n_nodes, 6), bool)
-    fixed[np.linalg.norm(mesh.nodes[:, :2], axis=1) < 1e-9, :2] = True
-    loads = np.zeros((mesh.n_nodes, 6))
-    loads[:, 2] = -model.lumped_mass()[:, 0] * G0
-    sph = Sphere((0.0, 0.0, -2.0 - H / 2), 2.0, offset=H / 2)
+    mesh, model, fixed, loads, sph = _sheet_on_sphere()
     deep = {}
     for n, updates in ((0, 0), (3, 0), (3, DEFAULT_UPDATES)):
         r = solve_static(model, fixed, loads, contact=[sph], contact_face_points=n, contact_augment=updates)

@@ -13,7 +13,7 @@ Three runs on one mesh:
 Each reports DC, folds, the solver's stability verdict, interpenetrated nodes (the sheet through
 itself, n_p . d_p < 0) and the contact contract by solidshell.penetration (5 x 5 lattice).
 
-    python verification/sphere_static.py [--mesh 60x60]     # ~2 min + ~20 min on two cores
+    python verification/sphere_static.py [--mesh 60x60]     # ~4 min on two cores (100x100: ~10 min)
 
 Writes verification/out/sphere_static-<mesh>.json.
 """

@@ -235,6 +235,20 @@ def test_penalty_contact_with_floor():
     assert r.info["contact_stiffness"] > 0
 
 
+def test_static_says_that_the_bodies_friction_is_not_applied():
+    """The static contact is frictionless: a body's friction is reported unused (one warning), and
+    the solve is the frictionless one -- the same state to the last bit as with friction 0."""
+    from solidshell.contact import Plane
+
+    mesh, model, fixed, P = wool_strip(10, "warp")
+    plain = solve_static(model, fixed, P, contact=[Plane((0.0, 0.0, -2.0))])
+    rough = solve_static(model, fixed, P, contact=[Plane((0.0, 0.0, -2.0), friction=0.3)])
+    assert not any("friction" in w for w in plain.info["warnings"])
+    said = [w for w in rough.info["warnings"] if "friction" in w]
+    assert len(said) == 1 and "0.3" in said[0] and "frictionless" in said[0], said
+    np.testing.assert_array_equal(rough.U, plain.U)
+
+
 def test_arclength_passes_limit_point_of_shallow_arch():
     """Half of a shallow pinned parabolic arch (span 10, rise 0.15, h 0.1; symmetry at mid-span)
     under a central dead load beyond its snap-through load: the arc-length path climbs to a limit

@@ -108,7 +108,7 @@ def _solve(model, fixed, loads, prescribed, contact, s, progress):
         final_relative_residual=np.nan,
         D_last=D,
     )
-    path, warnings = [], []
+    path, warnings = [], _friction_unused(contact)
     D, ok, msg, rel, status = _equilibrium(sys, D, o, s, stats, progress, path, warnings)
     if ok:
         msg = (
@@ -140,6 +140,18 @@ def _solve(model, fixed, loads, prescribed, contact, s, progress):
     info["wall_time_s"] = time.perf_counter() - t0
     progress(1.0, "static: done" if ok else "static: stopped")
     return SolveResult(U=D.reshape(sys.n, 6).copy(), converged=bool(ok), message=msg, info=info, frames=path)
+
+
+def _friction_unused(contact) -> list[str]:
+    """The warning that the bodies' friction is not applied: the static contact is frictionless
+    (system.py), friction acts in the explicit solvers only (contact.py)."""
+    mu = sorted({float(getattr(b, "friction", 0.0)) for b in contact or ()} - {0.0})
+    if not mu:
+        return []
+    return [
+        f"static: the contact is frictionless; the bodies' friction ({', '.join(f'{m:g}' for m in mu)}) acts in the "
+        "explicit solvers only (a scene's [supports.static] holds what friction would)"
+    ]
 
 
 def _monotone(progress):

@@ -25,7 +25,7 @@ from .arclength import arc_length
 from .newton import newton_level
 from .paper import paper_level
 from .settings import RUN_SETTINGS, StaticSettings
-from .system import System, free_length, seek_minimum, shifted_factor, stability
+from .system import System, free_length, seek_minimum, stability
 
 __all__ = ["run", "solve_static"]
 
@@ -474,15 +474,12 @@ def _predictor(sys, D, lam0, lam1):
         A = sys.Kff(K)
     else:
         _, A = sys.free_tangent(D)
-    scale = np.abs(A.diagonal())
-    scale[scale == 0.0] = 1.0
-    lu, sigma, nf = shifted_factor(sys.chol, A, scale, 0.0)
-    sys.n_factor += nf
-    if sigma > 0.0:
+    sys.n_factor += 1
+    if not sys.chol.factor(A):
         raise RuntimeError("the tangent is not positive definite: no linearised prediction")
     sys.n_solves += 1
     Dp = sys.apply_prescribed(D, lam1)
-    Dp[f] += lu.solve(rhs)
+    Dp[f] += sys.chol.solve(rhs)
     return Dp
 
 

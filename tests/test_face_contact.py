@@ -368,10 +368,11 @@ def test_static_drape_on_a_sphere_stable_and_faces_out_further():
     """Static solve of a sheet on a sphere, held as the sphere scene holds it (``_sheet_on_sphere``;
     frictionless: a centred drape slides off or turns otherwise): a converged stable minimum
     (positive-definite tangent) with contact on the nodes only, on the face points with the plain
-    penalty, and with the augmented-Lagrangian updates (the default).  Measured deepest face point (5 x 5 lattice) in units of h: 1.75 (nodes
-    only; chord sag L^2 / (8 R) of the 1 cm elements) -> 0.055 (face points, penalty k = 1e4
-    K_sheet) -> 0.027 (4 updates).  Asserted: faces a third as deep as nodes only, the updates 1.5 x
-    shallower again and within 2 x the contract (1 cm faces over R = 2 cm; the drape above)."""
+    penalty, and with the augmented-Lagrangian updates (the default).  Measured deepest face point
+    (5 x 5 lattice) in units of h: 1.75 (nodes only; chord sag L^2 / (8 R) of the 1 cm elements) ->
+    0.055 (face points, penalty k = 1e4 K_sheet) -> 0.027 (4 updates).  Asserted: faces a third as
+    deep as nodes only, the updates 1.5 x shallower again and within 2 x the contract (1 cm faces
+    over R = 2 cm; the drape above)."""
     from solidshell.solvers.static import solve_static
 
     mesh, model, fixed, loads, sph = _sheet_on_sphere()

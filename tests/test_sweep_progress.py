@@ -29,8 +29,11 @@ solver = "explicit"
 [grid]
 "solver.explicit.t_end" = [0.15, 0.2]
 """
-# "<label>: NN% after X s[, ETA Y] -- step N, t = T s, E_kin = E ..." (solidshell.run.progress._Lines)
-LINE = r"sweep hang-tiny run (\d) \(solver\.explicit\.t_end=(0\.15|0\.2)\) \[key (\w+)\]: +(\d+)% after [\d.]+ s(.*)"
+# "<label>: NN% after X s[, ETA Y] -- step N, t = T s, E_kin = E ..." (solidshell.run.progress._Lines);
+# X as progress.duration writes it: "4.2 s", "17 s", "1 min 05 s" (a fresh clone compiles numba's
+# kernels in the first run: ~65 s here), "1 h 02 min"
+DURATION = r"(?:[\d.]+ s|\d+ min \d\d s|\d+ h \d\d min)"
+LINE = rf"sweep hang-tiny run (\d) \(solver\.explicit\.t_end=(0\.15|0\.2)\) \[key (\w+)\]: +(\d+)% after {DURATION}(.*)"
 
 
 def _spec(tmp_path):

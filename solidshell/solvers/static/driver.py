@@ -365,7 +365,7 @@ def _load_stepping(sys, D, factors, o, s, stats, progress, path):
     energy-minimising Newton snaps to the stable branch beyond it (``stats["snaps"]``, the factors
     it left from; a failed snap is cut back as any failed step).  Without it the halving shrank the
     steps geometrically and the path never got past the point: sphere 60x60 with self-contact held
-    at 0.9165 for 700 steps of ~1e-9, ~22 iterations each (docs/contact.md section 15); from that
+    at 0.9165 for 700 steps of ~1e-9, ~22 iterations each (docs/notes/contact-history.md); from that
     state the full step to 1 took 191 iterations."""
     newton = s.method == "newton"
     level = newton_level if newton else paper_level

@@ -326,16 +326,15 @@ def test_sheet_over_a_pedestal_edge_face_points_cut_the_edge_through(shape, edge
 
 
 def _sheet_on_sphere():
-    """The 8 x 8 cm sheet (1 cm quads) on a 2 cm sphere, as the sphere scene's static run holds it:
-    the centre node in-plane, and the next node along +X in y (a frictionless drape may turn about
-    the vertical axis, a zero mode of the tangent otherwise).  Returns (mesh, model, fixed, loads,
-    sphere)."""
+    """The 8 x 8 cm sheet (1 cm quads) on a 2 cm sphere, held as the sphere scene's static run holds
+    it ([supports.static]): the mesh's ``centre`` node in-plane and its ``centre_east`` node in y (a
+    frictionless drape may turn about the vertical axis, a zero mode of the tangent otherwise).
+    Returns (mesh, model, fixed, loads, sphere)."""
     mesh = _sheet(8, 8.0)
     model = Model(mesh, Fabric.wool())
     fixed = np.zeros((mesh.n_nodes, 6), bool)
-    fixed[np.linalg.norm(mesh.nodes[:, :2], axis=1) < 1e-9, :2] = True
-    east = np.flatnonzero((np.abs(mesh.nodes[:, 1]) < 1e-9) & (mesh.nodes[:, 0] > 0.0))
-    fixed[east[np.argmin(mesh.nodes[east, 0])], 1] = True
+    fixed[mesh.node_sets["centre"], :2] = True
+    fixed[mesh.node_sets["centre_east"], 1] = True
     loads = np.zeros((mesh.n_nodes, 6))
     loads[:, 2] = -model.lumped_mass()[:, 0] * G0
     return mesh, model, fixed, loads, Sphere((0.0, 0.0, -2.0 - H / 2), 2.0, offset=H / 2)

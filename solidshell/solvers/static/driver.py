@@ -457,12 +457,12 @@ def _start(sys, D, hist, lam, trial, predict):
 def _predictor(sys, D, lam0, lam1):
     """Linearised first guess for a load/prescribed increment lam0 -> lam1 (tangent at D).  Raises
     RuntimeError (``_start`` then goes without it) where the tangent is not positive definite: along
-    a zero or negative mode a shifted solve is a step of any length.  The flat sheet resting on the sphere (its centre held
-    in-plane only, the contact not pressed yet) is singular in the vertical translation, and its
-    "prediction" dropped the whole sheet 1821 cm, through the sphere to where the penalty sees no
-    penetration; the lowest potential chose it, and each attempt then fell for 1000 iterations
-    (tests/test_face_contact.py: 8x8 sheet 5908 iterations and 5 cut-backs -> 153 and none; sphere
-    60x60 4978 -> 328)."""
+    a zero or negative mode a shifted solve is a step of any length.  The flat sheet resting on the
+    sphere (its centre held in-plane only, the contact not pressed yet) is singular in the vertical
+    translation, and its "prediction" dropped the whole sheet 1821 cm, through the sphere to where
+    the penalty sees no penetration; the lowest potential chose it, and each attempt then fell for
+    1000 iterations (tests/test_face_contact.py: 8x8 sheet 5908 iterations and 5 cut-backs -> 153
+    and none; sphere 60x60 4978 -> 328)."""
     f, c = sys.free, sys.fixd
     dl = lam1 - lam0
     rhs = dl * sys.P[f]

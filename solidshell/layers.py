@@ -65,6 +65,8 @@ def self_intersections(mesh, U=None) -> np.ndarray:
         return np.zeros((0, 2), dtype=np.int64)
     x = _positions(mesh, U)
     E = ipctk.edges(F)
+    if not ipctk.has_intersections(ipctk.CollisionMesh(x, E, F), x):
+        return np.zeros((0, 2), dtype=np.int64)  # the library's compiled yes/no first: the pairs below loop in Python
     bp = ipctk.LBVH()
     bp.build(x, np.asfortranarray(E), np.asfortranarray(F), 0.0)
     ef = np.array([(c.edge_id, c.face_id) for c in bp.detect_edge_face_candidates()], dtype=np.int64).reshape(-1, 2)

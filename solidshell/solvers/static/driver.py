@@ -277,6 +277,8 @@ def _info(sys, o, s, stats, ok, status, rel, warnings) -> dict:
         "saddle_eigenvalues": saddles,
         "warnings": warnings,
     }
+    if sys.contact:  # trial points whose node paths went into a body (contact_paths.py): cut or refused
+        info["contact_path_cuts"] = int(sys.body_cuts)
     if sys.selfc is not None:  # contact_self.py: the barrier's kappa, its evaluations, the steps CCD cut
         info["self_contact_stiffness"] = sys.selfc.stiffness
         info["self_contact_evaluations"] = int(sys.selfc.evaluations)
@@ -448,7 +450,7 @@ def _start(sys, D, hist, lam, trial, predict):
             pass
     if len(cands) == 1:
         return cands[0]
-    cands = [cands[0]] + [cd for cd in cands[1:] if sys.step_cut(D, cd) >= 1.0]  # no layers taken through
+    cands = [cands[0]] + [cd for cd in cands[1:] if sys.step_cut(D, cd) >= 1.0]  # nothing taken through
     pis = [sys.potential_and_gradient(cd, trial)[0] for cd in cands]
     pis = [pi if np.isfinite(pi) and np.all(np.isfinite(cd)) else np.inf for pi, cd in zip(pis, cands)]
     return cands[int(np.argmin(pis))]

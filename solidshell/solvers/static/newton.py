@@ -269,9 +269,10 @@ def _trial(D, alpha, step):
 
 def _free_trial(sys, D, alpha, step):
     """(alpha, trial point) with the step cut until the straight path from D to the trial point
-    takes no two layers of the sheet through each other (System.step_cut: continuous collision
-    detection of the self-contact; a step is taken unchanged without it).  A curvilinear trial is
-    checked again after each cut, its path being no longer a part of the first one."""
+    takes no two layers of the sheet through each other and no node through a contact body
+    (System.step_cut: continuous collision detection of the self-contact, conservative advancement
+    against the bodies; a free step is taken unchanged).  A curvilinear trial is checked again
+    after each cut, its path being no longer a part of the first one."""
     Dt = _trial(D, alpha, step)
     for _ in range(MAX_TRIALS):
         c = sys.step_cut(D, Dt)
@@ -341,7 +342,7 @@ def _extend(sys, D, lam, step, radius, point, stats):
     while 2.0 * alpha * step.pmax <= radius:
         D2 = D + 2.0 * alpha * step.p
         if sys.step_cut(D, D2) < 1.0:
-            break  # the longer step would take layers through each other
+            break  # the longer step would take layers through each other or a node through a body
         Pi2, G2 = sys.potential_and_gradient(D2, lam)
         if not (np.isfinite(Pi2) and Pi2 < Pit):
             break

@@ -47,6 +47,8 @@ import numpy as np
 from ... import contact_augment as augment
 from ...contact import normal_gradient
 from ...contact_faces import DEFAULT_FACE_POINTS, FacePoints, contact_terms, spacing
+from ...contact_paths import free_fraction
+from ...contact_self import CCD_SAFETY
 from ...errors import InputError
 from ...model import Model
 from ..linear import CHOLESKY_KINDS, Cholesky, LowerCSC, arpack_start, as_csc, ldl_inertia, positive_definite_factor
@@ -110,6 +112,8 @@ class System:
         if not (np.all(np.isfinite(self.P)) and np.all(np.isfinite(self.presc))):
             raise InputError("loads and prescribed values must be finite")
         self.contact = list(contact or [])
+        self.h = float(model.material.thickness)  # the depth a node's path may not pass into a body (step_cut)
+        self.body_cuts = 0
         self.k_contact = 0.0
         if self.contact:
             if contact_stiffness is None:
@@ -254,9 +258,18 @@ class System:
 
     def step_cut(self, D0, D1) -> float:
         """The factor a trial step D0 -> D1 is cut by so that no two layers cross or come closer
-        than the self-contact's minimum distance (contact_self.SelfContact.cut); 1.0 without
-        self-contact or for a free step."""
-        return 1.0 if self.selfc is None else self.selfc.cut(D0, D1)
+        than the self-contact's minimum distance (contact_self.SelfContact.cut) and no node's path
+        passes into a contact body deeper than the thickness h (contact_paths.free_fraction), with
+        CCD_SAFETY to spare in both; 1.0 for a free step."""
+        c = 1.0 if self.selfc is None else self.selfc.cut(D0, D1)
+        if self.contact:
+            X = self.model.mesh.nodes
+            dU = (np.asarray(D1) - np.asarray(D0)).reshape(self.n, 6)[:, :3]
+            t = free_fraction(self.contact, X + np.asarray(D0).reshape(self.n, 6)[:, :3], dU, self.h)
+            if t < 1.0:
+                self.body_cuts += 1
+                c = min(c, CCD_SAFETY * t)
+        return c
 
     def force_tangent(self, D, self_terms=None):
         """(F internal (+contact) full vector, K (6N,6N) CSR).  ``self_terms``: the self-contact's
@@ -560,7 +573,7 @@ def _leave_saddle(sys, D, lam, L_f, step_frac):
             Dt = D.copy()
             Dt[f] += sgn * t * v
             if sys.step_cut(D, Dt) < 1.0:
-                continue  # the escape would take layers through each other
+                continue  # the escape would take layers through each other or a node through a body
             Pit, _ = sys.potential_and_gradient(Dt, lam)
             if np.isfinite(Pit) and Pit < best - ROUNDOFF * energy_scale(sys, D, lam, Pi0):
                 best, Dbest = Pit, Dt

@@ -14,8 +14,9 @@ field).
 
 The test: a path has gone into a body when its gap g(x) - offset (``RigidBody.penetration``) falls
 below ``-depth`` (the static solver passes the sheet's thickness h: fifty times the contact
-contract's tolerance of 2 % of h, contact.PENETRATION_TOL; a step whose end point is that deep is
-rejected by the penalty energy anyway, so the test only changes steps that pass through).  With L
+contract's tolerance of 2 % of h, contact.PENETRATION_TOL, so that pressing a node into a body is
+left to the penalty; on the paper's scenes a solve meets 0-2 such cuts, docs/solvers.md section 2).
+A body thinner than about h is not guarded: no point inside it is h deep.  With L
 the body's Lipschitz bound (``lipschitz``: 1 for the exact distances, sqrt(3) for a mesh body's
 grid), a node whose gap exceeds -depth by d cannot reach -depth before it has moved d / L along
 its path; it advances by that and looks again, until its path ends (free) or it is within

@@ -53,7 +53,13 @@ displacements' bounding box; distances do not see translations).  Then
   every pair the library's answer is 1.0 for certain, and it is not run.
 
 Both tests give the library's own answer (the same iterates, bit for bit:
-tests/test_self_contact.py compares whole solves with and without them).  Where a test fails the
+tests/test_self_contact.py compares whole solves with and without them).
+
+Reproducible: the barrier's collision set and its sums (energy, gradient, Hessian) are taken on one
+of ipctk's threads (``_serial``).  On its default thread pool their order of summation varied from
+run to run, and so did a solve whose layers press: square-on-disc 10x80 without the skips gave 267,
+267 and 265 iterations in three runs of one process (ipctk 1.6.1, 2 threads; 268 each time on one
+thread).  The reference searches and the CCD stay parallel: a minimum does not depend on the order.  Where a test fails the
 broad phase or CCD runs as before.  The last point's answer is also kept (``_last``): the solver
 asks for Pi and its gradient at an accepted point and then again for the tangent there, once.
 """
@@ -61,6 +67,7 @@ asks for Pi and its gradient at an accepted point and then again for the tangent
 from __future__ import annotations
 
 import math
+from contextlib import contextmanager
 
 import numpy as np
 
@@ -87,6 +94,17 @@ SKIP_SAFETY = 0.99
 CCD_SAFETY = 0.8
 """A trial step is cut to CCD_SAFETY x the collision-free fraction (IPC's conservative rescaling:
 the next step starts strictly inside, not on, the minimum distance)."""
+
+
+@contextmanager
+def _serial(ipctk):
+    """ipctk on one thread inside the block (its pool's size restored after): sums in one order."""
+    n = ipctk.get_num_threads()
+    ipctk.set_num_threads(1)
+    try:
+        yield
+    finally:
+        ipctk.set_num_threads(n)
 
 
 def band_force(s_hat: float, d_min: float) -> float:
@@ -166,10 +184,15 @@ class SelfContact:
         return np.asfortranarray(self.X + np.asarray(D, dtype=float).reshape(self.n, 6)[:, :3])
 
     def _collisions(self, V, reach: float = 0.0):
-        """ipctk's collision set at V: the pairs sharing no node closer than h + reach."""
+        """ipctk's collision set at V: the pairs sharing no node closer than h + reach (the
+        barrier's own, reach 0, in one order: ``_serial``)."""
         self.builds += 1
         col = self._ipctk.NormalCollisions()
-        col.build(self.mesh, V, self.s_hat + reach, self.d_min, self._bp)
+        if reach > 0.0:
+            col.build(self.mesh, V, self.s_hat + reach, self.d_min, self._bp)
+            return col
+        with _serial(self._ipctk):
+            col.build(self.mesh, V, self.s_hat, self.d_min, self._bp)
         return col
 
     def _clearance(self, V, reach: float) -> float:
@@ -221,12 +244,14 @@ class SelfContact:
         if hit:
             e, g = last[2], last[3]
         else:
-            e = float(self.barrier(col, self.mesh, V))
-            g = self._full(self.barrier.gradient(col, self.mesh, V))
+            with _serial(self._ipctk):
+                e = float(self.barrier(col, self.mesh, V))
+                g = self._full(self.barrier.gradient(col, self.mesh, V))
             self._last = (V, col, e, g)
         entries = None
         if want_tangent:
-            H = self.barrier.hessian(col, self.mesh, V).tocoo()
+            with _serial(self._ipctk):
+                H = self.barrier.hessian(col, self.mesh, V).tocoo()
             r, c = np.asarray(H.row, np.int64), np.asarray(H.col, np.int64)
             entries = ([6 * (r // 3) + r % 3], [6 * (c // 3) + c % 3], [np.asarray(H.data, float)])
         return e, g.copy(), entries

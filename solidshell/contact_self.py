@@ -53,15 +53,15 @@ displacements' bounding box; distances do not see translations).  Then
   every pair the library's answer is 1.0 for certain, and it is not run.
 
 Both tests give the library's own answer (the same iterates, bit for bit:
-tests/test_self_contact.py compares whole solves with and without them).
+tests/test_self_contact.py compares whole solves with and without them).  Where a test fails the
+broad phase or CCD runs as before.  The last point's answer is also kept (``_last``): the solver
+asks for Pi and its gradient at an accepted point and then again for the tangent there, once.
 
 Reproducible: the barrier's collision set and its sums (energy, gradient, Hessian) are taken on one
 of ipctk's threads (``_serial``).  On its default thread pool their order of summation varied from
 run to run, and so did a solve whose layers press: square-on-disc 10x80 without the skips gave 267,
 267 and 265 iterations in three runs of one process (ipctk 1.6.1, 2 threads; 268 each time on one
-thread).  The reference searches and the CCD stay parallel: a minimum does not depend on the order.  Where a test fails the
-broad phase or CCD runs as before.  The last point's answer is also kept (``_last``): the solver
-asks for Pi and its gradient at an accepted point and then again for the tangent there, once.
+thread).  The reference searches and the CCD stay parallel: a minimum does not depend on the order.
 """
 
 from __future__ import annotations

@@ -67,7 +67,7 @@ thread).  The reference searches and the CCD stay parallel: a minimum does not d
 from __future__ import annotations
 
 import math
-from contextlib import contextmanager
+from contextlib import contextmanager, nullcontext
 
 import numpy as np
 
@@ -188,11 +188,8 @@ class SelfContact:
         barrier's own, reach 0, in one order: ``_serial``)."""
         self.builds += 1
         col = self._ipctk.NormalCollisions()
-        if reach > 0.0:
+        with nullcontext() if reach > 0.0 else _serial(self._ipctk):
             col.build(self.mesh, V, self.s_hat + reach, self.d_min, self._bp)
-            return col
-        with _serial(self._ipctk):
-            col.build(self.mesh, V, self.s_hat, self.d_min, self._bp)
         return col
 
     def _clearance(self, V, reach: float) -> float:

@@ -112,7 +112,6 @@ class System:
         if not (np.all(np.isfinite(self.P)) and np.all(np.isfinite(self.presc))):
             raise InputError("loads and prescribed values must be finite")
         self.contact = list(contact or [])
-        self.h = float(model.material.thickness)  # the depth a node's path may not pass into a body (step_cut)
         self.body_cuts = 0
         self.k_contact = 0.0
         if self.contact:
@@ -179,13 +178,17 @@ class System:
         return D.reshape(self.n, 6)
 
     # -- contact (mid-surface nodes and face points; forces on U_o only)
+    def positions(self, D) -> np.ndarray:
+        """(N, 3) the mid-surface nodes' positions X + u at the full vector D (6N,) [length]."""
+        return self.model.mesh.nodes + np.asarray(D, dtype=float).reshape(self.n, 6)[:, :3]
+
     def _contact(self, D, want_tangent=False):
         """(penalty energy, its gradient (6N,), tangent blocks, face entries): the blocks are a list
         of (active nodes (A,), k (n n^T - p grad n) (A,3,3)) per body, the face entries (rows, cols,
         vals) of the face points' tangent in the full 6N x 6N numbering (contact_faces.contact_terms);
         both None without ``want_tangent``.  Penetrations count from each body's offset raised by the
         augmented-Lagrangian shifts (contact_augment.py)."""
-        x = self.model.mesh.nodes + D.reshape(self.n, 6)[:, :3]
+        x = self.positions(D)
         f = np.zeros((self.n, 6))
         e = 0.0
         blocks = [] if want_tangent else None
@@ -212,7 +215,7 @@ class System:
     def augment(self, D):
         """One Uzawa update of the contact at D (contact_augment.update): (deepest raw penetration
         [length], node shifts, face-point shifts); the caller sets ``shift_n``, ``shift_q``."""
-        x = self.model.mesh.nodes + D.reshape(self.n, 6)[:, :3]
+        x = self.positions(D)
         xq = self.faces.positions(x) if self.faces is not None else np.zeros((0, 3))
         return augment.update(self.contact, x, xq, self.shift_n, self.shift_q)
 
@@ -263,9 +266,9 @@ class System:
         CCD_SAFETY to spare in both; 1.0 for a free step."""
         c = 1.0 if self.selfc is None else self.selfc.cut(D0, D1)
         if self.contact:
-            X = self.model.mesh.nodes
             dU = (np.asarray(D1) - np.asarray(D0)).reshape(self.n, 6)[:, :3]
-            t = free_fraction(self.contact, X + np.asarray(D0).reshape(self.n, 6)[:, :3], dU, self.h)
+            h = float(self.model.material.thickness)  # the depth a node's path may not pass into a body
+            t = free_fraction(self.contact, self.positions(D0), dU, h)
             if t < 1.0:
                 self.body_cuts += 1
                 c = min(c, CCD_SAFETY * t)
